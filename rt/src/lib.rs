@@ -1,0 +1,2 @@
+//! haptloop-rt: the real-time core.
+pub mod alloc;
