@@ -98,6 +98,30 @@ unsafe impl GlobalAlloc for CountingAllocator {
     }
 }
 
+/// Turns counting on or off for the current thread; returns the previous
+/// setting. Prefer [`count`] or [`CountScope`]; this is for windows that span
+/// several calls of a `Send` object (start in one tick, finish in `on_stop`).
+pub fn set_counting(on: bool) -> bool {
+    ACTIVE.with(|a| a.replace(on))
+}
+
+/// This thread's cumulative counters (they only grow while counting is on).
+pub fn thread_stats() -> AllocStats {
+    read()
+}
+
+impl std::ops::Sub for AllocStats {
+    type Output = AllocStats;
+    fn sub(self, earlier: AllocStats) -> AllocStats {
+        AllocStats {
+            allocs: self.allocs - earlier.allocs,
+            deallocs: self.deallocs - earlier.deallocs,
+            reallocs: self.reallocs - earlier.reallocs,
+            bytes: self.bytes - earlier.bytes,
+        }
+    }
+}
+
 fn read() -> AllocStats {
     AllocStats {
         allocs: ALLOCS.with(Cell::get),
@@ -131,12 +155,7 @@ impl CountScope {
     pub fn finish(self) -> AllocStats {
         let end = read();
         ACTIVE.with(|a| a.set(self.was_active));
-        AllocStats {
-            allocs: end.allocs - self.start.allocs,
-            deallocs: end.deallocs - self.start.deallocs,
-            reallocs: end.reallocs - self.start.reallocs,
-            bytes: end.bytes - self.start.bytes,
-        }
+        end - self.start
     }
 }
 
@@ -189,7 +208,10 @@ mod tests {
         let stats = scope.finish();
         // Spawning a scoped thread allocates on this thread (its handle), but the
         // 1 KiB vector allocated on the child is not ours.
-        assert!(stats.bytes < 1024, "counted another thread's bytes: {stats:?}");
+        assert!(
+            stats.bytes < 1024,
+            "counted another thread's bytes: {stats:?}"
+        );
     }
 
     #[test]

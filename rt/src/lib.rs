@@ -1,2 +1,7 @@
 //! haptloop-rt: the real-time core.
 pub mod alloc;
+pub mod clock;
+pub mod exchange;
+pub mod hist;
+pub mod schedule;
+pub mod thread;
