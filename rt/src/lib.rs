@@ -3,5 +3,7 @@ pub mod alloc;
 pub mod clock;
 pub mod exchange;
 pub mod hist;
+pub mod probe;
+pub mod reference;
 pub mod schedule;
 pub mod thread;

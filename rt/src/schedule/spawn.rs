@@ -11,7 +11,7 @@ use crate::thread::{Granted, RtThread, SpawnError, ThreadUsage, spawn_rt};
 #[derive(Debug, thiserror::Error)]
 pub enum LoopError {
     /// The schedule configuration is invalid.
-    #[error("invalid schedule: {0}")]
+    #[error("invalid schedule")]
     Config(#[from] ConfigError),
     /// The real-time thread could not be started.
     #[error(transparent)]

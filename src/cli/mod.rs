@@ -1,0 +1,56 @@
+//! Command-line parsing: flags become typed values here, then validated
+//! configuration objects of the library crates.
+
+mod probe;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use haptloop_rt::schedule::StopFlag;
+use std::process::ExitCode;
+
+/// Real-time haptic interaction with constrained virtual mechanisms.
+///
+/// A pinned kilohertz loop keeps a virtual mechanism assembled around the
+/// finger of a (simulated) PHANToM arm and renders the constraint force.
+#[derive(Debug, Parser)]
+#[command(name = "haptloop", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Measure this machine's timer and the scheduler's added jitter.
+    ///
+    /// Runs the hard-rate scheduler with a synthetic tick load, alternating in
+    /// one-second blocks with a bare absolute-sleep reference loop on the same
+    /// core and priority, and prints both side by side.
+    Probe(probe::ProbeArgs),
+}
+
+/// Parses the command line and runs the chosen command.
+pub fn run() -> Result<ExitCode> {
+    let cli = Cli::parse();
+    let stop = install_ctrl_c()?;
+    match cli.command {
+        Some(Command::Probe(args)) => probe::run(&args, &stop),
+        // Until the end-to-end session lands, the main job is the probe.
+        None => probe::run(&probe::ProbeArgs::default(), &stop),
+    }
+}
+
+/// First Ctrl-C: ask the fast loop to stop at its next tick boundary (reports
+/// are still written). Second Ctrl-C: exit at once with status 130.
+fn install_ctrl_c() -> Result<StopFlag> {
+    let stop = StopFlag::new();
+    let flag = stop.clone();
+    ctrlc::set_handler(move || {
+        if flag.is_requested() {
+            std::process::exit(130);
+        }
+        eprintln!("\nhaptloop: stopping at the next tick boundary (Ctrl-C again to abort)");
+        flag.request();
+    })?;
+    Ok(stop)
+}

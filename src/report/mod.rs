@@ -1,0 +1,3 @@
+//! Human-readable reports.
+
+pub mod probe;

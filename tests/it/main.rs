@@ -1,0 +1,3 @@
+//! Workspace-level integration tests: one binary, a module per area.
+
+mod docs;
