@@ -1,0 +1,151 @@
+//! The safety layer's stages: clamp, ramp, rate limit, watchdog, NaN guard,
+//! velocity limit.
+
+use std::time::Duration;
+
+use haptloop_devices::{CutReason, FaultKind, Grip, Hand, SafetyConfig, Trajectory};
+use nalgebra::Vector3;
+
+use crate::common::{no_ramp, safe_sim, tick};
+
+#[test]
+fn clamp_limits_magnitude_and_keeps_direction() {
+    let mut dev = safe_sim("phantom-premium-1.5", Hand::still(), no_ramp());
+    dev.read(tick(1));
+    let out = dev.write(Vector3::new(12.0, -16.0, 0.0), tick(1));
+    assert!(
+        (out.force_n_device - Vector3::new(0.6, -0.8, 0.0) * 8.5).norm() < 1e-12,
+        "{}",
+        out.force_n_device
+    );
+    assert!(out.cuts.contains(CutReason::Clamp));
+    let cut = dev.last_cut().unwrap();
+    assert_eq!((cut.reason, cut.requested_n), (CutReason::Clamp, 20.0));
+    assert!((cut.applied_n - 8.5).abs() < 1e-3, "{}", cut.applied_n);
+}
+
+#[test]
+fn startup_ramp_is_linear_over_the_ramp_time() {
+    let mut dev = safe_sim("phantom-omni", Hand::still(), SafetyConfig::default());
+    let f = Vector3::new(0.0, 0.0, 1.0);
+    for k in 1..=1200u64 {
+        dev.read(tick(k));
+        let out = dev.write(f, tick(k));
+        let expected = ((k - 1) as f64 / 1000.0).min(1.0);
+        assert!(
+            (out.force_n_device.z - expected).abs() < 1e-12,
+            "tick {k}: {} vs {expected}",
+            out.force_n_device.z
+        );
+        assert_eq!(out.cuts.contains(CutReason::Ramp), k < 1001, "tick {k}");
+    }
+}
+
+#[test]
+fn rate_limit_bounds_change_per_tick() {
+    let cfg = SafetyConfig {
+        ramp: Duration::ZERO,
+        ..SafetyConfig::default()
+    }; // 2000 N/s = 2 N per ms
+    let mut dev = safe_sim("phantom-premium-1.5", Hand::still(), cfg);
+    let step = Vector3::new(3.0, 0.0, 4.0); // 5 N
+    let mut outs = Vec::new();
+    for k in 1..=4u64 {
+        dev.read(tick(k));
+        outs.push(dev.write(step, tick(k)).force_n_device.norm());
+    }
+    for (got, want) in outs.iter().zip([2.0, 4.0, 5.0, 5.0]) {
+        assert!((got - want).abs() < 1e-12, "{outs:?}");
+    }
+    assert_eq!(dev.counters().cut_ticks(CutReason::RateLimit), 2);
+}
+
+#[test]
+fn watchdog_switches_motors_off_when_writes_stop() {
+    let mut dev = safe_sim("phantom-premium-1.5", Hand::still(), no_ramp());
+    for k in 1..=50u64 {
+        dev.read(tick(k));
+        dev.write(Vector3::new(1.0, 0.0, 0.0), tick(k));
+    }
+    let work_at_50 = dev.device().motor_work_j();
+    // The loop stalls: reads continue, writes stop. Timeout = 10 periods.
+    dev.read(tick(60));
+    let work_at_60 = dev.device().motor_work_j();
+    // Until the timeout the held torque keeps working on the moving tip.
+    assert!(work_at_60 != work_at_50 && dev.last_cut().is_none());
+    for k in 61..=80u64 {
+        dev.read(tick(k));
+    }
+    let cut = dev.last_cut().expect("watchdog must record a cut");
+    assert_eq!((cut.reason, cut.at), (CutReason::Watchdog, tick(61)));
+    // The hardware watchdog cut torque at exactly 60 ms: no motor work after it.
+    assert_eq!(dev.device().motor_work_j(), work_at_60);
+    // Re-engaging counts one watchdog episode and force returns.
+    let out = dev.write(Vector3::new(1.0, 0.0, 0.0), tick(81));
+    assert!(out.cuts.contains(CutReason::Watchdog));
+    assert_eq!(dev.counters().cut_episodes(CutReason::Watchdog), 1);
+    assert!(out.motor.force_n_device.norm() > 0.99);
+}
+
+#[test]
+fn non_finite_commands_never_reach_a_motor() {
+    let mut dev = safe_sim("phantom-omni", Hand::still(), no_ramp());
+    let bad = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+    for (i, v) in bad.iter().enumerate() {
+        let k = 2 * i as u64 + 1;
+        dev.read(tick(k));
+        let out = dev.write(Vector3::new(0.1, *v, 0.0), tick(k));
+        assert_eq!(out.force_n_device, Vector3::zeros());
+        assert_eq!(out.motor.torque_nm, Vector3::zeros());
+        assert_eq!(dev.last_cut().unwrap().reason, CutReason::NonFiniteForce);
+        // A good command afterwards is delivered again.
+        dev.read(tick(k + 1));
+        let ok = dev.write(Vector3::new(0.5, 0.0, 0.0), tick(k + 1));
+        assert!((ok.force_n_device.x - 0.5).abs() < 1e-12);
+    }
+    assert_eq!(dev.counters().faults(FaultKind::NonFiniteForce), 3);
+    assert_eq!(dev.counters().cut_ticks(CutReason::NonFiniteForce), 3);
+    // Whatever comes in, what goes out is finite and within the peak.
+    for (k, f) in [1e300, -1e300, f64::MAX, f64::MIN_POSITIVE, 7.0]
+        .into_iter()
+        .enumerate()
+    {
+        let t = tick(100 + k as u64);
+        dev.read(t);
+        let out = dev.write(Vector3::new(f, -f, f), t);
+        assert!(
+            out.force_n_device.iter().all(|v| v.is_finite())
+                && out.force_n_device.norm() <= 3.3 + 1e-12
+        );
+    }
+}
+
+#[test]
+fn velocity_limit_cuts_force_while_the_tip_moves_too_fast() {
+    // The hand yanks the stylus 6 cm in 10 ms (6 m/s target speed).
+    let hand = Hand::new(Trajectory::Line {
+        to_m: Vector3::new(0.06, 0.0, 0.0),
+        duration: Duration::from_millis(10),
+    })
+    .with_grip(Grip {
+        stiffness_n_per_m: 3000.0,
+        damping_n_s_per_m: 20.0,
+    });
+    let mut dev = safe_sim("phantom-premium-1.5", hand, no_ramp());
+    let mut cut_ticks = 0;
+    for k in 1..=400u64 {
+        dev.read(tick(k));
+        let fast = dev.speed_m_per_s() > 2.0;
+        let out = dev.write(Vector3::new(0.0, 0.3, 0.0), tick(k));
+        assert_eq!(out.cuts.contains(CutReason::Velocity), fast, "tick {k}");
+        if fast {
+            cut_ticks += 1;
+            assert_eq!(out.force_n_device, Vector3::zeros());
+        }
+    }
+    assert!(cut_ticks > 0, "a 6 m/s yank must trip the 2 m/s limit");
+    assert_eq!(dev.counters().cut_ticks(CutReason::Velocity), cut_ticks);
+    // Once the stylus has settled, force is delivered again.
+    let out = dev.write(Vector3::new(0.0, 0.3, 0.0), tick(401));
+    assert!((out.force_n_device.y - 0.3).abs() < 1e-12);
+}
