@@ -1,0 +1,52 @@
+//! haptloop-solver: augmented-coordinate mechanism models, a constraint library
+//! with analytic Jacobians, and the sparse Jacobian the fast loop and the
+//! placement solver iterate on.
+//!
+//! Principal types and how data flows through them:
+//!
+//! ```text
+//!  BodySpec / JointSpec / FingerSpec ──► ModelBuilder::build() ──► Model
+//!  (scene vocabulary, names)                (validates: BuildError   │  bodies, Layout (q columns),
+//!                                            names the offender)     │  constraints + RowInfo per row
+//!                                                                    ▼
+//!  q (Layout order) + FingerTarget per finger ──► Evaluation::evaluate(&Model, q, targets)
+//!                                                   │  in place, zero allocation
+//!                                                   ├─► values():   C(q)   (equalities, then ≥ 0 rows)
+//!                                                   └─► jacobian(): C_q(q) (Jacobian: fixed CSR pattern,
+//!                                                                   mul_vec / mul_t_vec, faer view)
+//! ```
+//!
+//! - [`Model`]: bodies (7 coordinates r, e = [w, x, y, z] per moving body; none
+//!   for fixed bodies), free design variables, compiled constraints, per-row
+//!   metadata ([`RowInfo`]: constraint, equality/inequality, unit), fingers,
+//!   gravity. Immutable; [`Model::with_inequalities`] derives a model with
+//!   extra point–plane rows for a new contact active set.
+//! - [`Layout`]: which columns of q belong to which body and design variable;
+//!   [`Model::q0`] is the initial configuration.
+//! - [`Evaluation`]: allocated once per model; [`Evaluation::evaluate`] fills C
+//!   and C_q in place with bounded work and no allocation.
+//! - [`Jacobian`]: the fixed sparsity pattern (CSR, a transposed index, a
+//!   zero-copy faer view) and the products C_q·v, C_qᵀ·v.
+//! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
+//!   132-body sphere toy), each assembled at q0.
+//!
+//! Rotations use the rational form R(e) = A_h(e)/|e|² (see [`rotation`]), exact
+//! for non-unit e, with one quaternion-norm row per moving body.
+
+pub mod constraint;
+mod evaluate;
+mod ids;
+mod jacobian;
+pub mod mechanisms;
+mod model;
+pub mod rotation;
+
+pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
+pub use evaluate::{EvalError, Evaluation, FingerTarget};
+pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
+pub use jacobian::{Jacobian, ShapeError};
+pub use model::{
+    Body, BodySpec, BuildError, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, DesignVar,
+    Finger, FingerSpec, Grasp, JointKind, JointSpec, Layout, Model, ModelBuilder, Owner,
+    PlaneOwner, PointPlaneSpec, UnknownName,
+};

@@ -1,0 +1,131 @@
+//! The constraint library: one kind per file, each giving its value and its
+//! analytic Jacobian through the shared helpers of [`block`].
+//!
+//! | file | kind | rows | units |
+//! |---|---|---|---|
+//! | [`spherical`] | spherical joint, Eq. 9 | 3 | m |
+//! | [`perpendicular`] | perpendicular axes, Eq. 10 | 1 | angle |
+//! | [`universal`] | universal joint, Eq. 11 | 3 + 1 | m, angle |
+//! | [`revolute`] | revolute joint | 3 + 2 | m, angle |
+//! | [`prismatic`] | prismatic joint | 2 + 3 | m, angle |
+//! | [`weld`] | fixed joint | 3 + 3 | m, angle |
+//! | [`distance`] | distance joint (strut) | 1 | m |
+//! | [`point_plane`] | `point_on_plane` joint (=) and point–plane inequality (≥) | 1 | m |
+//! | [`finger`] | point grasp / rigid grasp | 3 / 3 + 3 | m, angle |
+//! | [`quat_norm`] | Euler-parameter norm, one per moving body | 1 | dimensionless |
+//! | [`limit`] | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
+//!
+//! [`axes`] holds the reference directions of the axis-aligning joints.
+
+pub(crate) mod axes;
+pub(crate) mod block;
+pub(crate) mod distance;
+pub(crate) mod finger;
+pub(crate) mod limit;
+mod meta;
+pub(crate) mod perpendicular;
+pub(crate) mod point_plane;
+pub(crate) mod prismatic;
+pub(crate) mod quat_norm;
+pub(crate) mod revolute;
+pub(crate) mod spherical;
+pub(crate) mod universal;
+pub(crate) mod weld;
+
+pub use meta::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
+
+use block::{Ctx, Groups, Sink, Slot};
+
+/// A compiled constraint: its geometry, ready to evaluate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Geometry {
+    Spherical(spherical::Spherical),
+    Perpendicular(perpendicular::Perpendicular),
+    Universal(universal::Universal),
+    Revolute(revolute::Revolute),
+    Prismatic(prismatic::Prismatic),
+    Weld(weld::Weld),
+    Distance(distance::Distance),
+    PointPlane(point_plane::PointPlane),
+    Finger(finger::Finger),
+    QuatNorm(quat_norm::QuatNorm),
+    Limit(limit::Limit),
+}
+
+impl Geometry {
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        match self {
+            Self::Spherical(_) => spherical::Spherical::ROWS,
+            Self::Perpendicular(_) => perpendicular::Perpendicular::ROWS,
+            Self::Universal(_) => universal::Universal::ROWS,
+            Self::Revolute(_) => revolute::Revolute::ROWS,
+            Self::Prismatic(_) => prismatic::Prismatic::ROWS,
+            Self::Weld(_) => weld::Weld::ROWS,
+            Self::Distance(_) => distance::Distance::ROWS,
+            Self::PointPlane(_) => point_plane::PointPlane::ROWS,
+            Self::Finger(f) => f.rows(),
+            Self::QuatNorm(_) => quat_norm::QuatNorm::ROWS,
+            Self::Limit(_) => limit::Limit::ROWS,
+        }
+    }
+
+    /// The column groups every row of this constraint touches.
+    pub fn groups(&self) -> Groups {
+        match self {
+            Self::Spherical(j) => j.pair.groups(),
+            Self::Perpendicular(j) => j.pair.groups(),
+            Self::Universal(j) => j.pair.groups(),
+            Self::Revolute(j) => j.pair.groups(),
+            Self::Prismatic(j) => j.pair.groups(),
+            Self::Weld(j) => j.pair.groups(),
+            Self::Distance(j) => {
+                let mut g = j.pair.groups();
+                if let block::Param1::Free(c) = j.length {
+                    g[Slot::Length as usize] = Some((c, 1));
+                }
+                g
+            }
+            Self::PointPlane(j) => j.pair.groups(),
+            Self::Finger(j) => j.pair.groups(),
+            Self::QuatNorm(j) => j.groups(),
+            Self::Limit(j) => j.groups(),
+        }
+    }
+
+    /// Frame indices of the two ends (for the Jacobian writer).
+    pub fn frames(&self) -> [usize; 2] {
+        match self {
+            Self::Spherical(j) => j.pair.frame,
+            Self::Perpendicular(j) => j.pair.frame,
+            Self::Universal(j) => j.pair.frame,
+            Self::Revolute(j) => j.pair.frame,
+            Self::Prismatic(j) => j.pair.frame,
+            Self::Weld(j) => j.pair.frame,
+            Self::Distance(j) => j.pair.frame,
+            Self::PointPlane(j) => j.pair.frame,
+            Self::Finger(j) => j.pair.frame,
+            // The norm row writes raw values only; any frame will do.
+            Self::QuatNorm(_) => [0, 0],
+            Self::Limit(j) => j.pair().frame,
+        }
+    }
+
+    /// Writes this constraint's rows of C into `c` and of C_q into `sink`.
+    #[inline]
+    pub fn eval<S: Sink>(&self, x: &Ctx, c: &mut [f64], sink: &mut S) {
+        match self {
+            Self::Spherical(j) => j.eval(x, c, sink),
+            Self::Perpendicular(j) => j.eval(x, c, sink),
+            Self::Universal(j) => j.eval(x, c, sink),
+            Self::Revolute(j) => j.eval(x, c, sink),
+            Self::Prismatic(j) => j.eval(x, c, sink),
+            Self::Weld(j) => j.eval(x, c, sink),
+            Self::Distance(j) => j.eval(x, c, sink),
+            Self::PointPlane(j) => j.eval(x, c, sink),
+            Self::Finger(j) => j.eval(x, c, sink),
+            Self::QuatNorm(j) => j.eval(x, c, sink),
+            Self::Limit(j) => j.eval(x, c, sink),
+        }
+    }
+}

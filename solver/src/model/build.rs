@@ -1,0 +1,245 @@
+//! [`ModelBuilder`]: collects specs, validates them and compiles a [`Model`].
+
+use std::collections::HashMap;
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::error::{BuildError, Owner};
+use super::joints::{Compiler, compile_finger, compile_joint};
+use super::layout::Layout;
+use super::spec::{BodySpec, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, FingerSpec, JointSpec};
+use super::{Body, Model, initial_frame, next_model_id};
+use crate::constraint::quat_norm::QuatNorm;
+use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, RowInfo};
+use crate::rotation::BodyFrame;
+use crate::{BodyId, ConstraintId, FingerId};
+
+/// Collects bodies, joints, fingers and gravity, then [`build`](Self::build)s a
+/// validated [`Model`]. Mirrors the scene format: one call per `[[body]]`,
+/// `[[joint]]`, `[[finger]]`; nothing is checked until `build`.
+#[derive(Debug, Clone, Default)]
+pub struct ModelBuilder {
+    bodies: Vec<BodySpec>,
+    joints: Vec<JointSpec>,
+    fingers: Vec<FingerSpec>,
+    gravity: [f64; 3],
+}
+
+impl ModelBuilder {
+    /// An empty builder (zero gravity).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Sets gravity, m/s², world frame (`scene.gravity`).
+    pub fn gravity(&mut self, gravity_m_s2: [f64; 3]) -> &mut Self {
+        self.gravity = gravity_m_s2;
+        self
+    }
+
+    /// Adds a body; its id is its insertion index.
+    pub fn body(&mut self, spec: BodySpec) -> BodyId {
+        self.bodies.push(spec);
+        BodyId(self.bodies.len() as u32 - 1)
+    }
+
+    /// Adds a joint; the k-th joint becomes `ConstraintId(k)` in the model.
+    pub fn joint(&mut self, spec: JointSpec) -> ConstraintId {
+        self.joints.push(spec);
+        ConstraintId(self.joints.len() as u32 - 1)
+    }
+
+    /// Adds a finger; its id is its insertion index.
+    pub fn finger(&mut self, spec: FingerSpec) -> FingerId {
+        self.fingers.push(spec);
+        FingerId(self.fingers.len() as u32 - 1)
+    }
+
+    /// Validates everything and compiles the model. The error names the first
+    /// offending body, joint or finger (in that order) and what is wrong.
+    pub fn build(&self) -> Result<Model, BuildError> {
+        if !self.gravity.iter().all(|v| v.is_finite()) {
+            return Err(BuildError::NonFinite {
+                owner: Owner::Scene,
+                field: "gravity",
+            });
+        }
+        let bodies = self
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, s)| body(i, s))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut by_name = HashMap::new();
+        for (i, b) in bodies.iter().enumerate() {
+            if by_name.insert(b.name.as_str(), BodyId(i as u32)).is_some() {
+                return Err(BuildError::DuplicateName {
+                    owner: Owner::Body(b.name.clone()),
+                });
+            }
+        }
+        let mut body_cols = Vec::with_capacity(bodies.len());
+        let mut col = 0;
+        for b in &bodies {
+            body_cols.push((!b.fixed).then_some(col));
+            col += if b.fixed { 0 } else { 7 };
+        }
+        let mut frames: Vec<BodyFrame> = bodies.iter().map(initial_frame).collect();
+        frames.push(BodyFrame::IDENTITY);
+        let mut cx = Compiler::new(&bodies, &by_name, &frames, &body_cols, col);
+
+        let mut out = Assembler::default();
+        let mut limits = Vec::new();
+        let mut joint_names = HashMap::new();
+        for (k, spec) in self.joints.iter().enumerate() {
+            let (info, geometry, limit) = compile_joint(k, spec, &mut cx)?;
+            if spec.name.is_some() && joint_names.insert(info.name.clone(), ()).is_some() {
+                return Err(BuildError::DuplicateName {
+                    owner: Owner::Joint(info.name),
+                });
+            }
+            limits.extend(limit.map(|(info, g)| (info, g, ConstraintId(k as u32))));
+            out.push(info, geometry);
+        }
+        let mut fingers = Vec::with_capacity(self.fingers.len());
+        for (k, spec) in self.fingers.iter().enumerate() {
+            if fingers.iter().any(|f: &super::Finger| f.name == spec.name) {
+                return Err(BuildError::DuplicateName {
+                    owner: Owner::Finger(spec.name.clone()),
+                });
+            }
+            let constraint = ConstraintId(out.infos.len() as u32);
+            let (finger, info, geometry) = compile_finger(k, spec, constraint, &mut cx)?;
+            fingers.push(finger);
+            out.push(info, geometry);
+        }
+        let (design_vars, dv_q0, len, characteristic_length) = cx.finish();
+        for (i, b) in bodies.iter().enumerate() {
+            if let Some(col) = body_cols[i] {
+                let info = ConstraintInfo {
+                    name: format!("{}.norm", b.name),
+                    kind: ConstraintKind::QuaternionNorm,
+                    rows: 0..0,
+                    bodies: [Some(BodyId(i as u32)), None],
+                    finger: None,
+                    limits: None,
+                };
+                out.push(info, Geometry::QuatNorm(QuatNorm { col }));
+            }
+        }
+        let equality_rows = out.rows.len();
+        for (mut info, geometry, joint) in limits {
+            info.limits = Some(joint);
+            out.push(info, geometry);
+        }
+
+        let mut q0 = Vec::with_capacity(len);
+        for b in bodies.iter().filter(|b| !b.fixed) {
+            let o = b.orientation.quaternion();
+            q0.extend_from_slice(b.position_m.as_slice());
+            q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
+        }
+        q0.extend_from_slice(&dv_q0);
+        let body_coords = col;
+        Ok(Model {
+            id: next_model_id(),
+            bodies,
+            fingers,
+            layout: Layout {
+                body_cols,
+                design_vars,
+                body_coords,
+                len,
+            },
+            geometry: out.geometry,
+            constraints: out.infos,
+            rows: out.rows,
+            q0,
+            gravity: Vector3::from(self.gravity),
+            equality_rows,
+            characteristic_length,
+        })
+    }
+}
+
+/// Appends constraints, assigning their row ranges and row metadata.
+#[derive(Default)]
+pub(super) struct Assembler {
+    pub infos: Vec<ConstraintInfo>,
+    pub geometry: Vec<Geometry>,
+    pub rows: Vec<RowInfo>,
+}
+
+impl Assembler {
+    pub fn push(&mut self, mut info: ConstraintInfo, geometry: Geometry) {
+        let id = ConstraintId(self.infos.len() as u32);
+        let n = geometry.rows();
+        let start = self.rows.len();
+        info.rows = start..start + n;
+        self.rows.extend((0..n).map(|r| RowInfo {
+            constraint: id,
+            sense: info.kind.sense(),
+            unit: info.kind.row_unit(r),
+        }));
+        self.infos.push(info);
+        self.geometry.push(geometry);
+    }
+}
+
+fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
+    if s.name.is_empty() {
+        return Err(BuildError::EmptyName {
+            owner: Owner::Body(format!("#{}", i + 1)),
+        });
+    }
+    let owner = || Owner::Body(s.name.clone());
+    let finite = |field, v: &[f64]| {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(BuildError::NonFinite {
+                owner: owner(),
+                field,
+            })
+        }
+    };
+    finite("position", &s.position_m)?;
+    finite("orientation", &s.orientation_wxyz)?;
+    let mass_kg = s.mass_kg.unwrap_or(DEFAULT_MASS_KG);
+    finite("mass", &[mass_kg])?;
+    if mass_kg <= 0.0 {
+        return Err(BuildError::NonPositiveMass {
+            owner: owner(),
+            mass_kg,
+        });
+    }
+    let sphere = 0.4 * mass_kg * DEFAULT_INERTIA_RADIUS_M * DEFAULT_INERTIA_RADIUS_M;
+    let inertia = s.inertia_kg_m2.unwrap_or([sphere; 3]);
+    finite("inertia", &inertia)?;
+    let [a, b, c] = inertia;
+    let slack = 1e-9 * (a + b + c);
+    if inertia.iter().any(|&x| x < 0.0)
+        || a > b + c + slack
+        || b > a + c + slack
+        || c > a + b + slack
+    {
+        return Err(BuildError::BadInertia {
+            owner: owner(),
+            inertia_kg_m2: inertia,
+        });
+    }
+    let [w, x, y, z] = s.orientation_wxyz;
+    let q = Quaternion::new(w, x, y, z);
+    let n2 = q.norm_squared();
+    if n2 <= 0.0 || !n2.is_finite() {
+        return Err(BuildError::ZeroOrientation { owner: owner() });
+    }
+    Ok(Body {
+        name: s.name.clone(),
+        fixed: s.fixed,
+        position_m: Vector3::from(s.position_m),
+        orientation: UnitQuaternion::from_quaternion(q),
+        mass_kg,
+        inertia_kg_m2: Vector3::from(inertia),
+    })
+}

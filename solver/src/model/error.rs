@@ -1,0 +1,256 @@
+//! Build errors: each names the offending body, joint, finger or inequality.
+
+use std::fmt;
+
+use super::spec::{DesignParam, JointKind};
+
+/// The item an error is about, printed as ``joint `j3` `` etc.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Owner {
+    /// A `[[body]]`.
+    Body(String),
+    /// A `[[joint]]` (unnamed joints are `#k`, 1-based).
+    Joint(String),
+    /// A `[[finger]]`.
+    Finger(String),
+    /// A point–plane inequality passed to
+    /// [`Model::with_inequalities`](crate::Model::with_inequalities).
+    Inequality(String),
+    /// Scene-level settings (gravity).
+    Scene,
+}
+
+impl fmt::Display for Owner {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Body(n) => write!(f, "body `{n}`"),
+            Self::Joint(n) => write!(f, "joint `{n}`"),
+            Self::Finger(n) => write!(f, "finger `{n}`"),
+            Self::Inequality(n) => write!(f, "inequality `{n}`"),
+            Self::Scene => f.write_str("scene"),
+        }
+    }
+}
+
+/// Why [`ModelBuilder::build`](crate::ModelBuilder::build) (or
+/// [`Model::with_inequalities`](crate::Model::with_inequalities)) rejected its input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// A name is empty.
+    #[error("{owner}: the name is empty")]
+    EmptyName {
+        /// What has no name (its index is in the owner string).
+        owner: Owner,
+    },
+    /// Two bodies, joints or fingers share a name.
+    #[error("{owner}: the name is used twice")]
+    DuplicateName {
+        /// The second item with the name.
+        owner: Owner,
+    },
+    /// A number is NaN or infinite.
+    #[error("{owner}: `{field}` is not finite")]
+    NonFinite {
+        /// Where.
+        owner: Owner,
+        /// Which field.
+        field: &'static str,
+    },
+    /// An orientation quaternion is zero or overflows when squared.
+    #[error("{owner}: `orientation` cannot be normalised (zero or overflowing)")]
+    ZeroOrientation {
+        /// The body.
+        owner: Owner,
+    },
+    /// A mass is not positive.
+    #[error("{owner}: mass {mass_kg} kg must be positive")]
+    NonPositiveMass {
+        /// The body.
+        owner: Owner,
+        /// The mass given.
+        mass_kg: f64,
+    },
+    /// Principal moments negative or violating the triangle inequality.
+    #[error(
+        "{owner}: inertia {inertia_kg_m2:?} kg·m² is not physical (moments must be ≥ 0 and each ≤ the sum of the other two)"
+    )]
+    BadInertia {
+        /// The body.
+        owner: Owner,
+        /// The moments given.
+        inertia_kg_m2: [f64; 3],
+    },
+    /// A reference to a body name (or id) that does not exist.
+    #[error("{owner}: names unknown body `{body}`")]
+    UnknownBody {
+        /// The joint, finger or inequality.
+        owner: Owner,
+        /// The name (or id) given.
+        body: String,
+    },
+    /// A joint (or inequality) names the same body twice.
+    #[error("{owner}: names body `{body}` twice")]
+    SameBody {
+        /// The joint.
+        owner: Owner,
+        /// The body.
+        body: String,
+    },
+    /// Both bodies are fixed (or the world): the constraint would have no columns.
+    #[error("{owner}: both bodies are fixed, so it constrains nothing")]
+    BothFixed {
+        /// The joint or inequality.
+        owner: Owner,
+    },
+    /// The kind needs `axes` and none were given.
+    #[error("{owner}: a {kind} joint needs `axes`")]
+    MissingAxes {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
+    /// An axis or normal has zero length.
+    #[error("{owner}: {field} has zero length")]
+    ZeroAxis {
+        /// The joint or inequality.
+        owner: Owner,
+        /// `axes[0]`, `axes[1]` or `normal`.
+        field: &'static str,
+    },
+    /// Axes that must be perpendicular are parallel at the initial configuration
+    /// (the perpendicular row would have a zero gradient there).
+    #[error(
+        "{owner}: axes are parallel at the initial configuration; a {kind} joint needs them perpendicular"
+    )]
+    ParallelAxes {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
+    /// A distance joint's anchors coincide at the initial configuration, so the
+    /// strut has no direction.
+    #[error(
+        "{owner}: anchors coincide at the initial configuration, so the distance has no direction"
+    )]
+    CoincidentAnchors {
+        /// The joint.
+        owner: Owner,
+    },
+    /// A distance joint's length is not positive.
+    #[error("{owner}: length {length_m} m must be positive")]
+    NonPositiveLength {
+        /// The joint.
+        owner: Owner,
+        /// The length given.
+        length_m: f64,
+    },
+    /// `length` given on a kind that has none.
+    #[error("{owner}: a {kind} joint has no `length`")]
+    UnexpectedLength {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
+    /// Limits with lo > hi.
+    #[error("{owner}: limits [{lo}, {hi}] have lo > hi")]
+    LimitsReversed {
+        /// The joint.
+        owner: Owner,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+    /// Limits on a kind without a joint coordinate.
+    #[error(
+        "{owner}: a {kind} joint has no joint coordinate to limit (only revolute, prismatic and distance do)"
+    )]
+    LimitsUnsupported {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
+    /// Revolute limits outside (−π, π).
+    #[error("{owner}: revolute limits [{lo}, {hi}] rad must lie inside (-π, π)")]
+    AngleLimitsOutOfRange {
+        /// The joint.
+        owner: Owner,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+    /// A fixed (not free) distance length lies outside its limits: infeasible.
+    #[error("{owner}: length {length_m} m lies outside limits [{lo}, {hi}] and is not free")]
+    LengthOutsideLimits {
+        /// The joint.
+        owner: Owner,
+        /// The length.
+        length_m: f64,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+    /// A design variable the kind does not have.
+    #[error("{owner}: a {kind} joint has no design variable `{param}`")]
+    UnsupportedFree {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+        /// The parameter.
+        param: DesignParam,
+    },
+    /// A design variable listed twice.
+    #[error("{owner}: design variable `{param}` is listed twice")]
+    DuplicateFree {
+        /// The joint.
+        owner: Owner,
+        /// The parameter.
+        param: DesignParam,
+    },
+    /// A finger on a fixed body.
+    #[error("{owner}: body `{body}` is fixed; a finger must hold a moving body")]
+    FingerOnFixedBody {
+        /// The finger.
+        owner: Owner,
+        /// The body.
+        body: String,
+    },
+}
+
+impl BuildError {
+    /// The item the error is about.
+    pub fn owner(&self) -> &Owner {
+        use BuildError::*;
+        match self {
+            EmptyName { owner }
+            | DuplicateName { owner }
+            | NonFinite { owner, .. }
+            | ZeroOrientation { owner }
+            | NonPositiveMass { owner, .. }
+            | BadInertia { owner, .. }
+            | UnknownBody { owner, .. }
+            | SameBody { owner, .. }
+            | BothFixed { owner }
+            | MissingAxes { owner, .. }
+            | ZeroAxis { owner, .. }
+            | ParallelAxes { owner, .. }
+            | CoincidentAnchors { owner }
+            | NonPositiveLength { owner, .. }
+            | UnexpectedLength { owner, .. }
+            | LimitsReversed { owner, .. }
+            | LimitsUnsupported { owner, .. }
+            | AngleLimitsOutOfRange { owner, .. }
+            | LengthOutsideLimits { owner, .. }
+            | UnsupportedFree { owner, .. }
+            | DuplicateFree { owner, .. }
+            | FingerOnFixedBody { owner, .. } => owner,
+        }
+    }
+}

@@ -1,0 +1,227 @@
+//! The mechanism model: bodies, the coordinate [`Layout`], the compiled
+//! constraints with per-row metadata, fingers and gravity. Built once by
+//! [`ModelBuilder`], immutable afterwards; [`Model::with_inequalities`] derives a
+//! model with extra point–plane inequalities for a new active set.
+
+mod build;
+mod error;
+mod inequality;
+mod joints;
+mod layout;
+mod spec;
+
+pub use build::ModelBuilder;
+pub use error::{BuildError, Owner};
+pub use inequality::{PlaneOwner, PointPlaneSpec};
+pub use layout::{DesignVar, Layout};
+pub use spec::{
+    BodySpec, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, FingerSpec, Grasp, JointKind,
+    JointSpec, UnknownName,
+};
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+use crate::constraint::{ConstraintInfo, Geometry, RowInfo};
+use crate::rotation::BodyFrame;
+use crate::{BodyId, ConstraintId, FingerId, FingerTarget};
+
+/// One rigid body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Body {
+    /// Unique name.
+    pub name: String,
+    /// Fixed bodies have no coordinates; their pose is the initial one forever.
+    pub fixed: bool,
+    /// Initial position of the origin, metres, world frame.
+    pub position_m: Vector3<f64>,
+    /// Initial orientation, body → world (normalised).
+    pub orientation: UnitQuaternion<f64>,
+    /// Mass, kilograms.
+    pub mass_kg: f64,
+    /// Principal moments of inertia about the body axes, kg·m².
+    pub inertia_kg_m2: Vector3<f64>,
+}
+
+/// One finger: a point (or rigid) grasp of a moving body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finger {
+    /// Unique name.
+    pub name: String,
+    /// The moving body held.
+    pub body: BodyId,
+    /// Attachment point, metres, body frame.
+    pub point_m: Vector3<f64>,
+    /// Point (3 rows) or rigid (6 rows).
+    pub grasp: Grasp,
+    /// Its constraint.
+    pub constraint: ConstraintId,
+}
+
+/// A validated mechanism. See the [crate docs](crate) for how it is used.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub(crate) id: u64,
+    pub(crate) bodies: Vec<Body>,
+    pub(crate) fingers: Vec<Finger>,
+    pub(crate) layout: Layout,
+    pub(crate) geometry: Vec<Geometry>,
+    pub(crate) constraints: Vec<ConstraintInfo>,
+    pub(crate) rows: Vec<RowInfo>,
+    pub(crate) q0: Vec<f64>,
+    pub(crate) gravity: Vector3<f64>,
+    pub(crate) equality_rows: usize,
+    pub(crate) characteristic_length: f64,
+}
+
+fn next_model_id() -> u64 {
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
+}
+
+impl Model {
+    /// All bodies, fixed ones included, in builder order.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// The body called `name`.
+    pub fn body_id(&self, name: &str) -> Option<BodyId> {
+        self.bodies
+            .iter()
+            .position(|b| b.name == name)
+            .map(|i| BodyId(i as u32))
+    }
+
+    /// The fingers, in builder order (also the order of the targets slice).
+    pub fn fingers(&self) -> &[Finger] {
+        &self.fingers
+    }
+
+    /// The finger called `name`.
+    pub fn finger_id(&self, name: &str) -> Option<FingerId> {
+        self.fingers
+            .iter()
+            .position(|f| f.name == name)
+            .map(|i| FingerId(i as u32))
+    }
+
+    /// Where each body and design variable lives in q.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// Number of coordinates (columns of C_q).
+    pub fn n_coords(&self) -> usize {
+        self.layout.len
+    }
+
+    /// Number of rows of C.
+    pub fn n_rows(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// All constraints. Order: joints (so the k-th joint is `ConstraintId(k)`),
+    /// fingers, quaternion norms (equalities), then joint limits and point–plane
+    /// inequalities.
+    pub fn constraints(&self) -> &[ConstraintInfo] {
+        &self.constraints
+    }
+
+    /// The constraint called `name`.
+    pub fn constraint_id(&self, name: &str) -> Option<ConstraintId> {
+        self.constraints
+            .iter()
+            .position(|c| c.name == name)
+            .map(|i| ConstraintId(i as u32))
+    }
+
+    /// Per-row metadata, one entry per row of C.
+    pub fn rows(&self) -> &[RowInfo] {
+        &self.rows
+    }
+
+    /// The equality rows (C = 0): always a prefix of C.
+    pub fn equality_rows(&self) -> Range<usize> {
+        0..self.equality_rows
+    }
+
+    /// The inequality rows (C ≥ 0): always a suffix of C.
+    pub fn inequality_rows(&self) -> Range<usize> {
+        self.equality_rows..self.rows.len()
+    }
+
+    /// The initial configuration: bodies at their given poses (unit quaternions),
+    /// design variables at their given values.
+    pub fn q0(&self) -> &[f64] {
+        &self.q0
+    }
+
+    /// Finger targets that the initial configuration satisfies exactly: each
+    /// finger's world point and its body's orientation at q0.
+    pub fn initial_targets(&self) -> Vec<FingerTarget> {
+        self.fingers
+            .iter()
+            .map(|f| {
+                let b = &self.bodies[f.body.index()];
+                FingerTarget {
+                    position_m: b.position_m + b.orientation * f.point_m,
+                    orientation: b.orientation,
+                }
+            })
+            .collect()
+    }
+
+    /// Gravity, m/s², world frame (zero if the scene gives none).
+    pub fn gravity_m_s2(&self) -> Vector3<f64> {
+        self.gravity
+    }
+
+    /// The largest lever arm in the model (anchor or finger point distance from
+    /// its body origin), metres, at least 1 mm: a rotation δθ moves a point by
+    /// about this × δθ, so it converts angle rows to metres when scaling K.
+    pub fn characteristic_length_m(&self) -> f64 {
+        self.characteristic_length
+    }
+
+    /// World position of a body's origin at `q`, metres (fixed bodies: their
+    /// pose). `None` for an unknown body or a q of the wrong length.
+    pub fn body_position(&self, q: &[f64], body: BodyId) -> Option<Vector3<f64>> {
+        self.body_frame(q, body).map(|f| f.r)
+    }
+
+    /// Rotation matrix (body → world) of a body at `q`: the rational R(e), exact
+    /// for non-unit e. `None` for an unknown body, a wrong-length q or a
+    /// degenerate quaternion.
+    pub fn body_rotation(&self, q: &[f64], body: BodyId) -> Option<Matrix3<f64>> {
+        self.body_frame(q, body).map(|f| f.rot)
+    }
+
+    /// World position of a finger's attachment point at `q`, metres.
+    pub fn finger_point(&self, q: &[f64], finger: FingerId) -> Option<Vector3<f64>> {
+        let f = self.fingers.get(finger.index())?;
+        self.body_frame(q, f.body).map(|fr| fr.point(&f.point_m))
+    }
+
+    pub(crate) fn body_frame(&self, q: &[f64], body: BodyId) -> Option<BodyFrame> {
+        let b = self.bodies.get(body.index())?;
+        if q.len() != self.layout.len {
+            return None;
+        }
+        match self.layout.body_offset(body) {
+            Some(o) => BodyFrame::new(
+                Vector3::new(q[o], q[o + 1], q[o + 2]),
+                [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
+            ),
+            None => Some(initial_frame(b)),
+        }
+    }
+}
+
+/// The frame of a body at its initial (for fixed bodies: permanent) pose.
+pub(crate) fn initial_frame(b: &Body) -> BodyFrame {
+    let o = b.orientation.quaternion();
+    BodyFrame::new(b.position_m, [o.w, o.i, o.j, o.k]).unwrap_or(BodyFrame::IDENTITY)
+}

@@ -1,0 +1,280 @@
+//! The builder's vocabulary. It mirrors `scene-format.md` one-to-one so a scene
+//! file compiles into builder calls: `[[body]]` → [`BodySpec`], `[[joint]]` →
+//! [`JointSpec`], `[[finger]]` → [`FingerSpec`], `scene.gravity` →
+//! [`ModelBuilder::gravity`](crate::ModelBuilder::gravity). Units are SI;
+//! vectors are `[x, y, z]`; orientations are `[w, x, y, z]`.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// Default mass when a body gives none, kilograms.
+pub const DEFAULT_MASS_KG: f64 = 1.0;
+
+/// Radius of the solid sphere whose inertia a body gets when it gives none,
+/// metres: a 10 cm ball is the scale of objects held in a PHANToM workspace, so
+/// rotational and translational inertia stay commensurate. The default inertia
+/// is `(2/5) m r²` about each principal axis.
+pub const DEFAULT_INERTIA_RADIUS_M: f64 = 0.05;
+
+/// A `[[body]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodySpec {
+    /// Required, unique.
+    pub name: String,
+    /// Fixed bodies have no coordinates.
+    pub fixed: bool,
+    /// Initial (or, if fixed, permanent) position of the body origin, metres, world frame.
+    pub position_m: [f64; 3],
+    /// Initial orientation `[w, x, y, z]`, body → world; normalised on build.
+    pub orientation_wxyz: [f64; 4],
+    /// Mass, kilograms (default [`DEFAULT_MASS_KG`]).
+    pub mass_kg: Option<f64>,
+    /// Principal moments of inertia in the body frame, kg·m² (default: a solid
+    /// sphere of radius [`DEFAULT_INERTIA_RADIUS_M`] and the body's mass).
+    pub inertia_kg_m2: Option<[f64; 3]>,
+}
+
+impl BodySpec {
+    /// A moving body at the origin with identity orientation and default mass.
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            fixed: false,
+            position_m: [0.0; 3],
+            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+            mass_kg: None,
+            inertia_kg_m2: None,
+        }
+    }
+
+    /// A fixed body at the origin.
+    pub fn fixed(name: impl Into<String>) -> Self {
+        Self {
+            fixed: true,
+            ..Self::new(name)
+        }
+    }
+
+    /// Sets the position, metres.
+    pub fn at(mut self, position_m: [f64; 3]) -> Self {
+        self.position_m = position_m;
+        self
+    }
+
+    /// Sets the orientation `[w, x, y, z]`.
+    pub fn oriented(mut self, orientation_wxyz: [f64; 4]) -> Self {
+        self.orientation_wxyz = orientation_wxyz;
+        self
+    }
+
+    /// Sets the mass, kilograms.
+    pub fn mass(mut self, mass_kg: f64) -> Self {
+        self.mass_kg = Some(mass_kg);
+        self
+    }
+
+    /// Sets the principal moments of inertia, kg·m².
+    pub fn inertia(mut self, inertia_kg_m2: [f64; 3]) -> Self {
+        self.inertia_kg_m2 = Some(inertia_kg_m2);
+        self
+    }
+}
+
+macro_rules! named_enum {
+    ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $var:ident = $s:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum $name { $($(#[$vdoc])* $var),+ }
+
+        impl $name {
+            /// Every variant, in declaration order.
+            pub const ALL: &'static [Self] = &[$(Self::$var),+];
+
+            /// The scene-file spelling.
+            pub fn as_str(self) -> &'static str {
+                match self { $(Self::$var => $s),+ }
+            }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl FromStr for $name {
+            type Err = UnknownName;
+            fn from_str(s: &str) -> Result<Self, UnknownName> {
+                Self::ALL.iter().copied().find(|v| v.as_str() == s).ok_or_else(|| UnknownName {
+                    what: stringify!($name),
+                    name: s.to_owned(),
+                    expected: Self::ALL.iter().map(|v| v.as_str()).collect::<Vec<_>>().join(" | "),
+                })
+            }
+        }
+    };
+}
+
+/// A scene-file word that names no variant.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} `{name}`; expected one of {expected}")]
+pub struct UnknownName {
+    /// The enum looked up.
+    pub what: &'static str,
+    /// The word given.
+    pub name: String,
+    /// The accepted words, `|`-separated.
+    pub expected: String,
+}
+
+named_enum!(
+    /// `joint.kind`.
+    JointKind {
+        /// Anchors coincide (3 rows).
+        Spherical = "spherical",
+        /// Spherical + axes stay parallel (5 rows); needs `axes`.
+        Revolute = "revolute",
+        /// Spherical + axes perpendicular (4 rows); needs `axes`.
+        Universal = "universal",
+        /// Anchor j slides along axis i, no relative rotation (5 rows); needs `axes`.
+        Prismatic = "prismatic",
+        /// Weld: anchors coincide and the initial relative orientation is kept (6 rows).
+        Fixed = "fixed",
+        /// Anchors stay `length` apart (1 row).
+        Distance = "distance",
+        /// Axes stay perpendicular (1 row); needs `axes`, ignores `anchors`.
+        Perpendicular = "perpendicular",
+        /// Anchor i stays on the plane through anchor j with normal `axes[1]` of
+        /// body j (1 row); `axes[0]` is ignored.
+        PointOnPlane = "point_on_plane",
+    }
+);
+
+named_enum!(
+    /// An entry of `joint.free`: a joint parameter that becomes a coordinate.
+    DesignParam {
+        /// The length of a distance joint (1 coordinate, metres).
+        Length = "length",
+        /// Anchor k_i in body i's frame (3 coordinates, metres).
+        AnchorI = "anchor_i",
+        /// Anchor k_j in body j's frame (3 coordinates, metres).
+        AnchorJ = "anchor_j",
+    }
+);
+
+named_enum!(
+    /// `finger.grasp`.
+    Grasp {
+        /// The finger holds a point (3 rows).
+        Point = "point",
+        /// The finger holds the body rigidly: point and orientation (6 rows).
+        Rigid = "rigid",
+    }
+);
+
+/// A `[[joint]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointSpec {
+    /// Optional, unique if given; unnamed joints are called `#k` (1-based) in errors.
+    pub name: Option<String>,
+    /// Joint kind.
+    pub kind: JointKind,
+    /// Body names `[i, j]`.
+    pub bodies: [String; 2],
+    /// Body-frame anchor points `[k_i, k_j]`, metres (default: both origins).
+    pub anchors_m: [[f64; 3]; 2],
+    /// Body-frame axes `[h_i, h_j]` where the kind needs them (normalised on build).
+    pub axes: Option<[[f64; 3]; 2]>,
+    /// Distance joints: length, metres (default: the anchors' initial distance).
+    pub length_m: Option<f64>,
+    /// Optional `[lo, hi]` on the joint coordinate (revolute: angle, rad;
+    /// prismatic: displacement, m; distance: measured length, m).
+    pub limits: Option<[f64; 2]>,
+    /// Parameters that become design variables.
+    pub free: Vec<DesignParam>,
+}
+
+impl JointSpec {
+    /// A joint of `kind` between bodies `i` and `j`, anchored at both origins.
+    pub fn new(kind: JointKind, i: impl Into<String>, j: impl Into<String>) -> Self {
+        Self {
+            name: None,
+            kind,
+            bodies: [i.into(), j.into()],
+            anchors_m: [[0.0; 3]; 2],
+            axes: None,
+            length_m: None,
+            limits: None,
+            free: Vec::new(),
+        }
+    }
+
+    /// Sets the name.
+    pub fn named(mut self, name: impl Into<String>) -> Self {
+        self.name = Some(name.into());
+        self
+    }
+
+    /// Sets the body-frame anchors `[k_i, k_j]`, metres.
+    pub fn anchors(mut self, k_i: [f64; 3], k_j: [f64; 3]) -> Self {
+        self.anchors_m = [k_i, k_j];
+        self
+    }
+
+    /// Sets the body-frame axes `[h_i, h_j]`.
+    pub fn axes(mut self, h_i: [f64; 3], h_j: [f64; 3]) -> Self {
+        self.axes = Some([h_i, h_j]);
+        self
+    }
+
+    /// Sets the length, metres.
+    pub fn length(mut self, length_m: f64) -> Self {
+        self.length_m = Some(length_m);
+        self
+    }
+
+    /// Sets `[lo, hi]` limits on the joint coordinate.
+    pub fn limits(mut self, lo: f64, hi: f64) -> Self {
+        self.limits = Some([lo, hi]);
+        self
+    }
+
+    /// Marks parameters free.
+    pub fn free(mut self, params: &[DesignParam]) -> Self {
+        self.free.extend_from_slice(params);
+        self
+    }
+}
+
+/// A `[[finger]]` entry (the device binding lives outside the solver).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FingerSpec {
+    /// Required, unique.
+    pub name: String,
+    /// The moving body held.
+    pub body: String,
+    /// Body-frame attachment point, metres.
+    pub point_m: [f64; 3],
+    /// Point or rigid grasp.
+    pub grasp: Grasp,
+}
+
+impl FingerSpec {
+    /// A point grasp of `body` at `point_m`.
+    pub fn point(name: impl Into<String>, body: impl Into<String>, point_m: [f64; 3]) -> Self {
+        Self {
+            name: name.into(),
+            body: body.into(),
+            point_m,
+            grasp: Grasp::Point,
+        }
+    }
+
+    /// A rigid grasp of `body` at `point_m`.
+    pub fn rigid(name: impl Into<String>, body: impl Into<String>, point_m: [f64; 3]) -> Self {
+        Self {
+            grasp: Grasp::Rigid,
+            ..Self::point(name, body, point_m)
+        }
+    }
+}

@@ -1,0 +1,14 @@
+//! Integration tests of haptloop-solver: one binary, a module per area.
+//! The counting allocator is installed so `alloc` can prove zero allocation.
+
+#[global_allocator]
+static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
+
+mod alloc;
+mod build_errors;
+mod common;
+mod fd;
+mod jacobian_fd;
+mod mechanisms;
+mod model;
+mod pattern;
