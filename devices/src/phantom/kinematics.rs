@@ -43,12 +43,88 @@ impl ArmGeometry {
         Vector3::new(s1 * r, l2 - l2 * c3 + l1 * s2, c1 * r - l1)
     }
 
-    /// Jacobian ∂p/∂θ (metres per radian), column j = joint j.
-    pub fn jacobian(&self, theta: &Vector3<f64>) -> Matrix3<f64> {
+    /// Tip position and Jacobian together, sharing the trigonometry (one
+    /// `sin_cos` per joint for both).
+    pub fn forward_and_jacobian(&self, theta: &Vector3<f64>) -> (Vector3<f64>, Matrix3<f64>) {
         let (l1, l2) = (self.link1_m, self.link2_m);
         let (s1, c1) = theta[0].sin_cos();
         let (s2, c2) = theta[1].sin_cos();
         let (s3, c3) = theta[2].sin_cos();
+        let r = l1 * c2 + l2 * s3;
+        let p = Vector3::new(s1 * r, l2 - l2 * c3 + l1 * s2, c1 * r - l1);
+        (p, self.jacobian_from_trig([s1, c1, s2, c2, s3, c3]))
+    }
+
+    /// Jacobian ∂p/∂θ (metres per radian), column j = joint j.
+    pub fn jacobian(&self, theta: &Vector3<f64>) -> Matrix3<f64> {
+        let (s1, c1) = theta[0].sin_cos();
+        let (s2, c2) = theta[1].sin_cos();
+        let (s3, c3) = theta[2].sin_cos();
+        self.jacobian_from_trig([s1, c1, s2, c2, s3, c3])
+    }
+
+    /// Sines and cosines `[s1, c1, s2, c2, s3, c3]` of the joint angles that
+    /// put the tip at `p` (elbow-down branch), from the inverse-kinematics
+    /// geometry with three square roots and no trigonometric calls — for the
+    /// physics sub-steps. `None` when `p` is on the joint-1 axis or out of
+    /// reach (singular).
+    pub fn joint_trig_at_position(&self, p: &Vector3<f64>) -> Option<[f64; 6]> {
+        let (l1, l2) = (self.link1_m, self.link2_m);
+        let zs = p.z + l1;
+        let r2 = p.x * p.x + zs * zs;
+        let h = p.y - l2;
+        let d2 = r2 + h * h;
+        let c = (d2 - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
+        if r2 < 1e-18 || !(-1.0..1.0).contains(&c) {
+            return None;
+        }
+        let (r, d) = (r2.sqrt(), d2.sqrt());
+        let (s1, c1) = (p.x / r, zs / r);
+        // γ = φ − θ2 in (−π, 0): cos γ = c, sin γ = −√(1 − c²).
+        let (cg, sg) = (c, -(1.0 - c * c).sqrt());
+        // θ2 = α − β with α the angle of the shoulder→tip line and β that of
+        // (l1 + l2 cos γ, l2 sin γ), whose length is d (law of cosines).
+        let (ca, sa) = (r / d, h / d);
+        let (cb, sb) = ((l1 + l2 * cg) / d, l2 * sg / d);
+        let (c2, s2) = (ca * cb + sa * sb, sa * cb - ca * sb);
+        // θ3 = θ2 + γ + π/2: sin θ3 = cos(θ2 + γ), cos θ3 = −sin(θ2 + γ).
+        let (c2g, s2g) = (c2 * cg - s2 * sg, s2 * cg + c2 * sg);
+        Some([s1, c1, s2, c2, c2g, -s2g])
+    }
+
+    /// The Jacobian at the joint angles that put the tip at `p` (see
+    /// [`ArmGeometry::joint_trig_at_position`]).
+    pub fn jacobian_at_position(&self, p: &Vector3<f64>) -> Option<Matrix3<f64>> {
+        self.joint_trig_at_position(p)
+            .map(|t| self.jacobian_from_trig(t))
+    }
+
+    /// Tip force F = J⁻ᵀ τ (newtons, device frame) at joint sines/cosines
+    /// `trig`, using the arm's structure instead of a general 3×3 inverse: in
+    /// the frame turned by θ1 (e1 = (c1, 0, −s1), e2 = y, e3 = (s1, 0, c1)),
+    /// τ1 = R f1, τ2 = l1(c2 f2 − s2 f3), τ3 = l2(s3 f2 + c3 f3), whose 2×2
+    /// part has determinant cos(θ2 − θ3). `None` when R or that determinant
+    /// is below 1e-6 (relative): the arm is singular.
+    pub fn force_for_torques_from_trig(
+        &self,
+        [s1, c1, s2, c2, s3, c3]: [f64; 6],
+        torque_nm: &Vector3<f64>,
+    ) -> Option<Vector3<f64>> {
+        let (l1, l2) = (self.link1_m, self.link2_m);
+        let r = l1 * c2 + l2 * s3;
+        let det = c2 * c3 + s2 * s3;
+        if r.abs() < 1e-6 * l1 || det.abs() < 1e-6 || det.is_nan() {
+            return None;
+        }
+        let f1 = torque_nm[0] / r;
+        let (a, b) = (torque_nm[1] / l1, torque_nm[2] / l2);
+        let f2 = (c3 * a + s2 * b) / det;
+        let f3 = (c2 * b - s3 * a) / det;
+        Some(Vector3::new(f1 * c1 + f3 * s1, f2, f3 * c1 - f1 * s1))
+    }
+
+    fn jacobian_from_trig(&self, [s1, c1, s2, c2, s3, c3]: [f64; 6]) -> Matrix3<f64> {
+        let (l1, l2) = (self.link1_m, self.link2_m);
         let r = l1 * c2 + l2 * s3;
         #[rustfmt::skip]
         let j = Matrix3::new(
@@ -122,6 +198,36 @@ mod tests {
                     prop_assert!((fd - j.column(col)).norm() < 1e-8, "col {col}: fd {fd} vs {}", j.column(col));
                 }
             }
+        }
+
+        /// The trig-free Jacobian at a position equals the Jacobian at the
+        /// angles that reach it (to round-off, 1e-12 m/rad).
+        #[test]
+        fn jacobian_at_position_matches_jacobian_at_angles(theta in angles()) {
+            for g in [PREMIUM_1_5.geometry, OMNI.geometry] {
+                let j = g.jacobian_at_position(&g.forward(&theta)).unwrap();
+                prop_assert!((j - g.jacobian(&theta)).norm() < 1e-12, "{j} vs {}", g.jacobian(&theta));
+            }
+        }
+
+        /// The structured J⁻ᵀ equals the general inverse (relative 1e-12).
+        #[test]
+        fn structured_force_for_torques_matches_general_inverse(theta in angles(), t1 in -1.0..1.0f64, t2 in -1.0..1.0f64, t3 in -1.0..1.0f64) {
+            let g = PREMIUM_1_5.geometry;
+            let tau = Vector3::new(t1, t2, t3);
+            let trig = g.joint_trig_at_position(&g.forward(&theta)).unwrap();
+            let fast = g.force_for_torques_from_trig(trig, &tau).unwrap();
+            let general = crate::phantom::motors::force_for_torques(&g, &theta, &tau).unwrap();
+            prop_assert!((fast - general).norm() <= 1e-12 * general.norm().max(1.0), "{fast} vs {general}");
+        }
+
+        /// The fused routine returns exactly what the separate ones do.
+        #[test]
+        fn forward_and_jacobian_agree_with_separate_calls(theta in angles()) {
+            let g = PREMIUM_1_5.geometry;
+            let (p, j) = g.forward_and_jacobian(&theta);
+            prop_assert_eq!(p, g.forward(&theta));
+            prop_assert_eq!(j, g.jacobian(&theta));
         }
 
         /// IK inverts FK on the elbow-down branch to round-off (1e-9 rad).

@@ -31,12 +31,29 @@ pub fn force_for_torques(
     theta: &Vector3<f64>,
     torque_nm: &Vector3<f64>,
 ) -> Option<Vector3<f64>> {
-    let jt: Matrix3<f64> = geometry.jacobian(theta).transpose();
+    force_for_torques_with(geometry, &geometry.jacobian(theta), torque_nm)
+}
+
+/// F = J⁻ᵀ τ for a given Jacobian (solves Jᵀ F = τ by Cramer's rule); `None`
+/// when |det J| is below 1e-9 of its scale l1·l2·(l1 + l2).
+pub fn force_for_torques_with(
+    geometry: &ArmGeometry,
+    jacobian: &Matrix3<f64>,
+    torque_nm: &Vector3<f64>,
+) -> Option<Vector3<f64>> {
+    let jt = jacobian.transpose();
+    let (c0, c1, c2) = (jt.column(0), jt.column(1), jt.column(2));
+    let det = c0.dot(&c1.cross(&c2));
     let scale = geometry.link1_m * geometry.link2_m * (geometry.link1_m + geometry.link2_m);
-    if jt.determinant().abs() < 1e-9 * scale {
+    if det.is_nan() || det.abs() < 1e-9 * scale {
         return None;
     }
-    jt.try_inverse().map(|inv| inv * torque_nm)
+    let inv_det = 1.0 / det;
+    Some(Vector3::new(
+        torque_nm.dot(&c1.cross(&c2)) * inv_det,
+        c0.dot(&torque_nm.cross(&c2)) * inv_det,
+        c0.dot(&c1.cross(torque_nm)) * inv_det,
+    ))
 }
 
 /// Per-joint torque limits and the saturation rule.

@@ -26,7 +26,7 @@
 
 use std::time::Duration;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::PhantomModel;
 use super::encoder::Encoder;
@@ -134,7 +134,8 @@ pub struct SimPhantom {
     last_write: Duration,
     hw_watchdog: Option<Duration>,
     watchdog_tripped: bool,
-    sensed_theta: Vector3<f64>,
+    /// Jacobian at the last sensed (quantised) angles: what `write` maps with.
+    sensed_jacobian: Matrix3<f64>,
     last_motor_force: Vector3<f64>,
     thermal: ThermalModel,
     faults: FaultSchedule,
@@ -144,6 +145,8 @@ pub struct SimPhantom {
     /// Forces at the current state (end of the last sub-step), reused as the
     /// start of the next one; cleared whenever torque or hand change.
     cached_forces: Option<Forces>,
+    /// (hand orientation, its quantised reading).
+    gimbal_cache: Option<(UnitQuaternion<f64>, UnitQuaternion<f64>)>,
 }
 
 /// Forces on the tip at one state, newtons, device frame.
@@ -192,7 +195,9 @@ impl SimPhantom {
             last_write: Duration::ZERO,
             hw_watchdog: None,
             watchdog_tripped: false,
-            sensed_theta: encoder.angles(&encoder.counts(&theta)),
+            sensed_jacobian: model
+                .geometry
+                .jacobian(&encoder.angles(&encoder.counts(&theta))),
             last_motor_force: Vector3::zeros(),
             thermal: ThermalModel::new(model.continuous_force_n, model.thermal_time_constant_s),
             faults: FaultSchedule::default(),
@@ -200,6 +205,7 @@ impl SimPhantom {
             hand_work_j: 0.0,
             motor_work_j: 0.0,
             cached_forces: None,
+            gimbal_cache: None,
         })
     }
 
@@ -355,9 +361,10 @@ impl SimPhantom {
     fn forces(&self, p: &Vector3<f64>, v: &Vector3<f64>, t_s: f64) -> Forces {
         let g = &self.model.geometry;
         let motor = if self.motors_on {
-            let (theta, _) = g.inverse(p);
             // At a singular pose keep the last force rather than divide by ~0.
-            motors::force_for_torques(g, &theta, &self.torque_nm).unwrap_or(self.last_motor_force)
+            g.joint_trig_at_position(p)
+                .and_then(|t| g.force_for_torques_from_trig(t, &self.torque_nm))
+                .unwrap_or(self.last_motor_force)
         } else {
             Vector3::zeros()
         };
@@ -402,11 +409,22 @@ impl SimPhantom {
         f
     }
 
-    fn quantised_orientation(&self) -> UnitQuaternion<f64> {
-        let (r, p, y) = self.hand.orientation_device.euler_angles();
-        let c = self.gimbal.counts(&Vector3::new(r, p, y));
-        let a = self.gimbal.angles(&c);
-        UnitQuaternion::from_euler_angles(a[0], a[1], a[2])
+    /// The stylus orientation as the gimbal encoders report it (roll, pitch,
+    /// yaw each quantised), cached while the hand's orientation is unchanged.
+    fn quantised_orientation(&mut self) -> UnitQuaternion<f64> {
+        let held = self.hand.orientation_device;
+        if let Some((q, sensed)) = self.gimbal_cache
+            && q == held
+        {
+            return sensed;
+        }
+        let (r, p, y) = held.euler_angles();
+        let a = self
+            .gimbal
+            .angles(&self.gimbal.counts(&Vector3::new(r, p, y)));
+        let sensed = UnitQuaternion::from_euler_angles(a[0], a[1], a[2]);
+        self.gimbal_cache = Some((held, sensed));
+        sensed
     }
 }
 
@@ -444,15 +462,24 @@ impl Device for SimPhantom {
         if self.watchdog_tripped && !self.motors_on {
             flags = flags.with(ReadingFlags::MOTORS_OFF);
         }
-        let mut reading = self.model.reading_from_counts(&counts, now);
-        reading.orientation_device = self.quantised_orientation();
-        reading.buttons = self.hand.buttons;
-        reading.flags = flags;
+        // Same conversion as `PhantomModel::reading_from_counts`, fused with the
+        // Jacobian the next `write` maps with.
+        let angles = self.encoder.angles(&counts);
+        let (tip, sensed_jacobian) = self.model.geometry.forward_and_jacobian(&angles);
+        let mut reading = DeviceReading {
+            time: now,
+            joint_counts: counts,
+            joint_angles_rad: angles,
+            tip_m_device: tip,
+            orientation_device: self.quantised_orientation(),
+            buttons: self.hand.buttons,
+            flags,
+        };
         if active.nan {
             reading.joint_angles_rad = Vector3::repeat(f64::NAN);
             reading.tip_m_device = Vector3::repeat(f64::NAN);
         } else {
-            self.sensed_theta = reading.joint_angles_rad;
+            self.sensed_jacobian = sensed_jacobian;
         }
         Ok(reading)
     }
@@ -489,7 +516,7 @@ impl Device for SimPhantom {
         if thermal_limited {
             force *= allowed / force.norm();
         }
-        let tau = motors::torques_for_force(&self.model.geometry, &self.sensed_theta, &force);
+        let tau = self.sensed_jacobian.transpose() * force;
         let (tau, saturated) = if self.options.motor_saturation {
             self.motor_limits.saturate(tau)
         } else {

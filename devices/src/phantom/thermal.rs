@@ -16,7 +16,8 @@
 //! about 0.55 s from cold (τ_th·−ln(1 − (1.4/8.5)²)).
 //!
 //! # Real-time
-//! One `exp` per update: no allocation, constant time.
+//! At most one `exp` per update (cached for a repeated step length): no
+//! allocation, constant time.
 
 /// First-order thermal model of the motors of one arm.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -25,6 +26,9 @@ pub struct ThermalModel {
     time_constant_s: f64,
     load: f64,
     limiting: bool,
+    /// Cache of the last step length and its `1 − exp(−dt/τ)`.
+    last_dt_s: f64,
+    last_a: f64,
 }
 
 impl ThermalModel {
@@ -40,6 +44,8 @@ impl ThermalModel {
             time_constant_s: time_constant_s.max(1e-6),
             load: 0.0,
             limiting: false,
+            last_dt_s: 0.0,
+            last_a: 0.0,
         }
     }
 
@@ -56,8 +62,11 @@ impl ThermalModel {
     /// Advances the temperature by `dt_s` seconds with `force_n` applied.
     pub fn update(&mut self, force_n: f64, dt_s: f64) {
         let target = (force_n / self.continuous_force_n).powi(2);
-        let a = 1.0 - (-dt_s / self.time_constant_s).exp();
-        self.load += a * (target - self.load);
+        if dt_s != self.last_dt_s {
+            self.last_dt_s = dt_s;
+            self.last_a = 1.0 - (-dt_s / self.time_constant_s).exp();
+        }
+        self.load += self.last_a * (target - self.load);
         if self.load >= 1.0 {
             self.limiting = true;
         } else if self.load < Self::RELEASE_LOAD {
