@@ -7,6 +7,8 @@
 //! | [`encoder`] | joint angle ↔ encoder count quantisation |
 //! | [`motors`] | Jᵀ torque mapping, torque saturation |
 //! | [`thermal`] | motor heating and the continuous-force cut |
+//! | [`options`] | [`SimOptions`]: loop period, sub-steps, which limits are modelled |
+//! | `stops` | end stops at the workspace box and the arm's reach |
 //! | [`sim`] | [`SimPhantom`]: sub-stepped tip dynamics under hand + motor force |
 //!
 //! # Where the numbers come from
@@ -33,11 +35,14 @@
 pub mod encoder;
 pub mod kinematics;
 pub mod motors;
+pub mod options;
 pub mod sim;
+mod stops;
 pub mod thermal;
 
 pub use kinematics::ArmGeometry;
-pub use sim::{SimOptions, SimPhantom};
+pub use options::SimOptions;
+pub use sim::SimPhantom;
 
 use std::time::Duration;
 

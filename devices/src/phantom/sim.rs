@@ -28,91 +28,15 @@ use std::time::Duration;
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-use super::PhantomModel;
 use super::encoder::Encoder;
 use super::motors::{self, MotorLimits};
+use super::options::SimOptions;
 use super::thermal::ThermalModel;
+use super::{PhantomModel, stops};
 use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport, ReadingFlags};
 use crate::error::DeviceError;
 use crate::fault::{FaultSchedule, InjectedFault};
 use crate::hand::Hand;
-
-/// Options of a simulated arm.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SimOptions {
-    /// Period of the fast loop that will drive the device (default 1 ms).
-    pub loop_period: Duration,
-    /// Physics sub-steps per loop period, ≥ 4 (default 4: the minimum;
-    /// velocity Verlet with 20 kN/m end stops is stable far beyond it).
-    pub substeps_per_period: u32,
-    /// Where the tip starts (and the hand's anchor), metres, device frame
-    /// (default: the home pose, origin).
-    pub start_m_device: Vector3<f64>,
-    /// Enforce the continuous-force rating with the thermal model (default true).
-    pub thermal: bool,
-    /// Saturate motor torques at the peak force (default true).
-    pub motor_saturation: bool,
-    /// Stop the tip at the workspace box and the arm's reach (default true).
-    pub end_stops: bool,
-}
-
-impl Default for SimOptions {
-    fn default() -> Self {
-        Self {
-            loop_period: Duration::from_millis(1),
-            substeps_per_period: 4,
-            start_m_device: Vector3::zeros(),
-            thermal: true,
-            motor_saturation: true,
-            end_stops: true,
-        }
-    }
-}
-
-impl SimOptions {
-    /// Default options for a loop running at `rate_hz` ticks per second.
-    pub fn for_rate_hz(rate_hz: u32) -> Self {
-        Self {
-            loop_period: Duration::from_nanos(1_000_000_000 / u64::from(rate_hz.max(1))),
-            ..Self::default()
-        }
-    }
-
-    fn validate(&self) -> Result<(), DeviceError> {
-        if self.substeps_per_period < 4 {
-            return Err(DeviceError::InvalidConfig {
-                what: "substeps_per_period",
-                value: self.substeps_per_period.to_string(),
-                reason: "the arm must be integrated at least 4x the loop rate",
-            });
-        }
-        if self.loop_period.is_zero()
-            || self.loop_period.as_nanos() < u128::from(self.substeps_per_period)
-        {
-            return Err(DeviceError::InvalidConfig {
-                what: "loop_period",
-                value: format!("{:?}", self.loop_period),
-                reason: "must be at least 1 ns per sub-step",
-            });
-        }
-        if !self.start_m_device.iter().all(|v| v.is_finite()) {
-            return Err(DeviceError::InvalidConfig {
-                what: "start_m_device",
-                value: format!("{:?}", self.start_m_device),
-                reason: "must be finite",
-            });
-        }
-        Ok(())
-    }
-}
-
-/// End-stop spring, N/m: stiff enough to feel like a hard stop, soft enough for
-/// the 4×-rate sub-steps (ω·h ≈ 0.2 at 1 kHz with the Omni's mass).
-const STOP_STIFFNESS_N_PER_M: f64 = 20_000.0;
-/// End-stop damper, N·s/m.
-const STOP_DAMPING_N_S_PER_M: f64 = 20.0;
-/// Fraction of full reach (l1 + l2) where the reach stop begins.
-const REACH_STOP_FRACTION: f64 = 0.97;
 
 /// A simulated PHANToM arm with its simulated hand. See the [module docs](self).
 #[derive(Debug, Clone)]
@@ -372,7 +296,7 @@ impl SimPhantom {
         let grip_spring =
             (self.anchor_m_device + target.offset_m - p) * self.hand.grip.stiffness_n_per_m;
         let stops = if self.options.end_stops {
-            self.stop_force(p, v)
+            stops::end_stop_force(self.model, p, v)
         } else {
             Vector3::zeros()
         };
@@ -386,27 +310,6 @@ impl SimPhantom {
             grip_spring,
             target_velocity: target.velocity_m_per_s,
         }
-    }
-
-    fn stop_force(&self, p: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
-        let half = &self.model.workspace_half_extent_m;
-        let mut f = Vector3::zeros();
-        for i in 0..3 {
-            let excess = p[i].abs() - half[i];
-            if excess > 0.0 {
-                f[i] = -p[i].signum() * STOP_STIFFNESS_N_PER_M * excess
-                    - STOP_DAMPING_N_S_PER_M * v[i];
-            }
-        }
-        let g = &self.model.geometry;
-        let reach = g.reach(p);
-        let limit = REACH_STOP_FRACTION * (g.link1_m + g.link2_m);
-        if reach > limit {
-            let shoulder = Vector3::new(0.0, g.link2_m, -g.link1_m);
-            let n = (p - shoulder) / reach;
-            f -= n * (STOP_STIFFNESS_N_PER_M * (reach - limit) + STOP_DAMPING_N_S_PER_M * n.dot(v));
-        }
-        f
     }
 
     /// The stylus orientation as the gimbal encoders report it (roll, pitch,

@@ -187,3 +187,16 @@ fn fewer_than_four_substeps_or_unknown_model_are_clear_errors() {
         "{err}"
     );
 }
+
+#[test]
+fn recorded_hand_trace_drives_the_tip() {
+    let csv = "t,dx,dy,dz\n0,0,0,0\n0.5,0.01,0,0\n1.0,0.01,0.01,-0.005\n";
+    let trace = haptloop_devices::HandTrace::parse(csv, "hand.csv").unwrap();
+    let hand = Hand::new(Trajectory::Trace(trace));
+    let mut sim = SimPhantom::by_name("phantom-omni", SimOptions::default(), hand).unwrap();
+    for k in 0..=3000 {
+        sim.read(tick(k)).unwrap();
+    }
+    // 2 s after the last sample the tip rests on it (transient decayed e^-13).
+    assert!((sim.true_tip_m_device() - Vector3::new(0.01, 0.01, -0.005)).norm() < 1e-6);
+}
