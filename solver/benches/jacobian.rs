@@ -2,10 +2,11 @@
 //! `solver` section of BENCHMARKS.md:
 //!
 //! - `jacobian/evaluate/{four-bar,stewart,sphere-toy}`: C and C_q in place;
-//! - `jacobian/mul_t/{hand,hand-csc,faer}/…`: C_qᵀ·v with the hand-owned CSR
-//!   scatter (the API's `mul_t_vec`), a gather over the transposed index, and
-//!   faer's `sparse_dense_matmul` on the zero-copy view;
-//! - `jacobian/mul/{hand,faer}/…`: C_q·v likewise.
+//! - `jacobian/mul_t/{block,csr,csc,faer}/…`: C_qᵀ·v with the API's
+//!   `mul_t_vec` (hand-owned, per-constraint dense blocks), a plain CSR scatter
+//!   over the same storage, a gather over the transposed index, and faer's
+//!   `sparse_dense_matmul` on the zero-copy view of the same values;
+//! - `jacobian/mul/{block,csr,faer}/…`: C_q·v likewise.
 //!
 //! Run: `CARGO_TARGET_DIR=target/solver cargo bench -p haptloop-solver --bench jacobian`
 
@@ -42,6 +43,25 @@ fn evaluated(model: &Model) -> Evaluation {
     ev
 }
 
+/// y = Jx, plain CSR: one indexed load of x per entry.
+fn mul_csr(j: &Jacobian, x: &[f64], y: &mut [f64]) {
+    let (ptr, idx, val) = (j.row_ptr(), j.col_idx(), j.values());
+    for (r, out) in y.iter_mut().enumerate() {
+        *out = (ptr[r]..ptr[r + 1]).map(|k| val[k] * x[idx[k]]).sum();
+    }
+}
+
+/// y = Jᵀx, plain CSR scatter: one indexed store into y per entry.
+fn mul_t_csr(j: &Jacobian, x: &[f64], y: &mut [f64]) {
+    let (ptr, idx, val) = (j.row_ptr(), j.col_idx(), j.values());
+    y.fill(0.0);
+    for (r, &xr) in x.iter().enumerate() {
+        for k in ptr[r]..ptr[r + 1] {
+            y[idx[k]] += val[k] * xr;
+        }
+    }
+}
+
 /// y = Jᵀx by gathering each column through the transposed index.
 fn mul_t_csc(j: &Jacobian, x: &[f64], y: &mut [f64]) {
     let (ptr, rows, pos, val) = (j.col_ptr(), j.col_rows(), j.col_value_index(), j.values());
@@ -71,10 +91,13 @@ fn products(c: &mut Criterion) {
         let (mut y, mut z) = (vec![0.0; j.nrows()], vec![0.0; j.ncols()]);
 
         let mut g = c.benchmark_group("jacobian/mul_t");
-        g.bench_function(format!("hand/{name}"), |b| {
+        g.bench_function(format!("block/{name}"), |b| {
             b.iter(|| j.mul_t_vec(black_box(&v), &mut z).unwrap())
         });
-        g.bench_function(format!("hand-csc/{name}"), |b| {
+        g.bench_function(format!("csr/{name}"), |b| {
+            b.iter(|| mul_t_csr(j, black_box(&v), &mut z))
+        });
+        g.bench_function(format!("csc/{name}"), |b| {
             b.iter(|| mul_t_csc(j, black_box(&v), &mut z))
         });
         g.bench_function(format!("faer/{name}"), |b| {
@@ -94,8 +117,11 @@ fn products(c: &mut Criterion) {
         g.finish();
 
         let mut g = c.benchmark_group("jacobian/mul");
-        g.bench_function(format!("hand/{name}"), |b| {
+        g.bench_function(format!("block/{name}"), |b| {
             b.iter(|| j.mul_vec(black_box(&x), &mut y).unwrap())
+        });
+        g.bench_function(format!("csr/{name}"), |b| {
+            b.iter(|| mul_csr(j, black_box(&x), &mut y))
         });
         g.bench_function(format!("faer/{name}"), |b| {
             b.iter(|| {
@@ -108,5 +134,17 @@ fn products(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, evaluate, products);
+/// 1 s warm-up and 2 s of samples per figure keep the whole run near two
+/// minutes on the shared 2-core machine.
+fn config() -> Criterion {
+    Criterion::default()
+        .warm_up_time(std::time::Duration::from_secs(1))
+        .measurement_time(std::time::Duration::from_secs(2))
+}
+
+criterion_group! {
+    name = benches;
+    config = config();
+    targets = evaluate, products
+}
 criterion_main!(benches);

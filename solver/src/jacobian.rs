@@ -41,10 +41,27 @@ fn check(expected: usize, got: usize) -> Result<(), ShapeError> {
 /// Where one constraint's dense block lives in the values.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct BlockDesc {
+    /// First value of the block (row-major, `rows × width`).
     pub start: usize,
+    /// First row of the constraint.
+    pub row0: usize,
+    /// Number of rows.
+    pub rows: usize,
+    /// Entries per row.
     pub width: usize,
     /// Position of each slot's first column within a row; `u16::MAX` if absent.
     pub pos: [u16; SLOTS],
+    /// The contiguous column groups of a row, ascending: `(first column, width)`.
+    pub groups: [(usize, usize); SLOTS],
+    /// How many of `groups` are used.
+    pub n_groups: usize,
+}
+
+impl BlockDesc {
+    #[inline]
+    fn groups(&self) -> &[(usize, usize)] {
+        &self.groups[..self.n_groups]
+    }
 }
 
 /// C_q: `n_rows × n_coords`, fixed pattern, values rewritten by
@@ -75,15 +92,21 @@ impl Jacobian {
                 .collect();
             groups.sort_unstable();
             let mut pos = [u16::MAX; SLOTS];
+            let mut cols = [(0, 0); SLOTS];
             let mut width = 0;
-            for &(_, w, slot) in &groups {
+            for (k, &(c, w, slot)) in groups.iter().enumerate() {
                 pos[slot] = width as u16;
+                cols[k] = (c, w);
                 width += w;
             }
             blocks.push(BlockDesc {
                 start: col_idx.len(),
+                row0: row_ptr.len() - 1,
+                rows: g.rows(),
                 width,
                 pos,
+                groups: cols,
+                n_groups: groups.len(),
             });
             for _ in 0..g.rows() {
                 for &(c, w, _) in &groups {
@@ -190,19 +213,33 @@ impl Jacobian {
 
     /// y = C_q · x (x: one entry per coordinate, y: one per row).
     ///
+    /// Runs over the constraints' dense blocks: each row is a few fixed-width
+    /// dot products with contiguous slices of x (no per-entry column index).
+    ///
     /// # Real-time
     /// No allocation, no locks; O(nnz).
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) -> Result<(), ShapeError> {
         check(self.ncols(), x.len())?;
         check(self.nrows(), y.len())?;
-        let (ptr, idx, val) = (self.row_ptr(), self.col_idx(), self.values());
-        for (r, out) in y.iter_mut().enumerate() {
-            let range = ptr[r]..ptr[r + 1];
-            *out = idx[range.clone()]
-                .iter()
-                .zip(&val[range])
-                .map(|(&c, v)| v * x[c])
-                .sum();
+        let val = self.values();
+        for b in &self.blocks {
+            let block = &val[b.start..b.start + b.rows * b.width];
+            let out = &mut y[b.row0..b.row0 + b.rows];
+            for (row, yr) in block.chunks_exact(b.width).zip(out) {
+                let mut acc = 0.0;
+                let mut col = 0;
+                for &(c, w) in b.groups() {
+                    let (r, xs) = (&row[col..col + w], &x[c..c + w]);
+                    acc += match w {
+                        7 => dot::<7>(r, xs),
+                        4 => dot::<4>(r, xs),
+                        3 => dot::<3>(r, xs),
+                        _ => dot::<1>(r, xs),
+                    };
+                    col += w;
+                }
+                *yr = acc;
+            }
         }
         Ok(())
     }
@@ -219,19 +256,71 @@ impl Jacobian {
 
     /// y += α · C_qᵀ · x, e.g. Δq = −f_qᵀ − C_qᵀ(λ + K C) in one pass.
     ///
+    /// Runs over the constraints' dense blocks: each y entry a block touches is
+    /// read and written once per block, after a short sum over the block's rows.
+    ///
     /// # Real-time
     /// No allocation, no locks; O(nnz).
     pub fn mul_t_vec_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) -> Result<(), ShapeError> {
         check(self.nrows(), x.len())?;
         check(self.ncols(), y.len())?;
-        let (ptr, idx, val) = (self.row_ptr(), self.col_idx(), self.values());
-        for (r, &xr) in x.iter().enumerate() {
-            let a = alpha * xr;
-            let range = ptr[r]..ptr[r + 1];
-            for (&c, v) in idx[range.clone()].iter().zip(&val[range]) {
-                y[c] += a * v;
+        let val = self.values();
+        for b in &self.blocks {
+            let block = &val[b.start..b.start + b.rows * b.width];
+            let xs = &x[b.row0..b.row0 + b.rows];
+            let mut col = 0;
+            for &(c, w) in b.groups() {
+                let ys = &mut y[c..c + w];
+                match w {
+                    7 => add_columns::<7>(alpha, block, b.width, col, xs, ys),
+                    4 => add_columns::<4>(alpha, block, b.width, col, xs, ys),
+                    3 => add_columns::<3>(alpha, block, b.width, col, xs, ys),
+                    _ => add_columns::<1>(alpha, block, b.width, col, xs, ys),
+                }
+                col += w;
             }
         }
         Ok(())
+    }
+}
+
+/// Σ a_k b_k over W-wide chunks, summed in four lanes (a short dependency
+/// chain; the fixed width lets the compiler unroll and vectorise).
+#[inline(always)]
+fn dot<const W: usize>(a: &[f64], b: &[f64]) -> f64 {
+    let mut lanes = [0.0; 4];
+    for (a, b) in a.chunks_exact(W).zip(b.chunks_exact(W)) {
+        if let (Some(a), Some(b)) = (a.first_chunk::<W>(), b.first_chunk::<W>()) {
+            for k in 0..W {
+                lanes[k % 4] += a[k] * b[k];
+            }
+        }
+    }
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+}
+
+/// y[..W·k] += α Σ_r x_r · block[r][col..col + W] for each W-wide chunk of the
+/// group (a fixed width lets the compiler keep W lane sums in registers).
+#[inline(always)]
+fn add_columns<const W: usize>(
+    alpha: f64,
+    block: &[f64],
+    width: usize,
+    col: usize,
+    xs: &[f64],
+    ys: &mut [f64],
+) {
+    for (k, y) in ys.chunks_exact_mut(W).enumerate() {
+        let mut s = [0.0; W];
+        for (xr, row) in xs.iter().zip(block.chunks_exact(width)) {
+            if let Some(seg) = row[col + k * W..].first_chunk::<W>() {
+                for (s, v) in s.iter_mut().zip(seg) {
+                    *s += xr * v;
+                }
+            }
+        }
+        for (y, s) in y.iter_mut().zip(s) {
+            *y += alpha * s;
+        }
     }
 }

@@ -86,6 +86,18 @@ impl BodyFrame {
     }
 }
 
+/// Ω(e) = (2/|e|²) (−v | w I + \[v\]×) (3 × 4, columns w, x, y, z): the map from
+/// ė to the world-frame angular velocity, and the map every constraint uses
+/// from δθ to its four e columns. `None` for a degenerate quaternion.
+///
+/// Generalized forces: a world torque τ does virtual work τ·δθ = (Ωᵀτ)·δe, so
+/// its generalized force on e is Q_e = Ωᵀτ; back from Q_e (e.g. the e block of
+/// C_qᵀλ), τ = (|e|²/4) Ω Q_e, because Ω Ωᵀ = (4/|e|²) I and Ω e = 0. For unit e
+/// this is Eq. 8's W = ¼ G W_c with G = Ω.
+pub fn angular_map(e: [f64; 4]) -> Option<Matrix3x4<f64>> {
+    BodyFrame::new(Vector3::zeros(), e).map(|f| f.omega)
+}
+
 /// Rotation matrix of a quaternion given as `[w, x, y, z]` (need not be unit).
 /// `None` for a degenerate quaternion.
 pub fn rotation_wxyz(e: [f64; 4]) -> Option<Matrix3<f64>> {
@@ -96,4 +108,34 @@ pub fn rotation_wxyz(e: [f64; 4]) -> Option<Matrix3<f64>> {
 #[inline]
 pub fn wxyz(q: &Quaternion<f64>) -> [f64; 4] {
     [q.w, q.i, q.j, q.k]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    #[test]
+    fn rotation_matches_nalgebra_and_ignores_scale() {
+        let q = UnitQuaternion::from_euler_angles(0.3, -1.1, 2.0);
+        let e = wxyz(q.quaternion());
+        let r = q.to_rotation_matrix().into_inner();
+        let scaled = e.map(|v| v * 1.7);
+        assert!((rotation_wxyz(e).unwrap() - r).abs().max() < 1e-15);
+        assert!((rotation_wxyz(scaled).unwrap() - r).abs().max() < 1e-15);
+        assert!(rotation_wxyz([0.0; 4]).is_none());
+    }
+
+    #[test]
+    fn torque_round_trips_through_generalized_force() {
+        let e = [0.9, -0.3, 0.5, 0.2];
+        let s: f64 = e.iter().map(|v| v * v).sum();
+        let omega = angular_map(e).unwrap();
+        let tau = Vector3::new(0.4, -1.2, 0.7);
+        let q_e = omega.transpose() * tau;
+        let back = omega * q_e * (s / 4.0);
+        assert!((back - tau).norm() < 1e-14);
+        let e_vec = nalgebra::Vector4::from(e);
+        assert!((omega * e_vec).norm() < 1e-15, "Ω e = 0");
+    }
 }

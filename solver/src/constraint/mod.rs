@@ -1,21 +1,21 @@
 //! The constraint library: one kind per file, each giving its value and its
-//! analytic Jacobian through the shared helpers of [`block`].
+//! analytic Jacobian through the shared helpers of `block.rs`.
 //!
 //! | file | kind | rows | units |
 //! |---|---|---|---|
-//! | [`spherical`] | spherical joint, Eq. 9 | 3 | m |
-//! | [`perpendicular`] | perpendicular axes, Eq. 10 | 1 | angle |
-//! | [`universal`] | universal joint, Eq. 11 | 3 + 1 | m, angle |
-//! | [`revolute`] | revolute joint | 3 + 2 | m, angle |
-//! | [`prismatic`] | prismatic joint | 2 + 3 | m, angle |
-//! | [`weld`] | fixed joint | 3 + 3 | m, angle |
-//! | [`distance`] | distance joint (strut) | 1 | m |
-//! | [`point_plane`] | `point_on_plane` joint (=) and point–plane inequality (≥) | 1 | m |
-//! | [`finger`] | point grasp / rigid grasp | 3 / 3 + 3 | m, angle |
-//! | [`quat_norm`] | Euler-parameter norm, one per moving body | 1 | dimensionless |
-//! | [`limit`] | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
+//! | `spherical.rs` | spherical joint, Eq. 9 | 3 | m |
+//! | `perpendicular.rs` | perpendicular axes, Eq. 10 | 1 | angle |
+//! | `universal.rs` | universal joint, Eq. 11 | 3 + 1 | m, angle |
+//! | `revolute.rs` | revolute joint | 3 + 2 | m, angle |
+//! | `prismatic.rs` | prismatic joint | 2 + 3 | m, angle |
+//! | `weld.rs` | fixed joint | 3 + 3 | m, angle |
+//! | `distance.rs` | distance joint (strut) | 1 | m |
+//! | `point_plane.rs` | `point_on_plane` joint (=) and point–plane inequality (≥) | 1 | m |
+//! | `finger.rs` | point grasp / rigid grasp | 3 / 3 + 3 | m, angle |
+//! | `quat_norm.rs` | Euler-parameter norm, one per moving body | 1 | dimensionless |
+//! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //!
-//! [`axes`] holds the reference directions of the axis-aligning joints.
+//! `axes.rs` holds the reference directions of the axis-aligning joints.
 
 pub(crate) mod axes;
 pub(crate) mod block;

@@ -8,7 +8,7 @@
 //! | [`sphere_toy`] | 132 | 120 U + 72 S | point on a top bead | see [`sphere_toy`] |
 //!
 //! All are written in world coordinates first (joint points and axes) and
-//! converted to body-frame anchors and axes by [`Assembly`], which is what makes
+//! converted to body-frame anchors and axes by a private `Assembly` helper, which makes
 //! the initial configuration exact.
 
 mod four_bar;

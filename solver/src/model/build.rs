@@ -4,8 +4,9 @@ use std::collections::HashMap;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
+use super::compiler::{Compiler, compile_finger};
 use super::error::{BuildError, Owner};
-use super::joints::{Compiler, compile_finger, compile_joint};
+use super::joints::compile_joint;
 use super::layout::Layout;
 use super::spec::{BodySpec, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, FingerSpec, JointSpec};
 use super::{Body, Model, initial_frame, next_model_id};

@@ -4,6 +4,7 @@
 //! model with extra point–plane inequalities for a new active set.
 
 mod build;
+mod compiler;
 mod error;
 mod inequality;
 mod joints;

@@ -1,0 +1,179 @@
+//! Build-time state shared by the joints and fingers of one model: body lookup
+//! by name, initial frames, design-variable column allocation; and the finger
+//! compiler.
+
+use std::collections::HashMap;
+
+use nalgebra::Vector3;
+
+use super::error::{BuildError, Owner};
+use super::layout::DesignVar;
+use super::spec::{DesignParam, FingerSpec, Grasp};
+use super::{Body, Finger};
+use crate::constraint::block::{Pair, Param3};
+use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, finger};
+use crate::rotation::BodyFrame;
+use crate::{BodyId, ConstraintId, FingerId};
+
+/// Below this, a world distance between anchors counts as coincident (metres)
+/// and a cross product of unit axes counts as parallel.
+pub(super) const DEGENERATE: f64 = 1e-9;
+
+/// Build-time state shared by the joints and fingers of one model.
+pub(super) struct Compiler<'a> {
+    pub bodies: &'a [Body],
+    by_name: &'a HashMap<&'a str, BodyId>,
+    /// Initial frames of every body, then the world.
+    pub frames: &'a [BodyFrame],
+    pub body_cols: &'a [Option<usize>],
+    next_col: usize,
+    design_vars: Vec<DesignVar>,
+    dv_q0: Vec<f64>,
+    pub lever: f64,
+}
+
+impl<'a> Compiler<'a> {
+    pub fn new(
+        bodies: &'a [Body],
+        by_name: &'a HashMap<&'a str, BodyId>,
+        frames: &'a [BodyFrame],
+        body_cols: &'a [Option<usize>],
+        first_design_col: usize,
+    ) -> Self {
+        Self {
+            bodies,
+            by_name,
+            frames,
+            body_cols,
+            next_col: first_design_col,
+            design_vars: Vec::new(),
+            dv_q0: Vec::new(),
+            lever: 1e-3,
+        }
+    }
+
+    /// Design variables, their initial values, the total coordinate count and
+    /// the characteristic length.
+    pub fn finish(self) -> (Vec<DesignVar>, Vec<f64>, usize, f64) {
+        (self.design_vars, self.dv_q0, self.next_col, self.lever)
+    }
+
+    pub fn resolve(&self, owner: &Owner, name: &str) -> Result<BodyId, BuildError> {
+        self.by_name
+            .get(name)
+            .copied()
+            .ok_or_else(|| BuildError::UnknownBody {
+                owner: owner.clone(),
+                body: name.to_owned(),
+            })
+    }
+
+    pub fn free(
+        &mut self,
+        joint: ConstraintId,
+        name: &str,
+        param: DesignParam,
+        init: &[f64],
+    ) -> usize {
+        let offset = self.next_col;
+        self.design_vars.push(DesignVar {
+            name: format!("{name}.{param}"),
+            joint,
+            param,
+            offset,
+            width: init.len(),
+        });
+        self.dv_q0.extend_from_slice(init);
+        self.next_col += init.len();
+        offset
+    }
+}
+
+pub(super) fn finite(owner: &Owner, field: &'static str, v: &[f64]) -> Result<(), BuildError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(BuildError::NonFinite {
+            owner: owner.clone(),
+            field,
+        })
+    }
+}
+
+pub(super) fn unit(
+    owner: &Owner,
+    field: &'static str,
+    v: [f64; 3],
+) -> Result<Vector3<f64>, BuildError> {
+    let v = Vector3::from(v);
+    let n = v.norm();
+    if n > DEGENERATE {
+        Ok(v / n)
+    } else {
+        Err(BuildError::ZeroAxis {
+            owner: owner.clone(),
+            field,
+        })
+    }
+}
+
+/// Validates the `k`-th finger and compiles its constraint.
+pub(super) fn compile_finger(
+    k: usize,
+    s: &FingerSpec,
+    constraint: ConstraintId,
+    cx: &mut Compiler,
+) -> Result<(Finger, ConstraintInfo, Geometry), BuildError> {
+    if s.name.is_empty() {
+        return Err(BuildError::EmptyName {
+            owner: Owner::Finger(format!("#{}", k + 1)),
+        });
+    }
+    let owner = Owner::Finger(s.name.clone());
+    let body = cx.resolve(&owner, &s.body)?;
+    let Some(col) = cx.body_cols[body.index()] else {
+        return Err(BuildError::FingerOnFixedBody {
+            owner,
+            body: s.body.clone(),
+        });
+    };
+    finite(&owner, "point", &s.point_m)?;
+    let point = Vector3::from(s.point_m);
+    cx.lever = cx.lever.max(point.norm());
+    let world = cx.frames.len() - 1;
+    let pair = Pair {
+        frame: [body.index(), world],
+        col: [Some(col), None],
+        anchor: [Param3::Const(point), Param3::Const(Vector3::zeros())],
+    };
+    let rigid = s.grasp == Grasp::Rigid;
+    let kind = if rigid {
+        ConstraintKind::RigidFinger
+    } else {
+        ConstraintKind::PointFinger
+    };
+    let finger = Finger {
+        name: s.name.clone(),
+        body,
+        point_m: point,
+        grasp: s.grasp,
+        constraint,
+    };
+    let info = ConstraintInfo {
+        name: s.name.clone(),
+        kind,
+        rows: 0..0,
+        bodies: [Some(body), None],
+        finger: Some(FingerId(k as u32)),
+        limits: None,
+    };
+    Ok((
+        finger,
+        info,
+        Geometry::Finger(finger::Finger {
+            pair,
+            finger: k,
+            rigid,
+        }),
+    ))
+}
