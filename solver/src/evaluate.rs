@@ -65,8 +65,9 @@ pub enum EvalError {
         /// The finger.
         finger: FingerId,
     },
-    /// A body's Euler parameters are (nearly) zero, so it has no rotation.
-    #[error("{body} has a degenerate quaternion (|e|² < 1e-12)")]
+    /// A body's Euler parameters are (nearly) zero or so large that |e|²
+    /// overflows, so it has no rotation.
+    #[error("{body} has a degenerate quaternion (|e|² below 1e-12 or not finite)")]
     DegenerateQuaternion {
         /// The body.
         body: BodyId,

@@ -30,6 +30,33 @@
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
+//! ```
+//! use haptloop_solver::{BodySpec, FingerSpec, JointKind, JointSpec, ModelBuilder};
+//!
+//! let mut b = ModelBuilder::new();
+//! b.gravity([0.0, 0.0, -9.81]);
+//! b.body(BodySpec::fixed("ground"));
+//! b.body(BodySpec::new("arm").at([0.1, 0.0, 0.0]).mass(0.05));
+//! b.joint(
+//!     JointSpec::new(JointKind::Revolute, "ground", "arm")
+//!         .named("hinge")
+//!         .anchors([0.0; 3], [-0.1, 0.0, 0.0])
+//!         .axes([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+//!         .limits(-1.0, 1.0),
+//! );
+//! b.finger(FingerSpec::point("index", "arm", [0.1, 0.0, 0.0]));
+//! let model = b.build()?;
+//!
+//! let mut ev = model.evaluation(); // allocates once
+//! let mut targets = model.initial_targets();
+//! targets[0].position_m.y += 0.01; // the finger moved; nothing is rebuilt
+//! ev.evaluate(&model, model.q0(), &targets)?; // C and C_q, in place
+//! let mut dq = vec![0.0; model.n_coords()];
+//! ev.jacobian().mul_t_vec(ev.values(), &mut dq)?; // C_qᵀ C
+//! assert!((ev.values()[model.constraints()[1].rows.start + 1] + 0.01).abs() < 1e-15);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Rotations use the rational form R(e) = A_h(e)/|e|² (see [`rotation`]), exact
 //! for non-unit e, with one quaternion-norm row per moving body.
 

@@ -173,6 +173,11 @@ named_enum!(
 );
 
 /// A `[[joint]]` entry.
+///
+/// A joint between a moving body and a fixed body constrains only the moving
+/// one: its rows have columns for the moving body (and any free design
+/// variables) only, and the fixed body's pose is a constant. A joint between two
+/// fixed bodies is an error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointSpec {
     /// Optional, unique if given; unnamed joints are called `#k` (1-based) in errors.
@@ -187,8 +192,16 @@ pub struct JointSpec {
     pub axes: Option<[[f64; 3]; 2]>,
     /// Distance joints: length, metres (default: the anchors' initial distance).
     pub length_m: Option<f64>,
-    /// Optional `[lo, hi]` on the joint coordinate (revolute: angle, rad;
-    /// prismatic: displacement, m; distance: measured length, m).
+    /// Optional `[lo, hi]` on the joint coordinate, two `≥ 0` rows:
+    /// - revolute: the angle of body j relative to body i about A_i h_i,
+    ///   radians, right-handed, **zero at the bodies' initial poses**, in
+    ///   (−π, π] (so limits must lie inside (−π, π));
+    /// - prismatic: the displacement (A_i h_i)·(p_j − p_i) of anchor j from
+    ///   anchor i along axis i, metres;
+    /// - distance: the measured anchor distance |p_i − p_j|, metres (not the
+    ///   design variable L).
+    ///
+    /// Other kinds have no joint coordinate; limits on them are an error.
     pub limits: Option<[f64; 2]>,
     /// Parameters that become design variables.
     pub free: Vec<DesignParam>,
