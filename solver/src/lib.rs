@@ -67,6 +67,7 @@ mod jacobian;
 pub mod mechanisms;
 mod model;
 pub mod rotation;
+pub mod scene;
 
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};

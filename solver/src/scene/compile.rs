@@ -1,0 +1,464 @@
+//! Compiling a validated scene into what a session needs — and only that: a
+//! [`Model`] (no coordinates for fixed bodies, design variables only where
+//! marked free), one [`DeviceDecl`] per `[[device]]`, the finger wiring, the
+//! solver settings the file set, and a count of the semantic areas.
+//!
+//! Builder errors come back as [`SceneError`]s pointing at the offending field.
+
+use super::LoadedScene;
+use super::SceneError;
+use super::spec::{
+    BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, SolverSection, Vec3,
+};
+use crate::model::{BodySpec, BuildError, DesignParam, FingerSpec, JointKind, JointSpec, Owner};
+use crate::{FingerId, Model, ModelBuilder};
+use std::ops::Range;
+use std::path::PathBuf;
+use toml::Spanned;
+
+/// The `[solver]` values the file set (unset keys are `None`; the session
+/// fills them from command-line flags or the solver's defaults).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SceneSettings {
+    /// Fast-loop rate, Hz.
+    pub rate_hz: Option<u32>,
+    /// AL iterations per tick.
+    pub iterations: Option<u32>,
+    /// h.
+    pub step: Option<f64>,
+    /// K.
+    pub gain: Option<f64>,
+    /// k₂.
+    pub multiplier_gain: Option<f64>,
+    /// Newton-KKT stopping tolerance.
+    pub placement_tolerance: Option<f64>,
+    /// μ.
+    pub damping: Option<f64>,
+    /// Witness activation distance, m.
+    pub contact_distance: Option<f64>,
+    /// Witness removal distance, m.
+    pub release_distance: Option<f64>,
+    /// Violation the scene promises to stay under, m.
+    pub violation_tolerance: Option<f64>,
+    /// Virtual-coupling stiffness, N/m.
+    pub coupling_stiffness: Option<f64>,
+    /// Virtual-coupling damping, N·s/m.
+    pub coupling_damping: Option<f64>,
+}
+
+/// What the simulated hand does, in the scene frame (offsets from the finger's
+/// initial world position).
+#[derive(Debug, Clone, PartialEq)]
+pub enum HandPath {
+    /// Stay where the finger starts.
+    Still,
+    /// r((cos ωt − 1)u + sin ωt v).
+    Circle {
+        /// m.
+        radius_m: f64,
+        /// Revolutions per second.
+        hz: f64,
+        /// In-plane direction.
+        u: Vec3,
+        /// In-plane direction.
+        v: Vec3,
+    },
+    /// Move by `to_m` over `seconds`, then hold.
+    Line {
+        /// m.
+        to_m: Vec3,
+        /// s.
+        seconds: f64,
+    },
+    /// A CSV trace, path resolved relative to the scene file.
+    Trace {
+        /// Resolved path.
+        path: PathBuf,
+        /// Where the path was written, for errors.
+        span: Range<usize>,
+    },
+}
+
+/// A simulated hand: trajectory plus optional grip settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HandDecl {
+    /// The trajectory.
+    pub path: HandPath,
+    /// Grip stiffness, N/m (None: the device crate's default).
+    pub stiffness_n_per_m: Option<f64>,
+    /// Grip damping, N·s/m (None: default).
+    pub damping_n_s_per_m: Option<f64>,
+}
+
+/// One `[[device]]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeviceDecl {
+    /// Unique name.
+    pub name: String,
+    /// Device model name (validated by the session against the device crate).
+    pub model: String,
+    /// Where `model` was written, for errors.
+    pub model_span: Range<usize>,
+    /// Scene metres per device metre.
+    pub scale: f64,
+    /// Device frame in the scene, `[w, x, y, z]`, normalised.
+    pub orientation_wxyz: Quat,
+    /// The simulated hand (default: still).
+    pub hand: HandDecl,
+}
+
+/// One `[[finger]]`, wired to its device and its model finger.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FingerDecl {
+    /// Unique name.
+    pub name: String,
+    /// Index into [`CompiledScene::devices`].
+    pub device: usize,
+    /// The finger in the model.
+    pub finger: FingerId,
+}
+
+/// A scene compiled to what it needs.
+#[derive(Debug, Clone)]
+pub struct CompiledScene {
+    /// `[scene] name`.
+    pub name: String,
+    /// `[scene] description`.
+    pub description: String,
+    /// The mechanism.
+    pub model: Model,
+    /// `[solver]` values the file set.
+    pub settings: SceneSettings,
+    /// One per `[[device]]`, in file order.
+    pub devices: Vec<DeviceDecl>,
+    /// One per `[[finger]]`, in file order (the model's finger order).
+    pub fingers: Vec<FingerDecl>,
+    /// Bodies with a collision shape (contact machinery is compiled only for these).
+    pub shaped_bodies: usize,
+    /// Semantic offer + binding areas declared.
+    pub semantic_areas: usize,
+}
+
+fn settings(s: &SolverSection) -> SceneSettings {
+    let f = |v: &Option<Spanned<f64>>| v.as_ref().map(|x| *x.get_ref());
+    SceneSettings {
+        rate_hz: s.rate_hz.as_ref().map(|x| *x.get_ref()),
+        iterations: s.iterations.as_ref().map(|x| *x.get_ref()),
+        step: f(&s.step),
+        gain: f(&s.gain),
+        multiplier_gain: f(&s.multiplier_gain),
+        placement_tolerance: f(&s.placement_tolerance),
+        damping: f(&s.damping),
+        contact_distance: f(&s.contact_distance),
+        release_distance: f(&s.release_distance),
+        violation_tolerance: f(&s.violation_tolerance),
+        coupling_stiffness: f(&s.coupling_stiffness),
+        coupling_damping: f(&s.coupling_damping),
+    }
+}
+
+fn joint_kind(k: JointKindSpec) -> JointKind {
+    match k {
+        JointKindSpec::Spherical => JointKind::Spherical,
+        JointKindSpec::Revolute => JointKind::Revolute,
+        JointKindSpec::Universal => JointKind::Universal,
+        JointKindSpec::Prismatic => JointKind::Prismatic,
+        JointKindSpec::Fixed => JointKind::Fixed,
+        JointKindSpec::Distance => JointKind::Distance,
+        JointKindSpec::Perpendicular => JointKind::Perpendicular,
+        JointKindSpec::PointOnPlane => JointKind::PointOnPlane,
+    }
+}
+
+fn body_spec(b: &BodySection) -> BodySpec {
+    let mut spec = if b.fixed {
+        BodySpec::fixed(b.name.get_ref().clone())
+    } else {
+        BodySpec::new(b.name.get_ref().clone())
+    };
+    if let Some(p) = &b.position {
+        spec = spec.at(*p.get_ref());
+    }
+    if let Some(q) = &b.orientation {
+        spec = spec.oriented(*q.get_ref());
+    }
+    spec.mass_kg = b.mass.as_ref().map(|m| *m.get_ref());
+    spec.inertia_kg_m2 = b.inertia.as_ref().map(|i| *i.get_ref());
+    spec
+}
+
+fn joint_spec(j: &JointSection) -> JointSpec {
+    let [bi, bj] = j.bodies.get_ref();
+    let mut spec = JointSpec::new(
+        joint_kind(*j.kind.get_ref()),
+        bi.get_ref().clone(),
+        bj.get_ref().clone(),
+    );
+    spec.name = j.name.as_ref().map(|n| n.get_ref().clone());
+    if let Some(a) = &j.anchors {
+        spec.anchors_m = *a.get_ref();
+    }
+    spec.axes = j.axes.as_ref().map(|a| *a.get_ref());
+    spec.length_m = j.length.as_ref().map(|l| *l.get_ref());
+    spec.limits = j.limits.as_ref().map(|l| *l.get_ref());
+    spec.free = j
+        .free
+        .iter()
+        .map(|f| match f.get_ref() {
+            FreeSpec::Length => DesignParam::Length,
+            FreeSpec::AnchorI => DesignParam::AnchorI,
+            FreeSpec::AnchorJ => DesignParam::AnchorJ,
+        })
+        .collect();
+    spec
+}
+
+fn normalised(q: Quat) -> Quat {
+    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+}
+
+impl LoadedScene {
+    /// Builds the model and wires devices to fingers. Every error names the
+    /// file, line and column of the offending value.
+    pub fn compile(&self) -> Result<CompiledScene, SceneError> {
+        let s = &self.spec;
+        let mut builder = ModelBuilder::new();
+        if let Some(g) = &s.scene.gravity {
+            builder.gravity(*g.get_ref());
+        }
+        for b in &s.bodies {
+            builder.body(body_spec(b));
+        }
+        for j in &s.joints {
+            builder.joint(joint_spec(j));
+        }
+        for f in &s.fingers {
+            let point = f.point.as_ref().map_or([0.0; 3], |p| *p.get_ref());
+            let spec = match f.grasp.as_ref().map_or(GraspSpec::Point, |g| *g.get_ref()) {
+                GraspSpec::Point => {
+                    FingerSpec::point(f.name.get_ref().clone(), f.body.get_ref().clone(), point)
+                }
+                GraspSpec::Rigid => {
+                    FingerSpec::rigid(f.name.get_ref().clone(), f.body.get_ref().clone(), point)
+                }
+            };
+            builder.finger(spec);
+        }
+        let model = builder.build().map_err(|e| self.build_error(&e))?;
+
+        let devices = s
+            .devices
+            .iter()
+            .map(|d| DeviceDecl {
+                name: d.name.get_ref().clone(),
+                model: d.model.get_ref().clone(),
+                model_span: d.model.span(),
+                scale: d.scale.as_ref().map_or(1.0, |x| *x.get_ref()),
+                orientation_wxyz: d
+                    .orientation
+                    .as_ref()
+                    .map_or([1.0, 0.0, 0.0, 0.0], |q| normalised(*q.get_ref())),
+                hand: self.hand(d.hand.as_ref()),
+            })
+            .collect();
+        let fingers = s
+            .fingers
+            .iter()
+            .map(|f| FingerDecl {
+                name: f.name.get_ref().clone(),
+                device: s
+                    .devices
+                    .iter()
+                    .position(|d| d.name.get_ref() == f.device.get_ref())
+                    .expect("validated: every finger names a known device"),
+                finger: model
+                    .finger_id(f.name.get_ref())
+                    .expect("built from these fingers"),
+            })
+            .collect();
+        Ok(CompiledScene {
+            name: s.scene.name.get_ref().clone(),
+            description: s.scene.description.clone().unwrap_or_default(),
+            model,
+            settings: settings(&s.solver),
+            devices,
+            fingers,
+            shaped_bodies: s.bodies.iter().filter(|b| b.shape.is_some()).count(),
+            semantic_areas: s
+                .bodies
+                .iter()
+                .map(|b| b.offer.len() + b.binding.len())
+                .sum(),
+        })
+    }
+
+    fn hand(&self, hand: Option<&Spanned<super::spec::HandSection>>) -> HandDecl {
+        let Some(h) = hand.map(Spanned::get_ref) else {
+            return HandDecl {
+                path: HandPath::Still,
+                stiffness_n_per_m: None,
+                damping_n_s_per_m: None,
+            };
+        };
+        let path = if let Some(c) = &h.circle {
+            let c = c.get_ref();
+            HandPath::Circle {
+                radius_m: c.radius,
+                hz: c.hz,
+                u: c.u,
+                v: c.v,
+            }
+        } else if let Some(l) = &h.line {
+            HandPath::Line {
+                to_m: l.get_ref().to,
+                seconds: l.get_ref().seconds,
+            }
+        } else if let Some(t) = &h.trace {
+            let rel = PathBuf::from(t.get_ref());
+            let path = match &self.dir {
+                Some(dir) if rel.is_relative() => dir.join(rel),
+                _ => rel,
+            };
+            HandPath::Trace {
+                path,
+                span: t.span(),
+            }
+        } else {
+            HandPath::Still
+        };
+        HandDecl {
+            path,
+            stiffness_n_per_m: h.stiffness.as_ref().map(|x| *x.get_ref()),
+            damping_n_s_per_m: h.damping.as_ref().map(|x| *x.get_ref()),
+        }
+    }
+
+    /// Maps a builder error to the span of the field it is about.
+    fn build_error(&self, e: &BuildError) -> SceneError {
+        let s = &self.spec;
+        let whole = 0..0;
+        let span: Range<usize> = match e.owner() {
+            Owner::Scene => s.scene.gravity.as_ref().map_or(whole, Spanned::span),
+            Owner::Body(name) => {
+                let dup = matches!(e, BuildError::DuplicateName { .. });
+                let b = s
+                    .bodies
+                    .iter()
+                    .filter(|b| b.name.get_ref() == name)
+                    .nth(usize::from(dup));
+                b.map_or(whole, |b| body_field(b, e))
+            }
+            Owner::Joint(name) => {
+                let dup = matches!(e, BuildError::DuplicateName { .. });
+                let j = match name.strip_prefix('#').and_then(|k| k.parse::<usize>().ok()) {
+                    Some(k) => s.joints.get(k.saturating_sub(1)),
+                    None => s
+                        .joints
+                        .iter()
+                        .filter(|j| j.name.as_ref().is_some_and(|n| n.get_ref() == name))
+                        .nth(usize::from(dup)),
+                };
+                j.map_or(whole, |j| joint_field(j, e))
+            }
+            Owner::Finger(name) => {
+                let dup = matches!(e, BuildError::DuplicateName { .. });
+                let f = s
+                    .fingers
+                    .iter()
+                    .filter(|f| f.name.get_ref() == name)
+                    .nth(usize::from(dup));
+                f.map_or(whole, |f| match e {
+                    BuildError::UnknownBody { .. } | BuildError::FingerOnFixedBody { .. } => {
+                        f.body.span()
+                    }
+                    BuildError::NonFinite { .. } => {
+                        f.point.as_ref().map_or(f.name.span(), Spanned::span)
+                    }
+                    _ => f.name.span(),
+                })
+            }
+            Owner::Inequality(_) => whole,
+        };
+        let mut msg = e.to_string();
+        if let BuildError::UnknownBody { .. } = e {
+            let known: Vec<&str> = s.bodies.iter().map(|b| b.name.get_ref().as_str()).collect();
+            msg.push_str(&format!(" (bodies: {})", super::validate::list(&known)));
+        }
+        self.error_at(span, msg)
+    }
+}
+
+fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
+    let or_name = |v: Option<Range<usize>>| v.unwrap_or_else(|| b.name.span());
+    match e {
+        BuildError::NonFinite {
+            field: "position", ..
+        } => or_name(b.position.as_ref().map(Spanned::span)),
+        BuildError::NonFinite {
+            field: "orientation",
+            ..
+        }
+        | BuildError::ZeroOrientation { .. } => or_name(b.orientation.as_ref().map(Spanned::span)),
+        BuildError::NonFinite { field: "mass", .. } | BuildError::NonPositiveMass { .. } => {
+            or_name(b.mass.as_ref().map(Spanned::span))
+        }
+        BuildError::NonFinite {
+            field: "inertia", ..
+        }
+        | BuildError::BadInertia { .. } => or_name(b.inertia.as_ref().map(Spanned::span)),
+        _ => b.name.span(),
+    }
+}
+
+fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
+    let head = j.name.as_ref().map_or(j.kind.span(), Spanned::span);
+    let or_head = |v: Option<Range<usize>>| v.unwrap_or_else(|| head.clone());
+    let [bi, bj] = j.bodies.get_ref();
+    match e {
+        BuildError::UnknownBody { body, .. } => {
+            if bi.get_ref() == body {
+                bi.span()
+            } else {
+                bj.span()
+            }
+        }
+        BuildError::SameBody { .. } => bj.span(),
+        BuildError::BothFixed { .. } => j.bodies.span(),
+        BuildError::MissingAxes { .. } => j.kind.span(),
+        BuildError::ZeroAxis { .. } | BuildError::ParallelAxes { .. } => {
+            or_head(j.axes.as_ref().map(Spanned::span))
+        }
+        BuildError::NonFinite { field: "axes", .. } => or_head(j.axes.as_ref().map(Spanned::span)),
+        BuildError::NonFinite {
+            field: "anchors", ..
+        }
+        | BuildError::CoincidentAnchors { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
+        BuildError::NonFinite {
+            field: "length", ..
+        }
+        | BuildError::NonPositiveLength { .. }
+        | BuildError::UnexpectedLength { .. }
+        | BuildError::LengthOutsideLimits { .. } => or_head(j.length.as_ref().map(Spanned::span)),
+        BuildError::NonFinite {
+            field: "limits", ..
+        }
+        | BuildError::LimitsReversed { .. }
+        | BuildError::LimitsUnsupported { .. }
+        | BuildError::AngleLimitsOutOfRange { .. } => or_head(j.limits.as_ref().map(Spanned::span)),
+        BuildError::UnsupportedFree { param, .. } | BuildError::DuplicateFree { param, .. } => {
+            let want = match param {
+                DesignParam::Length => FreeSpec::Length,
+                DesignParam::AnchorI => FreeSpec::AnchorI,
+                DesignParam::AnchorJ => FreeSpec::AnchorJ,
+            };
+            let dup = matches!(e, BuildError::DuplicateFree { .. });
+            j.free
+                .iter()
+                .filter(|f| *f.get_ref() == want)
+                .nth(usize::from(dup))
+                .map_or(head.clone(), Spanned::span)
+        }
+        _ => head,
+    }
+}

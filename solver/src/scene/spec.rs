@@ -1,0 +1,308 @@
+//! The scene file as typed values, exactly as `scene-format.md` spells it.
+//!
+//! Every value a later check may complain about keeps its byte span
+//! ([`Spanned`]) so the complaint can name the line and column. Unknown keys,
+//! wrong types, wrong array lengths, missing required keys and duplicate keys
+//! are rejected by the TOML deserializer itself (`deny_unknown_fields`); the
+//! semantic checks live in `validate`.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A 3-vector in the file: `[x, y, z]`.
+pub type Vec3 = [f64; 3];
+/// A quaternion in the file: `[w, x, y, z]` (normalised on load).
+pub type Quat = [f64; 4];
+
+/// The whole file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// `[scene]`: name, description, gravity.
+    pub scene: SceneSection,
+    /// `[solver]`: rates, iterations, gains, tolerances.
+    #[serde(default)]
+    pub solver: SolverSection,
+    /// `[[body]]` tables, in file order.
+    #[serde(default, rename = "body")]
+    pub bodies: Vec<BodySection>,
+    /// `[[joint]]` tables, in file order.
+    #[serde(default, rename = "joint")]
+    pub joints: Vec<JointSection>,
+    /// `[[device]]` tables, in file order.
+    #[serde(default, rename = "device")]
+    pub devices: Vec<DeviceSection>,
+    /// `[[finger]]` tables, in file order.
+    #[serde(default, rename = "finger")]
+    pub fingers: Vec<FingerSection>,
+    /// `[labels]`: each key is ≤ every label in its list (a partial order).
+    #[serde(default)]
+    pub labels: BTreeMap<Spanned<String>, Spanned<Vec<Spanned<String>>>>,
+}
+
+/// `[scene]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSection {
+    /// Required.
+    pub name: Spanned<String>,
+    /// One line for `haptloop scenes`.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// m/s², scene frame; default none (zero).
+    #[serde(default)]
+    pub gravity: Option<Spanned<Vec3>>,
+}
+
+/// `[solver]`: every key optional; defaults live in the solver's settings.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSection {
+    /// Fast-loop rate, Hz.
+    pub rate_hz: Option<Spanned<u32>>,
+    /// Augmented-Lagrangian iterations per tick.
+    pub iterations: Option<Spanned<u32>>,
+    /// h in q += h·Δq.
+    pub step: Option<Spanned<f64>>,
+    /// K, the constraint-violation gain.
+    pub gain: Option<Spanned<f64>>,
+    /// k₂, the multiplier gain.
+    pub multiplier_gain: Option<Spanned<f64>>,
+    /// Newton-KKT stopping tolerance (constraint norm).
+    pub placement_tolerance: Option<Spanned<f64>>,
+    /// μ in (J Jᵀ + μI).
+    pub damping: Option<Spanned<f64>>,
+    /// Witness activation distance, m.
+    pub contact_distance: Option<Spanned<f64>>,
+    /// Witness removal distance, m.
+    pub release_distance: Option<Spanned<f64>>,
+    /// Extra: the constraint violation this scene promises to stay under while
+    /// running (m for translational rows); checked by the scene tests.
+    pub violation_tolerance: Option<Spanned<f64>>,
+    /// Extra: virtual-coupling stiffness between device point and finger, N/m.
+    pub coupling_stiffness: Option<Spanned<f64>>,
+    /// Extra: virtual-coupling damping, N·s/m.
+    pub coupling_damping: Option<Spanned<f64>>,
+}
+
+/// `[[body]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySection {
+    /// Required, unique.
+    pub name: Spanned<String>,
+    /// Fixed bodies have no coordinates.
+    #[serde(default)]
+    pub fixed: bool,
+    /// m, scene frame; default origin.
+    #[serde(default)]
+    pub position: Option<Spanned<Vec3>>,
+    /// `[w, x, y, z]`; default identity.
+    #[serde(default)]
+    pub orientation: Option<Spanned<Quat>>,
+    /// kg.
+    #[serde(default)]
+    pub mass: Option<Spanned<f64>>,
+    /// Principal moments, kg·m², body frame.
+    #[serde(default)]
+    pub inertia: Option<Spanned<Vec3>>,
+    /// Collision shape; a body without one takes part in no contact.
+    #[serde(default)]
+    pub shape: Option<Spanned<ShapeSpec>>,
+    /// `[[body.offer]]` semantic areas.
+    #[serde(default)]
+    pub offer: Vec<AreaSection>,
+    /// `[[body.binding]]` semantic areas.
+    #[serde(default)]
+    pub binding: Vec<AreaSection>,
+}
+
+/// `shape = { … }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum ShapeSpec {
+    /// Half extents, m.
+    Box(Vec3),
+    /// Radius, m.
+    Sphere(f64),
+    /// Along the body's z axis.
+    Capsule {
+        /// Half the length of the cylinder part, m.
+        half_height: f64,
+        /// m.
+        radius: f64,
+    },
+    /// Convex hull of the points, body frame.
+    Convex(Vec<Vec3>),
+}
+
+/// A semantic offer or binding area.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaSection {
+    /// Label in the `[labels]` partial order.
+    pub label: Spanned<String>,
+    /// Planar polygon, body frame.
+    pub polygon: Spanned<Vec<Vec3>>,
+    /// Orientation vector, body frame.
+    pub normal: Spanned<Vec3>,
+}
+
+/// `kind = "…"` of a joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKindSpec {
+    /// 3 rows.
+    Spherical,
+    /// 5 rows.
+    Revolute,
+    /// 4 rows.
+    Universal,
+    /// 5 rows.
+    Prismatic,
+    /// 6 rows.
+    Fixed,
+    /// 1 row.
+    Distance,
+    /// 1 row.
+    Perpendicular,
+    /// 1 row.
+    PointOnPlane,
+}
+
+/// A name in `free = [...]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FreeSpec {
+    /// The distance joint's length.
+    Length,
+    /// The anchor on body i.
+    AnchorI,
+    /// The anchor on body j.
+    AnchorJ,
+}
+
+/// `[[joint]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSection {
+    /// Optional, unique if given.
+    #[serde(default)]
+    pub name: Option<Spanned<String>>,
+    /// The joint kind.
+    pub kind: Spanned<JointKindSpec>,
+    /// Body i, body j.
+    pub bodies: Spanned<[Spanned<String>; 2]>,
+    /// Body-local anchor points k_i, k_j, m.
+    #[serde(default)]
+    pub anchors: Option<Spanned<[Vec3; 2]>>,
+    /// Body-local axes h_i, h_j.
+    #[serde(default)]
+    pub axes: Option<Spanned<[Vec3; 2]>>,
+    /// Distance joints: strut length, m.
+    #[serde(default)]
+    pub length: Option<Spanned<f64>>,
+    /// Inequality on the joint coordinate.
+    #[serde(default)]
+    pub limits: Option<Spanned<[f64; 2]>>,
+    /// Design variables.
+    #[serde(default)]
+    pub free: Vec<Spanned<FreeSpec>>,
+}
+
+/// `[[device]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceSection {
+    /// Required, unique.
+    pub name: Spanned<String>,
+    /// A built-in simulated device model.
+    pub model: Spanned<String>,
+    /// Scene metres per device metre.
+    #[serde(default)]
+    pub scale: Option<Spanned<f64>>,
+    /// Device frame in the scene, `[w, x, y, z]`.
+    #[serde(default)]
+    pub orientation: Option<Spanned<Quat>>,
+    /// The simulated hand.
+    #[serde(default)]
+    pub hand: Option<Spanned<HandSection>>,
+}
+
+/// `hand = { … }`: one trajectory kind plus optional grip settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandSection {
+    /// Stay where the finger starts.
+    #[serde(default)]
+    pub still: Option<Spanned<bool>>,
+    /// r((cos ωt − 1)u + sin ωt v).
+    #[serde(default)]
+    pub circle: Option<Spanned<CircleSpec>>,
+    /// Move by `to` over `seconds`, then hold.
+    #[serde(default)]
+    pub line: Option<Spanned<LineSpec>>,
+    /// CSV `t,dx,dy,dz`, relative to the scene file.
+    #[serde(default)]
+    pub trace: Option<Spanned<String>>,
+    /// Grip stiffness, N/m.
+    #[serde(default)]
+    pub stiffness: Option<Spanned<f64>>,
+    /// Grip damping, N·s/m.
+    #[serde(default)]
+    pub damping: Option<Spanned<f64>>,
+}
+
+/// `circle = { radius, hz, u, v }`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSpec {
+    /// m.
+    pub radius: f64,
+    /// Revolutions per second.
+    pub hz: f64,
+    /// First in-plane direction (scene frame).
+    pub u: Vec3,
+    /// Second in-plane direction (scene frame).
+    pub v: Vec3,
+}
+
+/// `line = { to, seconds }`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineSpec {
+    /// Offset reached at the end, m, scene frame.
+    pub to: Vec3,
+    /// Duration of the move.
+    pub seconds: f64,
+}
+
+/// `grasp = "…"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GraspSpec {
+    /// 3 rows: the point follows the finger.
+    #[default]
+    Point,
+    /// 6 rows: position and orientation follow the finger.
+    Rigid,
+}
+
+/// `[[finger]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FingerSection {
+    /// Required, unique.
+    pub name: Spanned<String>,
+    /// The `[[device]]` that drives it.
+    pub device: Spanned<String>,
+    /// The body it holds.
+    pub body: Spanned<String>,
+    /// Body-local attachment point, m; default the body origin.
+    #[serde(default)]
+    pub point: Option<Spanned<Vec3>>,
+    /// Point or rigid grasp; default point.
+    #[serde(default)]
+    pub grasp: Option<Spanned<GraspSpec>>,
+}

@@ -1,0 +1,381 @@
+//! Semantic checks of the parts of a scene the model builder never sees:
+//! solver settings, devices and hands, which device drives which finger,
+//! shapes, semantic areas and the label order. (Bodies, joints and fingers are
+//! checked by [`ModelBuilder::build`](crate::ModelBuilder::build); the compiler
+//! maps its errors back to spans.)
+//!
+//! Checks run in file order and the first failure is returned, so an error
+//! always points at the first problem a reader meets.
+
+use super::SceneError;
+use super::spec::{AreaSection, DeviceSection, HandSection, SceneFile, ShapeSpec, Vec3};
+use std::collections::{BTreeMap, HashMap};
+use std::ops::Range;
+use toml::Spanned;
+
+pub(super) struct Checker<'a> {
+    pub file: &'a str,
+    pub text: &'a str,
+}
+
+type Check = Result<(), SceneError>;
+
+impl Checker<'_> {
+    pub fn err(&self, span: Range<usize>, msg: impl Into<String>) -> SceneError {
+        SceneError::at(self.file, self.text, span, msg)
+    }
+
+    fn finite<const N: usize>(&self, v: &Spanned<[f64; N]>, what: &str) -> Check {
+        match v.get_ref().iter().find(|x| !x.is_finite()) {
+            Some(x) => Err(self.err(
+                v.span(),
+                format!("{what} contains {x}; expected finite numbers"),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    fn positive(&self, v: &Spanned<f64>, what: &str) -> Check {
+        let x = *v.get_ref();
+        if x.is_finite() && x > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(
+                v.span(),
+                format!("{what} is {x}; expected a finite number > 0"),
+            ))
+        }
+    }
+
+    fn non_negative(&self, v: &Spanned<f64>, what: &str) -> Check {
+        let x = *v.get_ref();
+        if x.is_finite() && x >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(
+                v.span(),
+                format!("{what} is {x}; expected a finite number ≥ 0"),
+            ))
+        }
+    }
+
+    fn nonzero_vec(&self, v: Vec3, span: Range<usize>, what: &str) -> Check {
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if !n.is_finite() {
+            return Err(self.err(span, format!("{what} {v:?} is not finite")));
+        }
+        if n < 1e-12 {
+            return Err(self.err(
+                span,
+                format!("{what} {v:?} has zero length; expected a direction"),
+            ));
+        }
+        Ok(())
+    }
+
+    pub fn scene(&self, s: &SceneFile) -> Check {
+        if s.scene.name.get_ref().trim().is_empty() {
+            return Err(self.err(s.scene.name.span(), "scene name is empty"));
+        }
+        if let Some(g) = &s.scene.gravity {
+            self.finite(g, "gravity")?;
+        }
+        self.solver(s)?;
+        for b in &s.bodies {
+            if let Some(shape) = &b.shape {
+                self.shape(shape)?;
+            }
+            for area in b.offer.iter().chain(&b.binding) {
+                self.area(area)?;
+            }
+        }
+        self.devices(s)?;
+        self.finger_wiring(s)?;
+        self.labels(s)
+    }
+
+    fn solver(&self, s: &SceneFile) -> Check {
+        let v = &s.solver;
+        if let Some(r) = &v.rate_hz
+            && !(100..=20_000).contains(r.get_ref())
+        {
+            return Err(self.err(
+                r.span(),
+                format!("rate_hz {} is outside 100–20000 Hz", r.get_ref()),
+            ));
+        }
+        if let Some(i) = &v.iterations
+            && !(1..=10_000).contains(i.get_ref())
+        {
+            return Err(self.err(
+                i.span(),
+                format!("iterations {} is outside 1–10000", i.get_ref()),
+            ));
+        }
+        for (x, what) in [
+            (&v.step, "step"),
+            (&v.gain, "gain"),
+            (&v.placement_tolerance, "placement_tolerance"),
+        ]
+        .into_iter()
+        .chain([
+            (&v.violation_tolerance, "violation_tolerance"),
+            (&v.contact_distance, "contact_distance"),
+        ]) {
+            if let Some(x) = x {
+                self.positive(x, what)?;
+            }
+        }
+        for (x, what) in [
+            (&v.multiplier_gain, "multiplier_gain"),
+            (&v.damping, "damping"),
+            (&v.release_distance, "release_distance"),
+            (&v.coupling_stiffness, "coupling_stiffness"),
+            (&v.coupling_damping, "coupling_damping"),
+        ] {
+            if let Some(x) = x {
+                self.non_negative(x, what)?;
+            }
+        }
+        if let (Some(c), Some(r)) = (&v.contact_distance, &v.release_distance)
+            && r.get_ref() < c.get_ref()
+        {
+            return Err(self.err(
+                r.span(),
+                format!(
+                    "release_distance {} must not be below contact_distance {}",
+                    r.get_ref(),
+                    c.get_ref()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn shape(&self, shape: &Spanned<ShapeSpec>) -> Check {
+        let bad = |msg: String| Err(self.err(shape.span(), msg));
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        match shape.get_ref() {
+            ShapeSpec::Box(h) if !h.iter().all(|&x| ok(x)) => {
+                bad(format!("box half extents {h:?} must be finite and > 0"))
+            }
+            ShapeSpec::Sphere(r) if !ok(*r) => {
+                bad(format!("sphere radius {r} must be finite and > 0"))
+            }
+            ShapeSpec::Capsule {
+                half_height,
+                radius,
+            } if !(ok(*radius) && half_height.is_finite() && *half_height >= 0.0) => bad(format!(
+                "capsule half_height {half_height} / radius {radius} must be finite, radius > 0"
+            )),
+            ShapeSpec::Convex(pts)
+                if pts.len() < 4 || pts.iter().flatten().any(|x| !x.is_finite()) =>
+            {
+                bad(format!(
+                    "convex shape needs at least 4 finite points, got {}",
+                    pts.len()
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn area(&self, a: &AreaSection) -> Check {
+        if a.label.get_ref().trim().is_empty() {
+            return Err(self.err(a.label.span(), "area label is empty"));
+        }
+        self.finite(&a.normal, "area normal")?;
+        self.nonzero_vec(*a.normal.get_ref(), a.normal.span(), "area normal")?;
+        super::polygon::check(a.polygon.get_ref()).map_err(|m| self.err(a.polygon.span(), m))
+    }
+
+    fn devices(&self, s: &SceneFile) -> Check {
+        let mut seen: HashMap<&str, ()> = HashMap::new();
+        for d in &s.devices {
+            if seen.insert(d.name.get_ref(), ()).is_some() {
+                return Err(self.err(
+                    d.name.span(),
+                    format!("device name `{}` is used twice", d.name.get_ref()),
+                ));
+            }
+            self.device(d)?;
+        }
+        Ok(())
+    }
+
+    fn device(&self, d: &DeviceSection) -> Check {
+        if let Some(sc) = &d.scale {
+            self.positive(sc, "scale")?;
+        }
+        if let Some(q) = &d.orientation {
+            self.finite(q, "orientation")?;
+            let n = q.get_ref().iter().map(|x| x * x).sum::<f64>();
+            if n < 1e-24 {
+                return Err(self.err(
+                    q.span(),
+                    "orientation has zero length; expected a quaternion [w, x, y, z]",
+                ));
+            }
+        }
+        match &d.hand {
+            Some(h) => self.hand(h),
+            None => Ok(()),
+        }
+    }
+
+    fn hand(&self, h: &Spanned<HandSection>) -> Check {
+        let hs = h.get_ref();
+        let kinds = [
+            hs.still.is_some(),
+            hs.circle.is_some(),
+            hs.line.is_some(),
+            hs.trace.is_some(),
+        ];
+        if kinds.iter().filter(|&&k| k).count() != 1 {
+            return Err(self.err(
+                h.span(),
+                "hand needs exactly one of `still`, `circle`, `line` or `trace`",
+            ));
+        }
+        if let Some(c) = &hs.circle {
+            let cs = c.get_ref();
+            let ok = cs.radius.is_finite() && cs.radius >= 0.0 && cs.hz.is_finite() && cs.hz >= 0.0;
+            if !ok {
+                return Err(self.err(
+                    c.span(),
+                    format!(
+                        "circle radius {} / hz {} must be finite and ≥ 0",
+                        cs.radius, cs.hz
+                    ),
+                ));
+            }
+            self.nonzero_vec(cs.u, c.span(), "circle u")?;
+            self.nonzero_vec(cs.v, c.span(), "circle v")?;
+        }
+        if let Some(l) = &hs.line {
+            let ls = l.get_ref();
+            if !(ls.to.iter().all(|x| x.is_finite()) && ls.seconds.is_finite() && ls.seconds > 0.0)
+            {
+                return Err(self.err(
+                    l.span(),
+                    "line `to` must be finite and `seconds` finite and > 0",
+                ));
+            }
+        }
+        if let Some(k) = &hs.stiffness {
+            self.non_negative(k, "hand stiffness")?;
+        }
+        if let Some(b) = &hs.damping {
+            self.non_negative(b, "hand damping")?;
+        }
+        Ok(())
+    }
+
+    /// Every finger names a known device, and every device drives exactly one
+    /// finger (a device has one tip).
+    fn finger_wiring(&self, s: &SceneFile) -> Check {
+        let mut driven: HashMap<&str, &str> = HashMap::new();
+        for f in &s.fingers {
+            let dev = f.device.get_ref().as_str();
+            if !s.devices.iter().any(|d| d.name.get_ref() == dev) {
+                let known: Vec<&str> = s
+                    .devices
+                    .iter()
+                    .map(|d| d.name.get_ref().as_str())
+                    .collect();
+                return Err(self.err(
+                    f.device.span(),
+                    format!(
+                        "finger `{}` names unknown device `{dev}` (devices: {})",
+                        f.name.get_ref(),
+                        list(&known)
+                    ),
+                ));
+            }
+            if let Some(other) = driven.insert(dev, f.name.get_ref()) {
+                return Err(self.err(
+                    f.device.span(),
+                    format!(
+                        "device `{dev}` already drives finger `{other}`; a device drives one finger"
+                    ),
+                ));
+            }
+        }
+        if let Some(d) = s
+            .devices
+            .iter()
+            .find(|d| !driven.contains_key(d.name.get_ref().as_str()))
+        {
+            return Err(self.err(
+                d.name.span(),
+                format!("device `{}` drives no finger", d.name.get_ref()),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The label order must be a partial order: no cycles.
+    fn labels(&self, s: &SceneFile) -> Check {
+        let mut edges: BTreeMap<&str, Vec<(&str, Range<usize>)>> = BTreeMap::new();
+        for (k, vs) in &s.labels {
+            for v in vs.get_ref() {
+                if v.get_ref().trim().is_empty() {
+                    return Err(self.err(v.span(), "label is empty"));
+                }
+                edges
+                    .entry(k.get_ref())
+                    .or_default()
+                    .push((v.get_ref(), v.span()));
+            }
+        }
+        // Depth-first search with colours; report the edge that closes a cycle.
+        let mut state: HashMap<&str, u8> = HashMap::new();
+        fn visit<'s>(
+            n: &'s str,
+            edges: &BTreeMap<&'s str, Vec<(&'s str, Range<usize>)>>,
+            state: &mut HashMap<&'s str, u8>,
+            path: &mut Vec<&'s str>,
+        ) -> Option<(Vec<&'s str>, Range<usize>)> {
+            state.insert(n, 1);
+            path.push(n);
+            for (m, span) in edges.get(n).map(Vec::as_slice).unwrap_or(&[]) {
+                match state.get(m).copied().unwrap_or(0) {
+                    1 => {
+                        let start = path.iter().position(|p| p == m).unwrap_or(0);
+                        let mut cycle = path[start..].to_vec();
+                        cycle.push(m);
+                        return Some((cycle, span.clone()));
+                    }
+                    0 => {
+                        if let Some(c) = visit(m, edges, state, path) {
+                            return Some(c);
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            path.pop();
+            state.insert(n, 2);
+            None
+        }
+        for &n in edges.keys() {
+            if state.get(n).copied().unwrap_or(0) == 0
+                && let Some((cycle, span)) = visit(n, &edges, &mut state, &mut Vec::new())
+            {
+                return Err(self.err(
+                    span,
+                    format!("label order has a cycle: {}", cycle.join(" ≤ ")),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+pub(super) fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
