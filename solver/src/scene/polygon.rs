@@ -7,6 +7,14 @@ fn sub(a: Vec3, b: Vec3) -> Vec3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
+fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
 fn dot(a: Vec3, b: Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -22,14 +30,6 @@ pub(super) fn check(pts: &[Vec3]) -> Result<(), String> {
     if pts.iter().flatten().any(|x| !x.is_finite()) {
         return Err("polygon has a non-finite coordinate".into());
     }
-    // Newell's normal: robust for any simple polygon, zero for a degenerate one.
-    let mut n = [0.0; 3];
-    for (k, p) in pts.iter().enumerate() {
-        let q = pts[(k + 1) % pts.len()];
-        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
-    }
     let diameter = pts
         .iter()
         .flat_map(|a| {
@@ -37,6 +37,13 @@ pub(super) fn check(pts: &[Vec3]) -> Result<(), String> {
                 .map(move |b| dot(sub(*a, *b), sub(*a, *b)).sqrt())
         })
         .fold(0.0, f64::max);
+    // The plane: the largest cross product of two edges from the first vertex.
+    // (Newell's normal would cancel to zero for a bow-tie and hide that it
+    // crosses itself.)
+    let n = (1..pts.len() - 1)
+        .map(|k| cross(sub(pts[k], pts[0]), sub(pts[k + 1], pts[0])))
+        .max_by(|a, b| dot(*a, *a).total_cmp(&dot(*b, *b)))
+        .unwrap_or([0.0; 3]);
     let n_len = dot(n, n).sqrt();
     if diameter == 0.0 || n_len <= 1e-12 * diameter * diameter {
         return Err("polygon has zero area (collinear or repeated vertices)".into());
