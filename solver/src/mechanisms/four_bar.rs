@@ -18,10 +18,18 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{Assembly, rod_inertia, z_to};
-use crate::{BodySpec, FingerSpec, JointKind as K, Model};
+use crate::{BodySpec, FingerSpec, JointKind as K, Model, ModelBuilder};
 
 /// The spatial R-S-U-R four-bar (metres, kilograms), assembled at q0.
 pub fn four_bar() -> Model {
+    four_bar_builder()
+        .build()
+        .expect("the four-bar is valid by construction")
+}
+
+/// The specs of [`four_bar`] before building (bodies, body-frame joints, fingers,
+/// gravity), e.g. to write them as a scene file.
+pub fn four_bar_builder() -> ModelBuilder {
     let a = Vector3::new(0.0, 0.0, 0.0);
     let b = Vector3::new(0.04, 0.0, 0.03);
     let c = Vector3::new(0.09, 0.07, 0.08);
@@ -70,6 +78,4 @@ pub fn four_bar() -> Model {
     m.builder
         .finger(FingerSpec::point("index", "coupler", [0.0; 3]));
     m.builder
-        .build()
-        .expect("the four-bar is valid by construction")
 }

@@ -15,9 +15,9 @@ mod four_bar;
 mod sphere_toy;
 mod stewart;
 
-pub use four_bar::four_bar;
-pub use sphere_toy::{SPHERE_TOY_RADIUS_M, sphere_toy};
-pub use stewart::{STROKE_M as STEWART_STROKE_M, stewart};
+pub use four_bar::{four_bar, four_bar_builder};
+pub use sphere_toy::{SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder};
+pub use stewart::{STROKE_M as STEWART_STROKE_M, stewart, stewart_builder};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 

@@ -27,7 +27,7 @@ use std::f64::consts::PI;
 use nalgebra::Vector3;
 
 use super::{Assembly, from_columns};
-use crate::{BodySpec, FingerSpec, JointKind as K, Model};
+use crate::{BodySpec, FingerSpec, JointKind as K, Model, ModelBuilder};
 
 /// Radius of the sphere the bead centres lie on, metres.
 pub const SPHERE_TOY_RADIUS_M: f64 = 0.1;
@@ -49,6 +49,14 @@ fn frame(phi: f64, lam: f64) -> [Vector3<f64>; 3] {
 
 /// The 132-body sphere toy, assembled at q0.
 pub fn sphere_toy() -> Model {
+    sphere_toy_builder()
+        .build()
+        .expect("the sphere toy is valid by construction")
+}
+
+/// The specs of [`sphere_toy`] before building (bodies, body-frame joints, fingers,
+/// gravity), e.g. to write them as a scene file.
+pub fn sphere_toy_builder() -> ModelBuilder {
     let polar = |k: usize| PI * (k + 1) as f64 / 12.0;
     let longitude = |m: usize| 2.0 * PI * m as f64 / PER_RING as f64;
     let mut t = Assembly::new();
@@ -89,6 +97,4 @@ pub fn sphere_toy() -> Model {
     t.builder
         .finger(FingerSpec::point("index", bead(0, 0), [0.0, 0.0, 0.005]));
     t.builder
-        .build()
-        .expect("the sphere toy is valid by construction")
 }

@@ -22,13 +22,21 @@ use std::f64::consts::PI;
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{Assembly, rod_inertia, z_to};
-use crate::{BodySpec, FingerSpec, JointKind as K, Model};
+use crate::{BodySpec, FingerSpec, JointKind as K, Model, ModelBuilder};
 
 /// Stroke limit of each leg's slider, metres either side of the initial length.
 pub const STROKE_M: f64 = 0.04;
 
 /// The Stewart platform, assembled at q0.
 pub fn stewart() -> Model {
+    stewart_builder()
+        .build()
+        .expect("the Stewart platform is valid by construction")
+}
+
+/// The specs of [`stewart`] before building (bodies, body-frame joints, fingers,
+/// gravity), e.g. to write them as a scene file.
+pub fn stewart_builder() -> ModelBuilder {
     let height = 0.12;
     let on_circle = |r: f64, deg: f64, z: f64| {
         let t = deg * PI / 180.0;
@@ -86,6 +94,4 @@ pub fn stewart() -> Model {
     m.builder
         .finger(FingerSpec::rigid("index", "platform", [0.0, 0.0, 0.01]));
     m.builder
-        .build()
-        .expect("the Stewart platform is valid by construction")
 }

@@ -56,6 +56,26 @@ impl ModelBuilder {
         FingerId(self.fingers.len() as u32 - 1)
     }
 
+    /// The bodies added so far, in order.
+    pub fn body_specs(&self) -> &[BodySpec] {
+        &self.bodies
+    }
+
+    /// The joints added so far, in order.
+    pub fn joint_specs(&self) -> &[JointSpec] {
+        &self.joints
+    }
+
+    /// The fingers added so far, in order.
+    pub fn finger_specs(&self) -> &[FingerSpec] {
+        &self.fingers
+    }
+
+    /// Gravity, m/s², world frame.
+    pub fn gravity_m_s2(&self) -> [f64; 3] {
+        self.gravity
+    }
+
     /// Validates everything and compiles the model. The error names the first
     /// offending body, joint or finger (in that order) and what is wrong.
     pub fn build(&self) -> Result<Model, BuildError> {

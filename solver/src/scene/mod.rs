@@ -17,9 +17,11 @@ mod error;
 mod polygon;
 pub mod spec;
 mod validate;
+mod write;
 
 pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
 pub use error::SceneError;
+pub use write::mechanism_tables;
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};

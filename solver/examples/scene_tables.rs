@@ -1,0 +1,29 @@
+//! Prints a built-in mechanism's `[[body]]`, `[[joint]]` and `[[finger]]`
+//! tables in scene-file syntax; the built-in scenes in `scenes/` were made this
+//! way (a header with `[scene]`, `[solver]` and `[[device]]` written by hand).
+//!
+//! `cargo run -p haptloop-solver --example scene_tables -- four-bar right`
+
+use haptloop_solver::mechanisms;
+use haptloop_solver::scene::mechanism_tables;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (name, device) = match args.as_slice() {
+        [n, d] => (n.as_str(), d.clone()),
+        _ => {
+            eprintln!("usage: scene_tables <four-bar|stewart|sphere-toy> <device-name>");
+            std::process::exit(2);
+        }
+    };
+    let builder = match name {
+        "four-bar" => mechanisms::four_bar_builder(),
+        "stewart" => mechanisms::stewart_builder(),
+        "sphere-toy" => mechanisms::sphere_toy_builder(),
+        other => {
+            eprintln!("unknown mechanism `{other}`; expected four-bar, stewart or sphere-toy");
+            std::process::exit(2);
+        }
+    };
+    print!("{}", mechanism_tables(&builder, &|_| device.clone()));
+}
