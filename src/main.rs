@@ -1,18 +1,9 @@
-//! `haptloop`: real-time haptic interaction with constrained virtual mechanisms.
-//!
-//! This binary is thin: it parses flags into typed values ([`cli`]), hands them
-//! to the library crates, and prints reports ([`report`]).
-//!
-//! Exit codes: 0 success; 1 a runtime error (printed with its cause chain);
-//! 2 a usage error (bad flags, printed by clap).
-
-mod cli;
-mod report;
+//! `haptloop`: see the library docs (`src/lib.rs`) and `haptloop --help`.
 
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    match cli::run() {
+    match haptloop::cli::run() {
         Ok(code) => code,
         Err(err) => {
             eprintln!("haptloop: error: {err:#}");

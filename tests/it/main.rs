@@ -1,3 +1,4 @@
 //! Workspace-level integration tests: one binary, a module per area.
 
 mod docs;
+mod scenes;

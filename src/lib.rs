@@ -1,0 +1,17 @@
+//! haptloop: real-time haptic interaction with constrained virtual mechanisms.
+//!
+//! The library behind the `haptloop` command. It wires the three crates
+//! together; each of them is documented on its own:
+//!
+//! ```text
+//!  scenes::resolve(SCENE|FILE) ─► Scene { CompiledScene (haptloop_solver), hand traces }
+//!  cli ─► probe (haptloop_rt::probe) │ scenes │ check │ run (session)
+//!  report ─► text reports, summary.json, percentile distributions, SVG plots
+//! ```
+//!
+//! Exit codes of the binary: 0 success; 1 a runtime error or an invalid scene
+//! (printed with file:line:column or the cause chain); 2 a usage error.
+
+pub mod cli;
+pub mod report;
+pub mod scenes;

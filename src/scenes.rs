@@ -1,0 +1,111 @@
+//! Built-in scenes (embedded, so `haptloop run four-bar` works from any
+//! directory) and resolution of a `SCENE|FILE` argument into a checked scene.
+
+use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel};
+use haptloop_solver::scene::{self, CompiledScene, HandPath, LoadedScene, SceneError};
+use std::path::Path;
+
+/// A scene shipped inside the binary.
+pub struct Builtin {
+    /// Name on the command line.
+    pub name: &'static str,
+    /// The TOML text (also in `scenes/<name>.toml`).
+    pub text: &'static str,
+}
+
+/// The built-in scenes, default first.
+pub const BUILTIN: &[Builtin] = &[
+    Builtin {
+        name: "four-bar",
+        text: include_str!("../scenes/four-bar.toml"),
+    },
+    Builtin {
+        name: "stewart",
+        text: include_str!("../scenes/stewart.toml"),
+    },
+    Builtin {
+        name: "peaucellier",
+        text: include_str!("../scenes/peaucellier.toml"),
+    },
+    Builtin {
+        name: "sphere-toy",
+        text: include_str!("../scenes/sphere-toy.toml"),
+    },
+    Builtin {
+        name: "grasp-2",
+        text: include_str!("../scenes/grasp-2.toml"),
+    },
+    Builtin {
+        name: "grasp-3",
+        text: include_str!("../scenes/grasp-3.toml"),
+    },
+];
+
+/// The scene `haptloop` runs with no arguments.
+pub const DEFAULT_SCENE: &str = "four-bar";
+
+/// A scene ready for a session: the file, its compiled model, and the hand
+/// traces it references, loaded and checked.
+pub struct Scene {
+    /// The parsed file (kept for error messages).
+    pub loaded: LoadedScene,
+    /// What it compiles to.
+    pub compiled: CompiledScene,
+    /// One entry per device: its hand trace, if the hand follows one.
+    pub traces: Vec<Option<HandTrace>>,
+}
+
+/// Resolves `arg` (a built-in name or a path), then parses, validates and
+/// compiles it, checks device models and loads hand traces. Every error names
+/// the file, line and column.
+pub fn resolve(arg: &str) -> Result<Scene, SceneError> {
+    let loaded = match BUILTIN.iter().find(|b| b.name == arg) {
+        Some(b) => scene::parse(
+            &format!("scenes/{}.toml", b.name),
+            b.text,
+            Some(Path::new("scenes")),
+        )?,
+        None if Path::new(arg).exists() => scene::load(Path::new(arg))?,
+        None => {
+            let names: Vec<&str> = BUILTIN.iter().map(|b| b.name).collect();
+            return Err(SceneError::whole_file(
+                arg,
+                format!(
+                    "no such file, and not a built-in scene ({})",
+                    names.join(", ")
+                ),
+            ));
+        }
+    };
+    check_loaded(loaded)
+}
+
+/// Compiles a loaded scene and checks what only the device crate knows.
+pub fn check_loaded(loaded: LoadedScene) -> Result<Scene, SceneError> {
+    let compiled = loaded.compile()?;
+    let mut traces = Vec::with_capacity(compiled.devices.len());
+    for d in &compiled.devices {
+        if PhantomModel::by_name(&d.model).is_err() {
+            return Err(loaded.error_at(
+                d.model_span.clone(),
+                format!(
+                    "unknown device model `{}`; known models: {}",
+                    d.model,
+                    KNOWN_MODELS.join(", ")
+                ),
+            ));
+        }
+        traces.push(match &d.hand.path {
+            HandPath::Trace { path, span } => Some(
+                HandTrace::load(path)
+                    .map_err(|e| loaded.error_at(span.clone(), format!("hand trace: {e}")))?,
+            ),
+            _ => None,
+        });
+    }
+    Ok(Scene {
+        loaded,
+        compiled,
+        traces,
+    })
+}

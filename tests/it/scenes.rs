@@ -1,0 +1,107 @@
+//! Scene files: the malformed corpus fails at the expected line and column,
+//! the built-in scenes compile, and the mechanism scenes are exactly the
+//! solver's builders.
+
+use haptloop::scenes::{BUILTIN, resolve};
+use haptloop_solver::mechanisms;
+use std::path::Path;
+
+/// Each file in `tests/data/bad-scenes/` starts with
+/// `# expect: LINE:COLUMN text`: loading it must fail at exactly that place
+/// with a message containing `text`.
+#[test]
+fn every_malformed_scene_fails_at_the_expected_place() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad-scenes");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(
+        files.len() >= 25,
+        "the corpus has only {} files",
+        files.len()
+    );
+    let mut failures = Vec::new();
+    for path in &files {
+        let text = std::fs::read_to_string(path).unwrap();
+        let expect = text
+            .lines()
+            .next()
+            .unwrap()
+            .strip_prefix("# expect: ")
+            .expect("expect header");
+        let (place, want) = expect.split_once(' ').unwrap_or((expect, ""));
+        let (line, col) = place.split_once(':').unwrap();
+        let (line, col): (usize, usize) = (line.parse().unwrap(), col.parse().unwrap());
+        let arg = path.to_str().unwrap();
+        match resolve(arg) {
+            Ok(_) => failures.push(format!("{arg}: loaded, but should fail")),
+            Err(e) => {
+                if (e.line, e.column) != (line, col) || !e.message.contains(want) || e.file != arg {
+                    failures.push(format!("{arg}: expected {line}:{col} `{want}`, got {e}"));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn every_builtin_scene_compiles_with_a_device_per_finger() {
+    for b in BUILTIN {
+        let s = resolve(b.name).unwrap_or_else(|e| panic!("{e}"));
+        let c = &s.compiled;
+        assert!(!c.description.is_empty(), "{} needs a description", b.name);
+        assert_eq!(c.fingers.len(), c.devices.len(), "{}", b.name);
+        assert_eq!(c.model.fingers().len(), c.fingers.len());
+        let on_disk = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{}.toml", b.name)),
+        )
+        .unwrap();
+        assert_eq!(on_disk, b.text, "the embedded copy of {} is stale", b.name);
+    }
+}
+
+#[test]
+fn mechanism_scenes_are_exactly_the_solver_builders() {
+    for (name, model) in [
+        ("four-bar", mechanisms::four_bar()),
+        ("stewart", mechanisms::stewart()),
+        ("sphere-toy", mechanisms::sphere_toy()),
+    ] {
+        let scene = resolve(name).unwrap();
+        let m = &scene.compiled.model;
+        assert_eq!(
+            (m.n_coords(), m.n_rows()),
+            (model.n_coords(), model.n_rows()),
+            "{name}"
+        );
+        assert_eq!(m.q0(), model.q0(), "{name}: q0 differs");
+        let (mut a, mut b) = (m.evaluation(), model.evaluation());
+        a.evaluate(m, m.q0(), &m.initial_targets()).unwrap();
+        b.evaluate(&model, model.q0(), &model.initial_targets())
+            .unwrap();
+        assert_eq!(a.values(), b.values(), "{name}: C differs");
+        assert_eq!(
+            a.jacobian().values(),
+            b.jacobian().values(),
+            "{name}: C_q differs"
+        );
+    }
+}
+
+#[test]
+fn the_peaucellier_scene_is_assembled_and_q_lies_on_its_line() {
+    let scene = resolve("peaucellier").unwrap();
+    let m = &scene.compiled.model;
+    let mut e = m.evaluation();
+    e.evaluate(m, m.q0(), &m.initial_targets()).unwrap();
+    let worst = e.values().iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(worst < 1e-12, "initial violation {worst:e}");
+    let q = m
+        .finger_point(m.q0(), haptloop_solver::FingerId(0))
+        .unwrap();
+    // x = (a² − b²)/(2r) = (0.01 − 0.0016)/0.1.
+    assert!((q.x - 0.084).abs() < 1e-12, "Q at {q:?}");
+}
