@@ -27,6 +27,10 @@
 //!   and C_q in place with bounded work and no allocation.
 //! - [`Jacobian`]: the fixed sparsity pattern (CSR, a transposed index, a
 //!   zero-copy faer view) and the products C_q·v, C_qᵀ·v.
+//! - [`Placement`] ([`placement`]): the slow thread's Newton-KKT solver —
+//!   symbolic analysis of J Jᵀ once per structure ([`Placement::analyze`],
+//!   cached by [`PlacementCache`]), then allocation-free damped Newton
+//!   iterations with slack inequalities ([`Placement::solve`] → [`SolveInfo`]).
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
@@ -66,6 +70,7 @@ mod ids;
 mod jacobian;
 pub mod mechanisms;
 mod model;
+pub mod placement;
 pub mod rotation;
 pub mod scene;
 
@@ -77,4 +82,7 @@ pub use model::{
     Body, BodySpec, BuildError, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, DesignVar,
     Finger, FingerSpec, Grasp, JointKind, JointSpec, Layout, Model, ModelBuilder, Owner,
     PlaneOwner, PointPlaneSpec, UnknownName,
+};
+pub use placement::{
+    Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };

@@ -1,0 +1,191 @@
+//! Dense columns by the modified Schur complement (Choi & Cremer §5.1, after
+//! Andersen 1996), written as its equivalent Sherman–Morrison–Woodbury solve.
+//!
+//! With the dense columns A_d of C_q split off, the normal matrix is
+//!
+//! ```text
+//! N = S + U C Uᵀ,   S = A_s W_s⁻¹ A_sᵀ + D + μI + F Fᵀ,
+//! U = [A_d W_d^{-1/2} | F],   C = diag(I, −I)
+//! ```
+//!
+//! where F has one nonzero per column, on each row that has no entry left in a
+//! sparse column (Eq. 14: F Fᵀ only modifies the diagonal, so S keeps its
+//! sparsity and stays nonsingular). Eliminating γ, ρ of Eq. 13 gives
+//! N⁻¹ r = S⁻¹ r − Z K⁻¹ Uᵀ S⁻¹ r with Z = S⁻¹ U and the small dense
+//! K = C + Uᵀ Z (k × k, k = dense columns + F columns), factored by LU with
+//! partial pivoting (K is symmetric but indefinite). Cost per iteration: one
+//! sparse factorisation of S, k + 1 sparse solves, O(m k²) + O(k³).
+
+use super::factor::{NormalFactor, NotPositive};
+use crate::Jacobian;
+
+/// Buffers and the split of one structure's dense columns.
+#[derive(Debug, Clone)]
+pub(crate) struct LowRank {
+    m: usize,
+    /// Dense columns, and for each its (row, value position) entries.
+    cols: Vec<usize>,
+    entry_ptr: Vec<usize>,
+    entries: Vec<(usize, usize)>,
+    f_rows: Vec<usize>,
+    /// U then Z = S⁻¹U, column-major m × k.
+    u: Vec<f64>,
+    z: Vec<f64>,
+    kmat: Vec<f64>,
+    piv: Vec<usize>,
+    t: Vec<f64>,
+}
+
+impl LowRank {
+    /// Sizes everything for `dense_cols` and `f_rows` of `jac`'s pattern.
+    pub fn new(jac: &Jacobian, dense_cols: &[usize], f_rows: &[usize]) -> Self {
+        let (ptr, rows, pos) = (jac.col_ptr(), jac.col_rows(), jac.col_value_index());
+        let mut entry_ptr = vec![0];
+        let mut entries = Vec::new();
+        for &c in dense_cols {
+            entries.extend((ptr[c]..ptr[c + 1]).map(|k| (rows[k], pos[k])));
+            entry_ptr.push(entries.len());
+        }
+        let m = jac.nrows();
+        let k = dense_cols.len() + f_rows.len();
+        Self {
+            m,
+            cols: dense_cols.to_vec(),
+            entry_ptr,
+            entries,
+            f_rows: f_rows.to_vec(),
+            u: vec![0.0; m * k],
+            z: vec![0.0; m * k],
+            kmat: vec![0.0; k * k],
+            piv: vec![0; k],
+            t: vec![0.0; k],
+        }
+    }
+
+    /// Rank k of the correction (0: no dense columns).
+    pub fn rank(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Number of dense columns.
+    pub fn dense_columns(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Writes U from the Jacobian values; for each F row, adds f² (the row's
+    /// dense-column diagonal + 1) to `diag`, the extra diagonal of S.
+    pub fn load(&mut self, vals: &[f64], winv: Option<&[f64]>, diag: &mut [f64]) {
+        let (m, kd) = (self.m, self.cols.len());
+        self.u.fill(0.0);
+        for (j, &c) in self.cols.iter().enumerate() {
+            let s = winv.map_or(1.0, |w| w[c].sqrt());
+            for &(row, p) in &self.entries[self.entry_ptr[j]..self.entry_ptr[j + 1]] {
+                self.u[j * m + row] = vals[p] * s;
+            }
+        }
+        for (i, &row) in self.f_rows.iter().enumerate() {
+            let dd: f64 = (0..kd).map(|j| self.u[j * m + row].powi(2)).sum();
+            let f2 = dd + 1.0;
+            self.u[(kd + i) * m + row] = f2.sqrt();
+            diag[row] += f2;
+        }
+    }
+
+    /// After S is factored: Z = S⁻¹U, K = C + UᵀZ, LU of K. No allocation.
+    pub fn prepare(&mut self, factor: &mut NormalFactor) -> Result<(), NotPositive> {
+        let (m, k, kd) = (self.m, self.rank(), self.cols.len());
+        if k == 0 {
+            return Ok(());
+        }
+        self.z.copy_from_slice(&self.u);
+        factor.solve_many(&mut self.z, m, k);
+        for i in 0..k {
+            for j in 0..k {
+                let ui = &self.u[i * m..(i + 1) * m];
+                let zj = &self.z[j * m..(j + 1) * m];
+                let dot: f64 = ui.iter().zip(zj).map(|(a, b)| a * b).sum();
+                let c = if i != j {
+                    0.0
+                } else if i < kd {
+                    1.0
+                } else {
+                    -1.0
+                };
+                self.kmat[i + j * k] = c + dot;
+            }
+        }
+        lu_in_place(&mut self.kmat, k, &mut self.piv)
+    }
+
+    /// x ← N⁻¹ x = S⁻¹x − Z K⁻¹ Uᵀ S⁻¹x. No allocation.
+    pub fn solve(&mut self, factor: &mut NormalFactor, x: &mut [f64]) {
+        factor.solve(x);
+        let (m, k) = (self.m, self.rank());
+        if k == 0 {
+            return;
+        }
+        for (j, t) in self.t.iter_mut().enumerate() {
+            *t = self.u[j * m..(j + 1) * m]
+                .iter()
+                .zip(x.iter())
+                .map(|(a, b)| a * b)
+                .sum();
+        }
+        lu_solve(&self.kmat, k, &self.piv, &mut self.t);
+        for (j, t) in self.t.iter().enumerate() {
+            for (xi, zi) in x.iter_mut().zip(&self.z[j * m..(j + 1) * m]) {
+                *xi -= zi * t;
+            }
+        }
+    }
+}
+
+/// LU with partial pivoting of the column-major k × k `a`, in place.
+fn lu_in_place(a: &mut [f64], k: usize, piv: &mut [usize]) -> Result<(), NotPositive> {
+    for col in 0..k {
+        let p = (col..k)
+            .max_by(|&i, &j| a[i + col * k].abs().total_cmp(&a[j + col * k].abs()))
+            .unwrap_or(col);
+        piv[col] = p;
+        // Partial pivoting is backward stable; small pivots are the problem's
+        // conditioning (refined by the caller), only an exact zero fails.
+        if !(a[p + col * k].abs() > 0.0 && a[p + col * k].is_finite()) {
+            return Err(NotPositive);
+        }
+        if p != col {
+            for j in 0..k {
+                a.swap(col + j * k, p + j * k);
+            }
+        }
+        let d = a[col + col * k];
+        for i in col + 1..k {
+            a[i + col * k] /= d;
+        }
+        for j in col + 1..k {
+            let f = a[col + j * k];
+            for i in col + 1..k {
+                a[i + j * k] -= a[i + col * k] * f;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Solves with the factors of [`lu_in_place`], in place.
+fn lu_solve(a: &[f64], k: usize, piv: &[usize], b: &mut [f64]) {
+    // The factorisation swapped whole rows, so apply every swap first.
+    for (col, &p) in piv.iter().enumerate().take(k) {
+        b.swap(col, p);
+    }
+    for col in 0..k {
+        for i in col + 1..k {
+            b[i] -= a[i + col * k] * b[col];
+        }
+    }
+    for col in (0..k).rev() {
+        b[col] /= a[col + col * k];
+        for i in 0..col {
+            b[i] -= a[i + col * k] * b[col];
+        }
+    }
+}

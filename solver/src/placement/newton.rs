@@ -1,0 +1,359 @@
+//! The Newton-KKT loop of [`Placement::solve`]: damped steps, backtracking on
+//! a two-part merit, adaptive (Levenberg–Marquardt) damping, the outcome.
+//!
+//! Acceptance of a trial x + αδ (a simple filter): the constraint residual
+//! θ = ‖g‖₂ drops by the Armijo fraction 1e-4·α, **or** θ stays below
+//! θ_ok = 10·tolerance while the objective f = ½‖q − q_ref‖²_W decreases
+//! (tangential progress on the constraint manifold, which ‖g‖ alone would
+//! reject). Up to six halvings of α; if none is accepted the damping μ grows
+//! ×10 and the step is recomputed; a full step resets μ to
+//! clamp(θ², 1e-4·`damping`, `damping`). μ beyond `MU_MAX` ends the solve. A failed Cholesky
+//! pivot also raises μ (×100).
+//!
+//! Least-squares mode: when θ stalls above θ_ok for three accepted steps
+//! (Newton would have contracted it), or J can no longer reduce a large
+//! residual, the rows conflict. Steps are then plain Levenberg–Marquardt on
+//! ψ = ½θ² + μf (gain ratio, no backtracking; `least_squares.rs`), whose
+//! stationary point is the finite compromise reported as
+//! [`SolveStatus::LeastSquares`] (λ = g/μ there).
+
+use super::least_squares::lm_update;
+use super::step::H_MIN;
+use super::{IterationRecord, Placement, PlacementError, SolveInfo, SolveStatus};
+use crate::{FingerTarget, Model, RowUnit};
+
+/// Damping beyond which a solve gives up (the step would be ~1e-4 of Newton's).
+const MU_MAX: f64 = 1e4;
+/// Backtracking halvings per step.
+const MAX_HALVINGS: u32 = 6;
+/// Slack below which an inequality row counts as active.
+const Y_FLOOR: f64 = 1e-6;
+/// A row with Y < `Y_FLOOR` and λ above this pulls (wrong sign): it is
+/// released by resetting Y to `Y_FLOOR` (Y = 0 is a fixed point of δY).
+const LAMBDA_PULL: f64 = 1e-10;
+/// ‖Jᵀg‖ ≤ this · ‖J‖_max · ‖g‖ · √n marks a least-squares stationary point.
+pub(super) const LS_GRADIENT: f64 = 1e-4;
+/// Least-squares mode also starts when θ > this × tolerance and
+/// ‖Jᵀg‖ ≤ `LS_ENTRY_GRADIENT` · ‖J‖_max · ‖g‖ · √n: the residual lies
+/// (almost) in the left null space of J, where no step can reduce it.
+const LS_ENTRY: f64 = 1e3;
+const LS_ENTRY_GRADIENT: f64 = 1e-3;
+
+/// θ above this × the previous θ counts as a stalled iteration.
+const STAGNATION: f64 = 0.9;
+/// Stalled iterations in a row that switch to least-squares mode.
+const STAGNANT_STEPS: u32 = 3;
+
+/// The state a trial is judged against.
+#[derive(Debug, Clone, Copy)]
+struct Merit {
+    theta: f64,
+    f: f64,
+    theta_ok: f64,
+}
+
+impl Merit {
+    fn accepts(&self, alpha: f64, theta_t: f64, f_t: f64) -> bool {
+        let feasible = theta_t <= (1.0 - 1e-4 * alpha) * self.theta;
+        let tangential = theta_t <= self.theta_ok && f_t < self.f;
+        feasible || tangential
+    }
+}
+
+/// The smallest damping at residual θ: θ², between 1e-4·μ₀ and μ₀.
+fn damping_floor(theta: f64, mu0: f64) -> f64 {
+    (theta * theta).clamp(MU_FLOOR_RATIO * mu0, mu0)
+}
+
+/// Lowest damping relative to `options.damping` (1e-12 by default: four
+/// orders above rounding in a unit-scale J Jᵀ; the bias μ|λ| it leaves is far
+/// below the tolerance).
+const MU_FLOOR_RATIO: f64 = 1e-6;
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+impl Placement {
+    /// Numeric phase: places `q` (start in, result out) by Newton-KKT on
+    /// min ½‖q − q_ref‖²_W s.t. C_eq = 0, C_in ≥ 0, with the fingers at
+    /// `targets`. Numerical outcomes, good or bad, are `Ok(SolveInfo)` with a
+    /// finite q; `Err` only for inputs that cannot be solved (another
+    /// structure, wrong lengths, a start that cannot be evaluated), and then q
+    /// is untouched.
+    ///
+    /// Allocates nothing per iteration (one [`Evaluation`](crate::Evaluation)
+    /// when `model` is a new object of the analysed structure). Slow thread:
+    /// the time is bounded by `max_iterations` × (7 evaluations + up to 5
+    /// factorisations), not by a deadline.
+    pub fn solve(
+        &mut self,
+        model: &Model,
+        q: &mut [f64],
+        q_ref: &[f64],
+        targets: &[FingerTarget],
+    ) -> Result<SolveInfo, PlacementError> {
+        self.bind(model)?;
+        for v in [q.len(), q_ref.len()] {
+            if v != self.n {
+                let (expected, got) = (self.n, v);
+                return Err(PlacementError::CoordinateCount { expected, got });
+            }
+        }
+        if let Some(index) = q_ref.iter().position(|v| !v.is_finite()) {
+            return Err(PlacementError::NonFiniteReference { index });
+        }
+        self.eval
+            .evaluate(model, q, targets)
+            .map_err(PlacementError::Eval)?;
+        let opt = self.options.clone_scalars();
+        for (y, c) in self.y.iter_mut().zip(&self.eval.values()[self.m_eq..]) {
+            *y = c.max(0.0).sqrt().max(Y_FLOOR);
+        }
+        self.lambda.fill(0.0);
+        self.hy.fill(H_MIN);
+        self.history.clear();
+        self.update_residual();
+        let mut theta = norm2(&self.g);
+        let mut f = self.objective(q, q_ref);
+        let theta_ok = 10.0 * opt.tolerance;
+        let (mut mu, mut regularised) = (opt.damping, false);
+        let (mut status, mut step, mut iterations) = (SolveStatus::MaxIterations, 0.0, 0);
+        let (mut least_squares, mut stagnant, mut nu) = (false, 0, 0.0);
+        'outer: while iterations < opt.max_iterations {
+            let alpha = loop {
+                // Least-squares mode: matrix damping μ₀ + ν, pull μ₀/(μ₀ + ν).
+                let (damp, pull) = match least_squares {
+                    false => (mu, 1.0),
+                    true => (opt.damping + nu, opt.damping / (opt.damping + nu)),
+                };
+                if self.newton_step(q, q_ref, damp, pull).is_err() {
+                    mu *= 100.0;
+                    nu = nu * 100.0 + opt.damping;
+                    regularised = true;
+                } else {
+                    step = norm_inf(&self.dq).max(norm_inf(&self.dy));
+                    if least_squares {
+                        let psi = (theta, f, opt.damping);
+                        if let Some(rho) = self.lm_trial(model, q, q_ref, targets, psi) {
+                            nu = lm_update(nu, rho);
+                            break 1.0;
+                        }
+                        nu = 4.0 * nu + opt.damping;
+                    } else {
+                        let merit = Merit { theta, f, theta_ok };
+                        if let Some(alpha) = self.line_search(model, q, q_ref, targets, merit) {
+                            break alpha;
+                        }
+                        mu *= 10.0;
+                    }
+                    regularised = true;
+                }
+                if mu.max(nu) > MU_MAX {
+                    status = self.stall_status(theta, opt.tolerance, step, opt.step_tolerance);
+                    break 'outer;
+                }
+            };
+            self.commit(model, q, targets);
+            let theta_prev = theta;
+            theta = norm2(&self.g);
+            f = self.objective(q, q_ref);
+            iterations += 1;
+            self.history.push(IterationRecord {
+                residual: theta,
+                step,
+                alpha,
+                damping: if least_squares { opt.damping + nu } else { mu },
+            });
+            // Levenberg–Marquardt: a full step resets μ to its floor, which
+            // follows θ² (Yamashita–Fukushima): the damping bias μ|λ| then
+            // vanishes faster than the residual, so convergence stays
+            // quadratic even for rank-deficient but consistent rows.
+            if alpha == 1.0 && !least_squares {
+                mu = damping_floor(theta, opt.damping);
+            }
+            if theta <= opt.tolerance && step <= opt.step_tolerance && self.signs_ok() {
+                status = SolveStatus::Converged;
+                break;
+            }
+            if least_squares && alpha * step <= opt.step_tolerance {
+                status = SolveStatus::LeastSquares;
+                break;
+            }
+            // Newton contracts θ fast; a θ that stalls well above tolerance,
+            // or a residual J can no longer reduce, means the rows conflict:
+            // switch to the damped least-squares problem.
+            stagnant = if theta > theta_ok && theta > STAGNATION * theta_prev {
+                stagnant + 1
+            } else {
+                0
+            };
+            if !least_squares
+                && (stagnant >= STAGNANT_STEPS
+                    || (theta > LS_ENTRY * opt.tolerance
+                        && self.gradient_ratio() <= LS_ENTRY_GRADIENT))
+            {
+                least_squares = true;
+                nu = 0.0;
+            }
+            if theta > opt.tolerance && alpha * step <= opt.step_tolerance {
+                status = self.stall_status(theta, opt.tolerance, step, opt.step_tolerance);
+                break;
+            }
+        }
+        if status == SolveStatus::MaxIterations
+            && least_squares
+            && self.gradient_ratio() <= LS_GRADIENT
+        {
+            status = SolveStatus::LeastSquares;
+        }
+        // A rejected trial left its values in the evaluation: restore q's.
+        let _ = self.eval.evaluate(model, q, targets);
+        self.update_residual();
+        let damping = if least_squares { opt.damping + nu } else { mu };
+        Ok(self.info(model, status, iterations, step, regularised, damping))
+    }
+
+    /// ½‖q − q_ref‖²_W.
+    pub(super) fn objective(&self, q: &[f64], q_ref: &[f64]) -> f64 {
+        0.5 * q
+            .iter()
+            .zip(q_ref)
+            .zip(&self.w)
+            .map(|((a, b), w)| w * (a - b) * (a - b))
+            .sum::<f64>()
+    }
+
+    /// Tries α = 1, ½, … on the step in `dq`/`dy`; leaves the accepted trial
+    /// in `q_trial`/`y_trial` and returns α.
+    fn line_search(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        q_ref: &[f64],
+        targets: &[FingerTarget],
+        m: Merit,
+    ) -> Option<f64> {
+        let mut alpha = 1.0;
+        for _ in 0..=MAX_HALVINGS {
+            for ((t, q), d) in self.q_trial.iter_mut().zip(q).zip(&self.dq) {
+                *t = q + alpha * d;
+            }
+            for ((t, y), d) in self.y_trial.iter_mut().zip(&self.y).zip(&self.dy) {
+                *t = (y + alpha * d).abs();
+            }
+            if let Some(theta_t) = self.trial_residual(model, targets) {
+                let f_t = self.objective(&self.q_trial, q_ref);
+                if m.accepts(alpha, theta_t, f_t) {
+                    return Some(alpha);
+                }
+                // Second-order correction (the Maratos effect: a good
+                // tangential step raises θ to second order): project the
+                // trial back with the factor already at hand.
+                if self.correct_trial()
+                    && let Some(theta_c) = self.trial_residual(model, targets)
+                {
+                    let f_c = self.objective(&self.q_trial, q_ref);
+                    if m.accepts(alpha, theta_c, f_c) {
+                        return Some(alpha);
+                    }
+                }
+            }
+            alpha *= 0.5;
+        }
+        None
+    }
+
+    /// θ at (`q_trial`, `y_trial`), evaluating C there (C_q keeps q's values).
+    fn trial_residual(&mut self, model: &Model, targets: &[FingerTarget]) -> Option<f64> {
+        self.eval
+            .evaluate_values(model, &self.q_trial, targets)
+            .ok()?;
+        let c = self.eval.values();
+        let mut t2: f64 = c[..self.m_eq].iter().map(|v| v * v).sum();
+        for (c, y) in c[self.m_eq..].iter().zip(&self.y_trial) {
+            t2 += (c - y * y).powi(2);
+        }
+        let theta = t2.sqrt();
+        theta.is_finite().then_some(theta)
+    }
+
+    /// Moves to the accepted trial: q, Y, λ, a full evaluation, H_Y, releases.
+    fn commit(&mut self, model: &Model, q: &mut [f64], targets: &[FingerTarget]) {
+        q.copy_from_slice(&self.q_trial);
+        self.y.copy_from_slice(&self.y_trial);
+        self.lambda.copy_from_slice(&self.lambda_new);
+        // The trial evaluated without error, so the full one does too; on the
+        // impossible error the values of the trial stay (C is already current).
+        let _ = self.eval.evaluate(model, q, targets);
+        let lam_in = &self.lambda[self.m_eq..];
+        for ((h, y), l) in self.hy.iter_mut().zip(self.y.iter_mut()).zip(lam_in) {
+            *h = (-2.0 * l).max(H_MIN);
+            if *y < Y_FLOOR && *l > LAMBDA_PULL {
+                *y = Y_FLOOR;
+            }
+        }
+        self.update_residual();
+    }
+
+    /// No active inequality pulls (λ_j > 0 with Y_j ≈ 0).
+    fn signs_ok(&self) -> bool {
+        let lam_in = &self.lambda[self.m_eq..];
+        self.y
+            .iter()
+            .zip(lam_in)
+            .all(|(y, l)| *y >= Y_FLOOR || *l <= LAMBDA_PULL)
+    }
+
+    /// The status when no further progress is made at this point.
+    fn stall_status(&mut self, theta: f64, tol: f64, step: f64, step_tol: f64) -> SolveStatus {
+        if theta <= tol {
+            return if step <= step_tol && self.signs_ok() {
+                SolveStatus::Converged
+            } else {
+                SolveStatus::Stalled
+            };
+        }
+        if self.gradient_ratio() <= LS_GRADIENT {
+            SolveStatus::LeastSquares
+        } else {
+            SolveStatus::Stalled
+        }
+    }
+
+    /// The report, from C at the returned q.
+    fn info(
+        &self,
+        model: &Model,
+        status: SolveStatus,
+        iterations: u32,
+        step: f64,
+        regularised: bool,
+        damping: f64,
+    ) -> SolveInfo {
+        let (mut all, mut len, mut ang) = (0.0, 0.0, 0.0);
+        for (k, (c, row)) in self.eval.values().iter().zip(model.rows()).enumerate() {
+            let v = if k < self.m_eq { *c } else { c.min(0.0) };
+            all += v * v;
+            match row.unit {
+                RowUnit::Length => len += v * v,
+                RowUnit::Angle => ang += v * v,
+                RowUnit::Dimensionless => {}
+            }
+        }
+        SolveInfo {
+            status,
+            iterations,
+            residual: f64::sqrt(all),
+            residual_length_m: f64::sqrt(len),
+            residual_angle_rad: f64::sqrt(ang),
+            step,
+            regularised,
+            damping,
+        }
+    }
+}
