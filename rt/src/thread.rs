@@ -120,6 +120,11 @@ pub struct RtThread<R> {
 }
 
 impl<R> RtThread<R> {
+    /// True once the thread's function has returned (never blocks).
+    pub fn is_finished(&self) -> bool {
+        self.handle.is_finished()
+    }
+
     /// Waits for the thread's function to return.
     pub fn join(self) -> std::thread::Result<R> {
         self.handle.join()

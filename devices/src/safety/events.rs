@@ -183,3 +183,29 @@ impl SafetyCounters {
         self.faults[kind.index()] += 1;
     }
 }
+
+impl CutReason {
+    /// A short human name for reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CutReason::NonFiniteForce => "non-finite force zeroed",
+            CutReason::Fault => "force cut by a fault",
+            CutReason::Watchdog => "watchdog motors-off",
+            CutReason::Velocity => "velocity limit",
+            CutReason::Clamp => "peak-force clamp",
+            CutReason::Thermal => "thermal cut",
+            CutReason::Ramp => "start-up ramp",
+            CutReason::RateLimit => "force rate limit",
+            CutReason::MotorSaturation => "motor saturation",
+        }
+    }
+}
+
+impl std::fmt::Display for SafetyEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SafetyEvent::Cut(r) => write!(f, "{} (ticks)", r.as_str()),
+            SafetyEvent::Fault(k) => write!(f, "fault: {k:?} (ticks)"),
+        }
+    }
+}

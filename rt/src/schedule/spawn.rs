@@ -50,6 +50,11 @@ impl<B> LoopHandle<B> {
         &self.thread.granted
     }
 
+    /// True once the loop has ended (never blocks): a reporter polls this.
+    pub fn is_finished(&self) -> bool {
+        self.thread.is_finished()
+    }
+
     /// Waits for the loop to end (set the [`StopFlag`] or let the limit expire).
     pub fn join(self) -> Result<LoopOutcome<B>, LoopError> {
         self.thread.join().map_err(|_| LoopError::Panicked)
