@@ -8,7 +8,7 @@ use super::factor::NormalFactor;
 use super::lowrank::LowRank;
 use super::pattern;
 use super::{IterationRecord, PlacementError, PlacementOptions, PlacementStats};
-use crate::{ConstraintKind, Evaluation, Model};
+use crate::{Evaluation, Model};
 
 /// Identifies a constraint structure: coordinates, rows, equality/inequality
 /// split and the column groups of every constraint, i.e. everything the
@@ -45,12 +45,11 @@ pub struct Placement {
     pub(super) eval: Evaluation,
     pub(super) factor: NormalFactor,
     pub(super) low: LowRank,
-    /// Objective weights W (1 by default) and the inverse of the q-block
-    /// Hessian H = W + 2λ_norm on each body's e columns (`step.rs`).
+    /// Objective weights W (1 by default), their inverses (the q block of
+    /// the Hessian is W, Eq. 8), and whether any differ from 1.
     pub(super) w: Vec<f64>,
     pub(super) hinv: Vec<f64>,
-    /// (row, first e column) of each quaternion-norm row.
-    pub(super) norm_rows: Vec<(usize, usize)>,
+    pub(super) weighted: bool,
     pub(super) stats: PlacementStats,
     /// Multipliers at the current iterate and of the step being tried.
     pub(super) lambda: Vec<f64>,
@@ -76,6 +75,12 @@ pub struct Placement {
     pub(super) q_trial: Vec<f64>,
     pub(super) history: Vec<IterationRecord>,
 }
+
+// The slow thread builds and keeps analyses; the session may move them.
+const _: () = {
+    const fn assert_send<T: Send>() {}
+    assert_send::<Placement>();
+};
 
 impl Placement {
     /// Symbolic phase, once per constraint structure: validates `options`,
@@ -107,15 +112,7 @@ impl Placement {
         let m_eq = model.equality_rows().end;
         let m_in = m - m_eq;
         let w = options.weights.clone().unwrap_or_else(|| vec![1.0; n]);
-        let norm_rows = model
-            .constraints()
-            .iter()
-            .filter(|c| c.kind == ConstraintKind::QuaternionNorm)
-            .filter_map(|c| {
-                let body = c.bodies[0]?;
-                Some((c.rows.start, model.layout().rotation_range(body)?.start))
-            })
-            .collect();
+
         Ok(Self {
             options: options.clone(),
             key: StructureKey::of(model),
@@ -127,8 +124,8 @@ impl Placement {
             factor,
             low,
             hinv: w.iter().map(|v| 1.0 / v).collect(),
+            weighted: options.weights.is_some(),
             w,
-            norm_rows,
             stats,
             lambda: vec![0.0; m],
             lambda_new: vec![0.0; m],

@@ -92,26 +92,40 @@ impl LowRank {
     }
 
     /// After S is factored: Z = S⁻¹U, K = C + UᵀZ, LU of K. No allocation.
-    pub fn prepare(&mut self, factor: &mut NormalFactor) -> Result<(), NotPositive> {
+    ///
+    /// An F row has no sparse entry, so S is diagonal and decoupled there:
+    /// S_rr = `s_diag[r]` exactly. Its block of K is then computed in closed
+    /// form, −(S_rr − f²)/S_rr, not as −1 + f²/S_rr, whose cancellation would
+    /// lose every digit when μ → 0; F columns of U have one entry, so their
+    /// products are O(1).
+    pub fn prepare(
+        &mut self,
+        factor: &mut NormalFactor,
+        s_diag: &[f64],
+    ) -> Result<(), NotPositive> {
         let (m, k, kd) = (self.m, self.rank(), self.cols.len());
         if k == 0 {
             return Ok(());
         }
         self.z.copy_from_slice(&self.u);
         factor.solve_many(&mut self.z, m, k);
-        for i in 0..k {
-            for j in 0..k {
-                let ui = &self.u[i * m..(i + 1) * m];
-                let zj = &self.z[j * m..(j + 1) * m];
-                let dot: f64 = ui.iter().zip(zj).map(|(a, b)| a * b).sum();
-                let c = if i != j {
-                    0.0
-                } else if i < kd {
-                    1.0
+        for j in 0..k {
+            for i in j..k {
+                let v = if i < kd {
+                    let ui = &self.u[i * m..(i + 1) * m];
+                    let zj = &self.z[j * m..(j + 1) * m];
+                    ui.iter().zip(zj).map(|(a, b)| a * b).sum::<f64>() + f64::from(i == j)
                 } else {
-                    -1.0
+                    let r = self.f_rows[i - kd];
+                    let f = self.u[i * m + r];
+                    match (j < kd, i == j) {
+                        (true, _) => f * self.z[j * m + r],
+                        (false, true) => -(s_diag[r] - f * f) / s_diag[r],
+                        (false, false) => 0.0,
+                    }
                 };
-                self.kmat[i + j * k] = c + dot;
+                self.kmat[i + j * k] = v;
+                self.kmat[j + i * k] = v;
             }
         }
         lu_in_place(&mut self.kmat, k, &mut self.piv)

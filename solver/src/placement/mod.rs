@@ -34,6 +34,7 @@
 //! | `newton.rs` | the loop: merit, backtracking, damping schedule, outcome |
 //! | `least_squares.rs` | conflicting rows: Levenberg–Marquardt gain ratio, stationarity |
 //! | `cache.rs` | [`PlacementCache`] |
+//! | `probe.rs` | one Newton step in isolation (benchmarks, diagnostics) |
 
 mod analyze;
 mod cache;
@@ -44,6 +45,7 @@ mod newton;
 mod options;
 mod outcome;
 mod pattern;
+mod probe;
 mod step;
 
 pub use analyze::{Placement, StructureKey};

@@ -33,18 +33,6 @@ pub(super) const H_MIN: f64 = 1e-6;
 const REFINE: usize = 6;
 
 impl Placement {
-    /// H⁻¹ of the q block: W, plus the exact Hessian 2λ_b I of each body's
-    /// norm row eᵀe − 1 on its e columns (diagonal, so the normal equations
-    /// keep their form), floored at W/2.
-    fn update_hessian(&mut self) {
-        for &(row, e0) in &self.norm_rows {
-            for c in e0..e0 + 4 {
-                let h = (self.w[c] + 2.0 * self.lambda[row]).max(0.5 * self.w[c]);
-                self.hinv[c] = 1.0 / h;
-            }
-        }
-    }
-
     /// g from the current evaluation and slacks.
     pub(super) fn update_residual(&mut self) {
         let c = self.eval.values();
@@ -69,12 +57,11 @@ impl Placement {
         for ((d, q), r) in self.d.iter_mut().zip(q).zip(q_ref) {
             *d = q - r;
         }
-        self.update_hessian();
         for (((s, d), w), h) in self.sd.iter_mut().zip(&self.d).zip(&self.w).zip(&self.hinv) {
             *s = pull * h * w * d;
         }
         let jac = self.eval.jacobian();
-        let winv = Some(&self.hinv[..]);
+        let winv = self.weighted.then_some(&self.hinv[..]);
         // rhs = g − J H⁻¹W d
         if jac.mul_vec(&self.sd, &mut self.rhs).is_err() {
             return Err(NotPositive);
@@ -96,13 +83,13 @@ impl Placement {
             vals[slot] += d;
         }
         f.factorize()?;
-        self.low.prepare(f)?;
+        self.low.prepare(f, &self.diag)?;
         self.lambda_new.copy_from_slice(&self.rhs);
         self.low.solve(f, &mut self.lambda_new);
         // The Woodbury solve loses digits when S is nearly singular (μ → 0 on
-        // the F rows); iterative refinement on N restores them, stopping once
-        // the residual is at rounding level.
+        // the F rows); iterative refinement on N restores them.
         let rhs_norm = self.rhs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut last = f64::INFINITY;
         for _ in 0..REFINE * usize::from(self.low.rank() > 0) {
             // r = rhs − N λ, N λ = J H⁻¹ Jᵀ λ + (D + μ) λ
             let _ = jac.mul_t_vec(&self.lambda_new, &mut self.tmp_n);
@@ -115,9 +102,11 @@ impl Placement {
                 *r = b - (*r + d * l);
             }
             let r_norm = self.tmp_m.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if r_norm <= 1e-15 * rhs_norm {
+            // Done at 1e-12 relative, or once rounding stops the progress.
+            if r_norm <= 1e-12 * rhs_norm || r_norm > 0.5 * last {
                 break;
             }
+            last = r_norm;
             self.low.solve(f, &mut self.tmp_m);
             for (l, c) in self.lambda_new.iter_mut().zip(&self.tmp_m) {
                 *l += c;
