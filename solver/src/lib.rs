@@ -16,6 +16,11 @@
 //!                                                                   mul_vec / mul_t_vec, faer view)
 //! ```
 //!
+//! The fast loop wraps that evaluation: `Program::new(Arc<Model>, SolverSettings)`
+//! (slow thread) → `tick(targets, dt)` per device sample → `TickReport` and
+//! `finger_outputs()` (forces for the device) → `adopt_state(&old)` when the
+//! slow thread hands over a replacement.
+//!
 //! - [`Model`]: bodies (7 coordinates r, e = [w, x, y, z] per moving body; none
 //!   for fixed bodies), free design variables, compiled constraints, per-row
 //!   metadata ([`RowInfo`]: constraint, equality/inequality, unit), fingers,
@@ -31,6 +36,12 @@
 //!   symbolic analysis of J Jᵀ once per structure ([`Placement::analyze`],
 //!   cached by [`PlacementCache`]), then allocation-free damped Newton
 //!   iterations with slack inequalities ([`Placement::solve`] → [`SolveInfo`]).
+//! - [`Program`] ([`al`], [`force`]): the fast loop's solver. Built once per
+//!   model from [`SolverSettings`]; [`Program::tick`] runs the
+//!   augmented-Lagrangian update (Nelson & Cohen Eq. 1–3) toward the finger
+//!   targets, then the finger loads of Eq. 7–8 plus a virtual coupling
+//!   ([`FingerOutput`], force on the finger, world frame), with zero
+//!   allocation; [`reference_finger_wrenches`] is the dense reference.
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
@@ -64,18 +75,23 @@
 //! Rotations use the rational form R(e) = A_h(e)/|e|² (see [`rotation`]), exact
 //! for non-unit e, with one quaternion-norm row per moving body.
 
+pub mod al;
 pub mod constraint;
 mod evaluate;
 mod ids;
 mod jacobian;
+pub mod force;
 pub mod mechanisms;
 mod model;
 pub mod placement;
+pub mod program;
 pub mod rotation;
 pub mod scene;
 
+pub use al::{InvalidSetting, SolverSettings};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};
+pub use force::{FingerWrench, ReferenceError, reference_finger_wrenches};
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
 pub use model::{
@@ -85,4 +101,7 @@ pub use model::{
 };
 pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
+};
+pub use program::{
+    AssemblyReport, FingerOutput, Program, ProgramError, TickOutcome, TickReport,
 };

@@ -1,0 +1,191 @@
+//! [`SolverSettings`]: the speed/accuracy knobs of the fast loop, each with its
+//! unit and the reason for its default.
+
+use std::time::Duration;
+
+/// Everything a [`Program`](crate::Program) needs to know besides the model.
+///
+/// Gains are dimensionless because the update runs in *scaled* coordinates in
+/// which every row and every column is measured in metres (see the
+/// [`al`](crate::al) module docs for the rule). `Default` gives settings that
+/// converge on all three built-in mechanisms; the trade-off table in
+/// BENCHMARKS.md shows what the knobs buy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// Augmented-Lagrangian iterations per tick (Eq. 1–3 applied this many
+    /// times). Default 4: the four-bar's finger error on the 2 cm, 0.5 Hz
+    /// circle stays under 10 µm with 4, and each iteration costs one
+    /// evaluation of C and C_q plus one C_qᵀ product (BENCHMARKS.md).
+    pub iterations: u32,
+    /// h as a **fraction of the largest stable step**: the update uses
+    /// h = step / (1 + K σ_max), where σ_max is the largest eigenvalue of the
+    /// scaled Gram matrix D C_q W⁻¹ C_qᵀ D, measured by
+    /// [`Program::new`](crate::Program::new) at the model's configuration. Dimensionless,
+    /// in (0, 1.3]. Default 0.9.
+    ///
+    /// Why relative: σ_max differs by a factor of several between mechanisms
+    /// (the absolute h used is [`Program::step_h`](crate::Program::step_h)), so
+    /// no absolute h is both stable on the stiffest and fast on the softest.
+    pub step: f64,
+    /// K, the base penalty gain of Eq. 3, dimensionless (penalty per square
+    /// metre of scaled violation relative to the least-astonishment objective
+    /// per square metre of scaled motion). Row i uses K·ℓ_i² (the K rule in the
+    /// module docs). Default 1000: a finger the mechanism can follow then lags
+    /// at most 1/(1 + K) = 0.1 % of one tick's motion at the fixed point of a
+    /// tick, and K ≫ 1 makes h ≈ step/(K σ_max), so the objective acts as a
+    /// mild proximal term and never fights the constraints.
+    pub gain: f64,
+    /// k₂ of Eq. 2, same scaling and unit as K (row i integrates k₂·ℓ_i²·C_i).
+    /// Default 1000 (= K, the method-of-multipliers choice); stability needs
+    /// h k₂ σ_max < 4 − 2 h K σ_max, checked by `Program::new`.
+    pub multiplier_gain: f64,
+    /// Pull limit d of a finger, metres: a finger's point (or, rigid, its
+    /// orientation times L) pulls with K·ℓ²·min(|error|, d) along the error.
+    /// Default 1 mm, the distance the device moves in one tick at 1 m/s:
+    /// targets the mechanism can follow are never limited, while one it cannot
+    /// reach (a 1-DOF linkage, a joint at its limit) stops loading the joints
+    /// with the whole distance (their violation stays at the micrometre level;
+    /// trade-off table). `f64::INFINITY` switches it off.
+    pub finger_pull_limit_m: f64,
+    /// Weight of finger rows relative to K (fingers are penalty rows with no
+    /// multiplier, see the module docs). Dimensionless, > 0. Default 1: the
+    /// finger pulls as hard as a joint holds.
+    pub finger_weight: f64,
+    /// The length ℓ that converts angle and quaternion-norm rows and
+    /// Euler-parameter columns to metres, in metres. `None` (default): the
+    /// model's [`characteristic_length_m`](crate::Model::characteristic_length_m),
+    /// its largest lever arm. `Some(1.0)` switches the scaling off (plain Eq. 3
+    /// with one K for every row), which the tests show converges slower.
+    pub length_scale_m: Option<f64>,
+    /// Stiffness of the virtual coupling between the device point (target) and
+    /// the finger's attachment point on the mechanism, N/m. Default 400 N/m:
+    /// about half the 700–800 N/m a PHANToM renders stably at 1 kHz, and with
+    /// K·T/2 = 0.2 N·s/m it leaves room for the default damping even with the
+    /// light grip of the devices' stability table (b = 0.31 N·s/m).
+    pub coupling_stiffness_n_per_m: f64,
+    /// Damping of the virtual coupling on the relative velocity of attachment
+    /// and target, N·s/m. Default 0.05 N·s/m: sampled virtual damping adds to
+    /// the passivity requirement b > K T/2 + B (Colgate), so it stays small;
+    /// it takes the edge off the wall the coupling renders in directions the
+    /// mechanism cannot move.
+    pub coupling_damping_n_s_per_m: f64,
+    /// Torsional stiffness of the coupling for rigid grasps, N·m/rad, acting on
+    /// the rotation from the target orientation to the body's. Default 0: a
+    /// PHANToM-class device renders no torque.
+    pub coupling_angular_stiffness_nm_per_rad: f64,
+    /// Time constant of the first-order low-pass filter applied to the body
+    /// velocities estimated from q (for noisy position sensors). Zero
+    /// (default) switches it off; encoders need none (Nelson & Cohen §5.2).
+    /// The filter delays velocities by about this much (plus the half tick of
+    /// the backward difference): [`Program::motion_delay`](crate::Program::motion_delay).
+    pub velocity_filter: Duration,
+    /// Relative Tikhonov regularisation μ of the Eq. 7 multiplier solve:
+    /// μ·(mean diagonal) is added to the joint block of the scaled
+    /// C_q M⁻¹ C_qᵀ. Default 0: exactly redundant joint rows (a planar linkage
+    /// built from spatial joints) are already handled by the factorisation's
+    /// dynamic regularisation (a pivot below 1e-14 × the largest diagonal is
+    /// replaced by 1e-10 × it), which leaves the finger load exact because a
+    /// redundant combination of joint rows is orthogonal to every finger row.
+    /// A Tikhonov term instead softens every joint and leaks load into the
+    /// finger: μ = 1e-12 already put a spurious 1e-9 of the load there on the
+    /// four-bar. Raise it only for nearly (not exactly) redundant scenes.
+    pub force_regularization: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            iterations: 4,
+            step: 0.9,
+            gain: 1000.0,
+            multiplier_gain: 1000.0,
+            finger_pull_limit_m: 1e-3,
+            finger_weight: 1.0,
+            length_scale_m: None,
+            coupling_stiffness_n_per_m: 400.0,
+            coupling_damping_n_s_per_m: 0.05,
+            coupling_angular_stiffness_nm_per_rad: 0.0,
+            velocity_filter: Duration::ZERO,
+            force_regularization: 0.0,
+        }
+    }
+}
+
+/// A setting out of its valid range.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("setting `{name}` = {value} is invalid: {why}")]
+pub struct InvalidSetting {
+    /// Field name.
+    pub name: &'static str,
+    /// Value given.
+    pub value: f64,
+    /// The valid range.
+    pub why: &'static str,
+}
+
+impl SolverSettings {
+    /// Checks every field's range (stability against the model is checked by
+    /// `Program::new`, which knows σ_max).
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        let bad = |name, value: f64, why| Err(InvalidSetting { name, value, why });
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let nonneg = |v: f64| v.is_finite() && v >= 0.0;
+        if self.iterations == 0 || self.iterations > 10_000 {
+            return bad("iterations", self.iterations as f64, "1 ..= 10000");
+        }
+        if !(pos(self.step) && self.step <= 1.3) {
+            return bad(
+                "step",
+                self.step,
+                "0 < step <= 1.3 (fraction of the stable step)",
+            );
+        }
+        if !pos(self.gain) {
+            return bad("gain", self.gain, "finite and > 0");
+        }
+        if !nonneg(self.multiplier_gain) {
+            return bad("multiplier_gain", self.multiplier_gain, "finite and >= 0");
+        }
+        if self.finger_pull_limit_m.is_nan() || self.finger_pull_limit_m <= 0.0 {
+            return bad(
+                "finger_pull_limit_m",
+                self.finger_pull_limit_m,
+                "> 0 (infinity: no limit)",
+            );
+        }
+        if !pos(self.finger_weight) {
+            return bad("finger_weight", self.finger_weight, "finite and > 0");
+        }
+        if let Some(l) = self.length_scale_m
+            && !pos(l)
+        {
+            return bad("length_scale_m", l, "finite and > 0");
+        }
+        for (name, v) in [
+            (
+                "coupling_stiffness_n_per_m",
+                self.coupling_stiffness_n_per_m,
+            ),
+            (
+                "coupling_damping_n_s_per_m",
+                self.coupling_damping_n_s_per_m,
+            ),
+            (
+                "coupling_angular_stiffness_nm_per_rad",
+                self.coupling_angular_stiffness_nm_per_rad,
+            ),
+        ] {
+            if !nonneg(v) {
+                return bad(name, v, "finite and >= 0");
+            }
+        }
+        if !(nonneg(self.force_regularization) && self.force_regularization < 1.0) {
+            return bad(
+                "force_regularization",
+                self.force_regularization,
+                "0 <= μ < 1",
+            );
+        }
+        Ok(())
+    }
+}

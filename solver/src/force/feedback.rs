@@ -1,0 +1,275 @@
+//! The fast-loop force pipeline of one [`Program`](crate::Program): motion
+//! history → b = Q_e + Q_v − M q̈ → scaled Gram matrix → finger multipliers →
+//! Eq. 8 wrench, plus the virtual coupling.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::gram::{Gram, Slot};
+use super::inertia::BodyMass;
+use super::motion::Motion;
+use super::reference::INEQUALITY_ACTIVE_BAND;
+use super::solve::{FactorError, MultiplierSolve};
+use super::wrench::on_finger;
+use crate::al::scaling::{Role, Scaling};
+use crate::program::FingerOutput;
+use crate::rotation::BodyFrame;
+use crate::{Evaluation, FingerTarget, Model, SolverSettings};
+
+/// One finger's rows and where its body's columns sit in each of them.
+#[derive(Debug, Clone)]
+struct FingerRows {
+    rows: std::ops::Range<usize>,
+    /// Value index of the body's first column in each row (≤ 6 rows).
+    pos: [usize; 6],
+    offset: usize,
+    point: Vector3<f64>,
+    rigid: bool,
+}
+
+/// Buffers and factor of the force computation.
+#[derive(Debug)]
+pub(crate) struct Feedback {
+    pub masses: Vec<BodyMass>,
+    pub motion: Motion,
+    gram: Gram,
+    solve: MultiplierSolve,
+    fingers: Vec<FingerRows>,
+    b: Vec<f64>,
+    y: Vec<f64>,
+    cy: Vec<f64>,
+    scale: Vec<f64>,
+    /// attachment − target at the previous tick, per finger (coupling damping).
+    prev_error: Vec<Vector3<f64>>,
+}
+
+impl Feedback {
+    /// Pattern, symbolic factor and buffers for `model` (whose Jacobian
+    /// pattern `ev` holds). Allocates.
+    pub fn new(
+        model: &Model,
+        ev: &Evaluation,
+        settings: &SolverSettings,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let jac = ev.jacobian();
+        let masses = BodyMass::of_model(model);
+        let gram = Gram::new(model, jac, &masses);
+        let solve = MultiplierSolve::new(&gram)?;
+        let fingers = model
+            .fingers()
+            .iter()
+            .map(|f| {
+                let rows = model.constraints()[f.constraint.index()].rows.clone();
+                let offset = model.layout().body_offset(f.body).unwrap_or(0);
+                let mut pos = [0; 6];
+                for (k, r) in rows.clone().enumerate() {
+                    let span = jac.row_ptr()[r]..jac.row_ptr()[r + 1];
+                    pos[k] = span
+                        .clone()
+                        .find(|&p| jac.col_idx()[p] == offset)
+                        .unwrap_or(span.start);
+                }
+                FingerRows {
+                    rigid: rows.len() == 6,
+                    rows,
+                    pos,
+                    offset,
+                    point: f.point_m,
+                }
+            })
+            .collect::<Vec<_>>();
+        let tau = settings.velocity_filter.as_secs_f64();
+        Ok(Self {
+            motion: Motion::new(model.q0(), masses.len(), tau),
+            masses,
+            gram,
+            solve,
+            prev_error: vec![Vector3::zeros(); fingers.len()],
+            fingers,
+            b: vec![0.0; model.n_coords()],
+            y: vec![0.0; model.n_coords()],
+            cy: vec![0.0; model.n_rows()],
+            scale: vec![0.0; model.n_rows()],
+        })
+    }
+
+    /// Carries finger `from` of `old`'s coupling history into finger `to`.
+    pub fn copy_finger(&mut self, to: usize, old: &Feedback, from: usize) {
+        self.prev_error[to] = old.prev_error[from];
+    }
+
+    /// Stored values of the sparse Cholesky factor (diagnostics).
+    pub fn factor_nnz(&self) -> usize {
+        self.solve.factor_nnz()
+    }
+
+    /// Advances the motion history to `q` and computes every finger's output
+    /// at the evaluated `ev` (C and C_q at `q` with `targets`). `lambda` holds
+    /// the AL multipliers (ν ≥ 0 of inequality rows decide the active set).
+    ///
+    /// # Real-time
+    /// No allocation, no locks. Time: O(bodies + Σ_b rows_b²) assembly, one
+    /// numeric sparse Cholesky with the symbolic factor of `new`, 1 + m_f
+    /// solves, an m_f × m_f eigensolve.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(
+        &mut self,
+        model: &Model,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        ev: &Evaluation,
+        lambda: &[f64],
+        targets: &[FingerTarget],
+        dt_s: f64,
+        out: &mut [FingerOutput],
+    ) -> Result<(), FactorError> {
+        self.motion.advance(&self.masses, q, dt_s);
+        let g = model.gravity_m_s2();
+        for (k, m) in self.masses.iter().enumerate() {
+            let f = frame(q, m.offset).ok_or(FactorError)?;
+            let mo = &self.motion;
+            let o = m.offset;
+            m.generalized_force(
+                &f,
+                &g,
+                &mo.a[k],
+                &mo.w[k],
+                &mo.alpha[k],
+                &mut self.b[o..o + 7],
+            );
+        }
+        let c = ev.values();
+        for (i, sc) in self.scale.iter_mut().enumerate() {
+            let active = match s.role[i] {
+                Role::Inequality => lambda[i] > 0.0 || c[i] <= INEQUALITY_ACTIVE_BAND,
+                Role::Equality | Role::Finger => true,
+            };
+            *sc = if active { s.ell[i] } else { 0.0 };
+        }
+        self.solve_multipliers(ev, settings)?;
+        // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
+        // sign). If the solve made one pull, release those rows and solve
+        // again, once: the bound keeps the tick's cost fixed.
+        let mut released = false;
+        for (j, &row) in self.gram.j_rows.iter().enumerate() {
+            if s.role[row] == Role::Inequality
+                && self.scale[row] != 0.0
+                && self.solve.joint_multiplier(self.gram.n_j, j) > 0.0
+            {
+                self.scale[row] = 0.0;
+                released = true;
+            }
+        }
+        if released {
+            self.solve_multipliers(ev, settings)?;
+        }
+        self.wrenches(s, settings, q, ev, targets, dt_s, out)
+    }
+
+    /// Assembles the scaled Gram matrix with the current row scales (0 drops
+    /// a row), regularises it and solves for λ̃_F.
+    fn solve_multipliers(
+        &mut self,
+        ev: &Evaluation,
+        settings: &SolverSettings,
+    ) -> Result<(), FactorError> {
+        let jac = ev.jacobian();
+        // After `advance`, the motion history's newest q is this tick's q.
+        let q = &self.motion.q_prev;
+        self.gram
+            .assemble(q, jac, &self.scale, &self.masses, &self.b, &mut self.y);
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (&d, &row) in self.gram.diag.iter().zip(&self.gram.j_rows) {
+            if self.scale[row] != 0.0 {
+                sum += self.gram.values[d];
+                count += 1;
+            }
+        }
+        let mu = settings.force_regularization * sum / count.max(1) as f64;
+        for j in 0..self.gram.n_j {
+            let (d, row) = (self.gram.diag[j], self.gram.j_rows[j]);
+            self.gram.values[d] = if self.scale[row] == 0.0 {
+                1.0
+            } else {
+                self.gram.values[d] + mu
+            };
+        }
+        jac.mul_vec(&self.y, &mut self.cy)
+            .map_err(|_| FactorError)?;
+        for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
+            *v *= sc;
+        }
+        self.solve.solve(&self.gram, &self.cy)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn wrenches(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        ev: &Evaluation,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        out: &mut [FingerOutput],
+    ) -> Result<(), FactorError> {
+        let vals = ev.jacobian().values();
+        for (k, fr) in self.fingers.iter().enumerate() {
+            let f = frame(q, fr.offset).ok_or(FactorError)?;
+            let mut w_c = [0.0; 7];
+            for (n, r) in fr.rows.clone().enumerate() {
+                let Slot::F(fi) = self.gram.slot[r] else {
+                    continue;
+                };
+                let lam = s.ell[r] * self.solve.lambda_f[fi];
+                for (c, w) in w_c.iter_mut().enumerate() {
+                    *w += vals[fr.pos[n] + c] * lam;
+                }
+            }
+            let p = f.point(&fr.point);
+            let (force, torque) = on_finger(&f, &p, &w_c);
+            let t = &targets[k];
+            let err = p - t.position_m;
+            let rate = if self.motion.ticks > 1 {
+                (err - self.prev_error[k]) / dt_s
+            } else {
+                Vector3::zeros()
+            };
+            self.prev_error[k] = err;
+            let coupling = err * settings.coupling_stiffness_n_per_m
+                + rate * settings.coupling_damping_n_s_per_m;
+            let coupling_torque = if fr.rigid {
+                let o = fr.offset;
+                let body = UnitQuaternion::new_normalize(Quaternion::new(
+                    q[o + 3],
+                    q[o + 4],
+                    q[o + 5],
+                    q[o + 6],
+                ));
+                (body * t.orientation.inverse()).scaled_axis()
+                    * settings.coupling_angular_stiffness_nm_per_rad
+            } else {
+                Vector3::zeros()
+            };
+            out[k] = FingerOutput {
+                force_n: force + coupling,
+                torque_nm: torque + coupling_torque,
+                constraint_force_n: force,
+                constraint_torque_nm: torque,
+                coupling_force_n: coupling,
+                coupling_torque_nm: coupling_torque,
+                attachment_m: p,
+                target_m: t.position_m,
+                tracking_error_m: err.norm(),
+            };
+        }
+        Ok(())
+    }
+}
+
+fn frame(q: &[f64], o: usize) -> Option<BodyFrame> {
+    BodyFrame::new(
+        Vector3::new(q[o], q[o + 1], q[o + 2]),
+        [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
+    )
+}

@@ -1,0 +1,116 @@
+//! Body velocities and accelerations from the history of q (Nelson & Cohen
+//! §5.2: "q̈ and q̇ … may be obtained by observing how q … changes over time").
+//!
+//! Per moving body, world frame, at tick k with step dt:
+//!
+//! ```text
+//! v_k = (r_k − r_{k−1}) / dt                      (centred at t_k − dt/2)
+//! ω_k = log(e_k ⊗ e_{k−1}⁻¹) / dt                 (rotation vector of the step)
+//! a_k = (v_k − v_{k−1}) / dt,  α_k = (ω_k − ω_{k−1}) / dt   (centred at t_k − dt)
+//! ```
+//!
+//! i.e. backward differences of q: accelerations are O(dt²)-accurate for the
+//! instant one tick back, so they lag by one tick. With
+//! [`SolverSettings::velocity_filter`](crate::SolverSettings::velocity_filter)
+//! τ > 0, v and ω pass a first-order low-pass y ← y + dt/(τ + dt) (x − y)
+//! before differencing, adding a delay of about τ.
+//!
+//! History after a reset ([`Program::new`](crate::Program::new), `assemble`,
+//! `set_q`): the program is taken to be at rest. The first tick's velocity is
+//! measured against the reset configuration, but its acceleration is reported
+//! as zero (a reset is a jump, not a motion); from the second tick on both are
+//! differences.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::inertia::BodyMass;
+
+/// Velocity and acceleration history of every moving body.
+#[derive(Debug, Clone)]
+pub(crate) struct Motion {
+    /// q at the previous tick.
+    pub q_prev: Vec<f64>,
+    pub v: Vec<Vector3<f64>>,
+    pub w: Vec<Vector3<f64>>,
+    pub a: Vec<Vector3<f64>>,
+    pub alpha: Vec<Vector3<f64>>,
+    /// Ticks since the last reset (saturating).
+    pub ticks: u32,
+    tau_s: f64,
+}
+
+impl Motion {
+    /// At rest at `q`. Allocates.
+    pub fn new(q: &[f64], bodies: usize, tau_s: f64) -> Self {
+        let z = vec![Vector3::zeros(); bodies];
+        Self {
+            q_prev: q.to_vec(),
+            v: z.clone(),
+            w: z.clone(),
+            a: z.clone(),
+            alpha: z,
+            ticks: 0,
+            tau_s,
+        }
+    }
+
+    /// Forgets the history: at rest at `q`.
+    ///
+    /// # Real-time
+    /// No allocation; O(coordinates).
+    pub fn reset(&mut self, q: &[f64]) {
+        self.q_prev.copy_from_slice(q);
+        for x in [&mut self.v, &mut self.w, &mut self.a, &mut self.alpha] {
+            x.fill(Vector3::zeros());
+        }
+        self.ticks = 0;
+    }
+
+    /// Advances the history to `q`, `dt_s` seconds after the previous tick.
+    ///
+    /// # Real-time
+    /// No allocation; O(bodies).
+    pub fn advance(&mut self, masses: &[BodyMass], q: &[f64], dt_s: f64) {
+        let alpha_f = if self.tau_s > 0.0 {
+            dt_s / (self.tau_s + dt_s)
+        } else {
+            1.0
+        };
+        let first = self.ticks == 0;
+        for (k, m) in masses.iter().enumerate() {
+            let o = m.offset;
+            let r = |q: &[f64]| Vector3::new(q[o], q[o + 1], q[o + 2]);
+            let e = |q: &[f64]| {
+                UnitQuaternion::new_normalize(Quaternion::new(
+                    q[o + 3],
+                    q[o + 4],
+                    q[o + 5],
+                    q[o + 6],
+                ))
+            };
+            let v_raw = (r(q) - r(&self.q_prev)) / dt_s;
+            let w_raw = (e(q) * e(&self.q_prev).inverse()).scaled_axis() / dt_s;
+            let v = self.v[k] + (v_raw - self.v[k]) * alpha_f;
+            let w = self.w[k] + (w_raw - self.w[k]) * alpha_f;
+            if first {
+                self.a[k] = Vector3::zeros();
+                self.alpha[k] = Vector3::zeros();
+            } else {
+                self.a[k] = (v - self.v[k]) / dt_s;
+                self.alpha[k] = (w - self.w[k]) / dt_s;
+            }
+            self.v[k] = v;
+            self.w[k] = w;
+        }
+        self.q_prev.copy_from_slice(q);
+        self.ticks = self.ticks.saturating_add(1);
+    }
+
+    /// Copies the history of body `from` of `old` into body `to` of `self`.
+    pub fn copy_body(&mut self, to: usize, old: &Motion, from: usize) {
+        self.v[to] = old.v[from];
+        self.w[to] = old.w[from];
+        self.a[to] = old.a[from];
+        self.alpha[to] = old.alpha[from];
+    }
+}

@@ -1,0 +1,202 @@
+//! The exact, dense reference for the finger wrenches of Eq. 7–8: for tests,
+//! and for the slow thread to measure the fast loop's force error. Allocates
+//! freely; O(n³) in the number of body coordinates.
+//!
+//! It solves the same physics as the fast path ([`super::solve`]) by a
+//! different route, the null-space method: with T an orthonormal basis of the
+//! motions the joints allow (null(C_J), by SVD) and R = Tᵀ M T, the finger
+//! multipliers are the minimum-norm least-squares solution of
+//!
+//! ```text
+//! L⁻¹ Tᵀ C_Fᵀ λ_F ≈ L⁻¹ Tᵀ b,     R = L Lᵀ,   b = Q_e + Q_v − M q̈
+//! ```
+//!
+//! i.e. the smallest finger load that balances b along every free motion, with
+//! any imbalance measured in the kinetic-energy metric (angle rows of a rigid
+//! grasp scaled to metres by the model's characteristic length, as in the fast
+//! path). Design variables are frozen (no inertia).
+
+use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion, Vector3, Vector4};
+
+use super::inertia::{BodyMass, angular_motion};
+use super::wrench::on_finger;
+use crate::rotation::BodyFrame;
+use crate::{EvalError, FingerId, FingerTarget, Model, RowUnit, Sense};
+
+/// An inequality row with C ≤ this (metres or radians) carries load in Eq. 7;
+/// one further inside its feasible side is inactive.
+pub const INEQUALITY_ACTIVE_BAND: f64 = 1e-6;
+
+/// The wrench a mechanism exerts on one finger.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FingerWrench {
+    /// The finger.
+    pub finger: FingerId,
+    /// Force on the finger, newtons, world frame.
+    pub force_n: Vector3<f64>,
+    /// Torque on the finger about its attachment point, N·m, world frame (zero
+    /// for a point grasp).
+    pub torque_nm: Vector3<f64>,
+}
+
+/// Why the reference could not be computed.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ReferenceError {
+    /// A vector has the wrong length.
+    #[error("{what} has {got} entries; the model has {expected} coordinates")]
+    Length {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Coordinates of the model.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// C or C_q could not be evaluated at q.
+    #[error("evaluation failed: {0}")]
+    Eval(#[from] EvalError),
+    /// A motion the joints allow moves no mass (R = Tᵀ M T is singular).
+    #[error("a free motion of the mechanism carries no mass")]
+    Massless,
+}
+
+/// The wrench on every finger (model finger order) at configuration `q` with
+/// augmented velocities `q_dot` and accelerations `q_ddot` (e-parts are ė, ë),
+/// each finger exactly holding its attachment point (targets at q).
+pub fn reference_finger_wrenches(
+    model: &Model,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) -> Result<Vec<FingerWrench>, ReferenceError> {
+    let n = model.n_coords();
+    for (what, v) in [("q", q), ("q_dot", q_dot), ("q_ddot", q_ddot)] {
+        if v.len() != n {
+            return Err(ReferenceError::Length {
+                what,
+                expected: n,
+                got: v.len(),
+            });
+        }
+    }
+    let frame = |o: usize| {
+        BodyFrame::new(
+            Vector3::new(q[o], q[o + 1], q[o + 2]),
+            [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
+        )
+    };
+    // Each finger exactly holds its attachment point (and, rigid, its body's
+    // orientation); a degenerate e fails in `evaluate` below.
+    let targets: Vec<FingerTarget> = model
+        .fingers()
+        .iter()
+        .map(|f| {
+            let o = model.layout().body_offset(f.body).unwrap_or(0);
+            FingerTarget {
+                position_m: frame(o).map_or(Vector3::zeros(), |fr| fr.point(&f.point_m)),
+                orientation: UnitQuaternion::new_normalize(Quaternion::new(
+                    q[o + 3],
+                    q[o + 4],
+                    q[o + 5],
+                    q[o + 6],
+                )),
+            }
+        })
+        .collect();
+    let mut ev = model.evaluation();
+    ev.evaluate(model, q, &targets)?;
+    let cq = ev.jacobian().to_dense();
+    let nb = model.layout().body_coords();
+    let masses = BodyMass::of_model(model);
+    let g = model.gravity_m_s2();
+    let (mut m, mut b) = (DMatrix::zeros(nb, nb), DVector::zeros(nb));
+    for bm in &masses {
+        let o = bm.offset;
+        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
+        let v4 = |x: &[f64]| Vector4::new(x[o + 3], x[o + 4], x[o + 5], x[o + 6]);
+        let (w, alpha) = angular_motion(&f, &v4(q), &v4(q_dot), &v4(q_ddot));
+        let a = Vector3::new(q_ddot[o], q_ddot[o + 1], q_ddot[o + 2]);
+        let mut out = [0.0; 7];
+        bm.generalized_force(&f, &g, &a, &w, &alpha, &mut out);
+        b.rows_mut(o, 7).copy_from_slice(&out);
+        m.view_mut((o, o), (3, 3)).fill_diagonal(bm.mass);
+        m.view_mut((o + 3, o + 3), (4, 4))
+            .copy_from(&bm.rotational_mass(&f));
+    }
+    let c = ev.values();
+    let (mut j_rows, mut f_rows) = (Vec::new(), Vec::new());
+    for (i, row) in model.rows().iter().enumerate() {
+        if model.constraints()[row.constraint.index()].finger.is_some() {
+            f_rows.push(i);
+        } else if row.sense == Sense::Equality || c[i] <= INEQUALITY_ACTIVE_BAND {
+            j_rows.push(i);
+        }
+    }
+    // Null space of C_J (body columns): right singular vectors of C_J padded
+    // with zero rows to a square matrix, so the SVD returns all of V.
+    let mut padded = DMatrix::zeros(j_rows.len().max(nb), nb);
+    for (k, &i) in j_rows.iter().enumerate() {
+        padded.row_mut(k).copy_from(&cq.view((i, 0), (1, nb)));
+    }
+    let svd = padded.svd(false, true);
+    let vt = svd.v_t.expect("requested");
+    let top = svd.singular_values.max();
+    let free: Vec<usize> = (0..nb)
+        .filter(|&k| svd.singular_values[k] <= 1e-10 * top)
+        .collect();
+    let mut lambda_f = DVector::zeros(f_rows.len());
+    if !free.is_empty() {
+        let t = DMatrix::from_fn(nb, free.len(), |r, k| vt[(free[k], r)]);
+        let chol = (t.transpose() * &m * &t)
+            .cholesky()
+            .ok_or(ReferenceError::Massless)?;
+        let l = chol.l();
+        let ell = model.characteristic_length_m();
+        let scale: Vec<f64> = f_rows
+            .iter()
+            .map(|&i| {
+                if model.rows()[i].unit == RowUnit::Length {
+                    1.0
+                } else {
+                    ell
+                }
+            })
+            .collect();
+        let cf = DMatrix::from_fn(nb, f_rows.len(), |r, k| cq[(f_rows[k], r)] * scale[k]);
+        let lhs = l
+            .solve_lower_triangular(&(t.transpose() * cf))
+            .ok_or(ReferenceError::Massless)?;
+        let rhs = l
+            .solve_lower_triangular(&(t.transpose() * &b))
+            .ok_or(ReferenceError::Massless)?;
+        let svd = lhs.svd(true, true);
+        let eps = 1e-10 * svd.singular_values.max();
+        let scaled = svd
+            .solve(&rhs, eps)
+            .unwrap_or_else(|_| DVector::zeros(f_rows.len()));
+        lambda_f = DVector::from_fn(f_rows.len(), |k, _| scaled[k] * scale[k]);
+    }
+    let mut out = Vec::with_capacity(model.fingers().len());
+    let mut lam = lambda_f.iter();
+    for (k, finger) in model.fingers().iter().enumerate() {
+        let o = model.layout().body_offset(finger.body).unwrap_or(0);
+        let mut w_c = [0.0; 7];
+        for (r, l) in model.constraints()[finger.constraint.index()]
+            .rows
+            .clone()
+            .zip(&mut lam)
+        {
+            for (c, w) in w_c.iter_mut().enumerate() {
+                *w += cq[(r, o + c)] * l;
+            }
+        }
+        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
+        let (force_n, torque_nm) = on_finger(&f, &f.point(&finger.point_m), &w_c);
+        out.push(FingerWrench {
+            finger: FingerId(k as u32),
+            force_n,
+            torque_nm,
+        });
+    }
+    Ok(out)
+}

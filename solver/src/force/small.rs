@@ -1,0 +1,127 @@
+//! Minimum-norm solution of a small symmetric positive semi-definite system
+//! (the finger Schur complement, m_f × m_f with m_f = 3 or 6 per finger) by
+//! cyclic Jacobi eigendecomposition in caller-owned buffers.
+//!
+//! A 1-DOF mechanism held by a point finger has a rank-1 Schur complement
+//! (only the component of the finger force along the mechanism's motion is
+//! determined), so a plain Cholesky would fail; the pseudo-inverse gives the
+//! smallest finger force that does the job.
+
+/// Eigenvalues below this × the largest are treated as zero. The Schur
+/// complement's structurally zero eigenvalues come out at 1e-14 relative on
+/// the built-in mechanisms (round-off of the sparse solve); genuinely
+/// non-zero ones are O(1).
+pub(crate) const RANK_TOLERANCE: f64 = 1e-9;
+
+/// Sweeps after which Jacobi stops even if not converged (it converges
+/// quadratically; 3 × 3 and 6 × 6 systems need 4–6 sweeps).
+const MAX_SWEEPS: usize = 30;
+
+/// x = A⁺ b for the symmetric n × n matrix `a` (row-major; destroyed: its
+/// diagonal ends up holding the eigenvalues). `v` (n × n) is scratch.
+/// Returns the numerical rank.
+///
+/// # Real-time
+/// No allocation; at most 30 sweeps of n²/2 rotations, O(n³) each.
+pub(crate) fn min_norm_solve(a: &mut [f64], b: &[f64], x: &mut [f64], v: &mut [f64]) -> usize {
+    let n = b.len();
+    v.fill(0.0);
+    for i in 0..n {
+        v[i * n + i] = 1.0;
+    }
+    let scale: f64 = a.iter().map(|t| t * t).sum::<f64>().sqrt();
+    for _ in 0..MAX_SWEEPS {
+        let off: f64 = (0..n)
+            .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
+            .map(|(i, j)| a[i * n + j] * a[i * n + j])
+            .sum::<f64>()
+            .sqrt();
+        if off <= 1e-15 * scale || !off.is_finite() {
+            break;
+        }
+        for p in 0..n {
+            for q in p + 1..n {
+                let apq = a[p * n + q];
+                if apq.abs() <= 1e-300 {
+                    continue;
+                }
+                let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                rotate(a, n, p, q, c, s);
+                for k in 0..n {
+                    let (vp, vq) = (v[k * n + p], v[k * n + q]);
+                    v[k * n + p] = c * vp - s * vq;
+                    v[k * n + q] = s * vp + c * vq;
+                }
+            }
+        }
+    }
+    let top = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
+    x.fill(0.0);
+    let mut rank = 0;
+    for k in 0..n {
+        let d = a[k * n + k];
+        // NaN-safe: a NaN eigenvalue fails `d > …` and is skipped too.
+        if d.partial_cmp(&(RANK_TOLERANCE * top)) != Some(std::cmp::Ordering::Greater) {
+            continue;
+        }
+        rank += 1;
+        let proj: f64 = (0..n).map(|i| v[i * n + k] * b[i]).sum::<f64>() / d;
+        for i in 0..n {
+            x[i] += v[i * n + k] * proj;
+        }
+    }
+    rank
+}
+
+/// A ← Jᵀ A J for the Jacobi rotation J in the (p, q) plane.
+fn rotate(a: &mut [f64], n: usize, p: usize, q: usize, c: f64, s: f64) {
+    for k in 0..n {
+        let (akp, akq) = (a[k * n + p], a[k * n + q]);
+        a[k * n + p] = c * akp - s * akq;
+        a[k * n + q] = s * akp + c * akq;
+    }
+    for k in 0..n {
+        let (apk, aqk) = (a[p * n + k], a[q * n + k]);
+        a[p * n + k] = c * apk - s * aqk;
+        a[q * n + k] = s * apk + c * aqk;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_rank_system_is_solved_exactly() {
+        let a0 = [4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0];
+        let b = [1.0, -2.0, 0.5];
+        let (mut a, mut x, mut v) = (a0, [0.0; 3], [0.0; 9]);
+        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v), 3);
+        for i in 0..3 {
+            let r: f64 = (0..3).map(|j| a0[i * 3 + j] * x[j]).sum::<f64>() - b[i];
+            assert!(r.abs() < 1e-14, "row {i}: {r}");
+        }
+    }
+
+    #[test]
+    fn rank_one_system_gives_the_minimum_norm_solution() {
+        // A = u uᵀ, b = 2 u: the minimum-norm solution is 2 u / |u|².
+        let u = [1.0, -2.0, 0.5];
+        let uu: f64 = u.iter().map(|t| t * t).sum();
+        let mut a = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                a[i * 3 + j] = u[i] * u[j];
+            }
+        }
+        let b = u.map(|t| 2.0 * t * uu);
+        let (mut x, mut v) = ([0.0; 3], [0.0; 9]);
+        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v), 1);
+        for i in 0..3 {
+            assert!((x[i] - 2.0 * u[i]).abs() < 1e-13, "{x:?}");
+        }
+    }
+}

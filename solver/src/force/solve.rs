@@ -1,0 +1,186 @@
+//! The finger multipliers of Eq. 7: joints first, then the smallest finger
+//! load that balances the rest.
+//!
+//! In the scaled normal equations A λ̃ = D C_q M̃⁻¹ b (rows J: joints, norms,
+//! active inequalities; rows F: fingers), eliminate J:
+//!
+//! ```text
+//! S = A_FF − A_FJ A_JJ⁻¹ A_JF,   s = r_F − A_FJ A_JJ⁻¹ r_J,   λ̃_F = S⁺ s,   λ_F = D_F λ̃_F
+//! ```
+//!
+//! S⁺ (minimum norm) makes the finger carry only what the joints cannot: the
+//! component of −M q̈ + Q along the mechanism's free motions. In directions
+//! the mechanism cannot move, the joints hold; the user feels those through
+//! the virtual coupling instead. A_JJ is factored by a faer sparse Cholesky
+//! (LLᵀ) whose symbolic analysis (AMD ordering, elimination tree, supernodes)
+//! is done once; each tick refactors the values and solves 1 + m_f
+//! right-hand sides. Sequential (`Par::Seq`), so the result is bit-identical
+//! run to run.
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::SparseColMatRef;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::{Conj, MatMut, Par, Side};
+
+use super::gram::Gram;
+use super::small::min_norm_solve;
+
+/// The numeric factorisation failed (a non-finite or non-positive pivot that
+/// the dynamic regularisation could not repair).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct FactorError;
+
+/// Symbolic factor and every buffer of the solve.
+pub(crate) struct MultiplierSolve {
+    symbolic: SymbolicCholesky<usize>,
+    l_values: Vec<f64>,
+    mem: MemBuffer,
+    /// n_J × (1 + m_f), column-major: r_J, then A_JF's columns; solved in place.
+    rhs: Vec<f64>,
+    schur: Vec<f64>,
+    schur_rhs: Vec<f64>,
+    eig: Vec<f64>,
+    /// Scaled finger multipliers λ̃_F.
+    pub lambda_f: Vec<f64>,
+    /// Numerical rank of S at the last solve.
+    pub rank: usize,
+}
+
+impl std::fmt::Debug for MultiplierSolve {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MultiplierSolve")
+            .field("n", &self.symbolic.nrows())
+            .field("factor_nnz", &self.l_values.len())
+            .field("rank", &self.rank)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MultiplierSolve {
+    /// Symbolic analysis of `gram`'s A_JJ pattern. Allocates.
+    pub fn new(gram: &Gram) -> Result<Self, faer::sparse::FaerError> {
+        let symbolic = factorize_symbolic_cholesky(
+            gram.pattern.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )?;
+        let (n, m) = (gram.n_j, gram.m_f);
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1 + m, Par::Seq),
+        ]);
+        Ok(Self {
+            l_values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            mem: MemBuffer::new(req),
+            rhs: vec![0.0; n * (1 + m)],
+            schur: vec![0.0; m * m],
+            schur_rhs: vec![0.0; m],
+            eig: vec![0.0; m * m],
+            lambda_f: vec![0.0; m],
+            rank: 0,
+        })
+    }
+
+    /// Number of stored values of the Cholesky factor L.
+    pub fn factor_nnz(&self) -> usize {
+        self.l_values.len()
+    }
+
+    /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
+    /// λ̃_F given the scaled right-hand side `r` (one entry per row of C).
+    ///
+    /// # Real-time
+    /// No allocation (faer runs in the preallocated `MemBuffer`), no locks;
+    /// time bounded by the symbolic factor: one numeric LLᵀ, 1 + m_f
+    /// triangular solve pairs, and an m_f × m_f Jacobi eigensolve.
+    pub fn solve(&mut self, gram: &Gram, r: &[f64]) -> Result<(), FactorError> {
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
+        let max_diag = gram
+            .diag
+            .iter()
+            .map(|&d| gram.values[d])
+            .fold(0.0, f64::max);
+        let reg = LltRegularization {
+            dynamic_regularization_delta: 1e-10 * max_diag,
+            dynamic_regularization_epsilon: 1e-14 * max_diag,
+        };
+        let stack = MemStack::new(&mut self.mem);
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.l_values,
+                a,
+                Side::Lower,
+                reg,
+                Par::Seq,
+                stack,
+                Default::default(),
+            )
+            .map_err(|_| FactorError)?;
+        let a_fj = &gram.values[nnz..nnz + m * n];
+        let a_ff = &gram.values[nnz + m * n..];
+        for (row, slot) in r.iter().zip(&gram.slot) {
+            if let super::gram::Slot::J(j) = *slot {
+                self.rhs[j] = *row;
+            }
+        }
+        self.rhs[n..].copy_from_slice(a_fj);
+        let stack = MemStack::new(&mut self.mem);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
+            Par::Seq,
+            stack,
+        );
+        for f in 0..m {
+            let a_f = &a_fj[f * n..(f + 1) * n];
+            self.schur_rhs[f] = r[gram.finger_rows[f]] - dot(a_f, &self.rhs[..n]);
+            for g in 0..m {
+                let x = &self.rhs[(1 + g) * n..(2 + g) * n];
+                self.schur[f * m + g] = a_ff[f * m + g] - dot(a_f, x);
+            }
+        }
+        // Symmetrise away round-off before the eigensolve.
+        for f in 0..m {
+            for g in 0..f {
+                let avg = 0.5 * (self.schur[f * m + g] + self.schur[g * m + f]);
+                self.schur[f * m + g] = avg;
+                self.schur[g * m + f] = avg;
+            }
+        }
+        self.rank = min_norm_solve(
+            &mut self.schur,
+            &self.schur_rhs,
+            &mut self.lambda_f,
+            &mut self.eig,
+        );
+        if self.lambda_f.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(FactorError)
+        }
+    }
+}
+
+impl MultiplierSolve {
+    /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:
+    /// A_JJ⁻¹ (r_J − A_JF λ̃_F) = z_j − Σ_f X_jf λ̃_f.
+    pub fn joint_multiplier(&self, n_j: usize, j: usize) -> f64 {
+        let mut v = self.rhs[j];
+        for (f, l) in self.lambda_f.iter().enumerate() {
+            v -= self.rhs[(1 + f) * n_j + j] * l;
+        }
+        v
+    }
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

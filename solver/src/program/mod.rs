@@ -1,0 +1,175 @@
+//! [`Program`]: everything one fast tick needs, built once on the slow thread,
+//! handed to the fast thread, ticked with zero allocation.
+//!
+//! ```text
+//!  Arc<Model> + SolverSettings ──► Program::new (allocates: Evaluation, gains, σ_max,
+//!                                  │             Gram pattern, symbolic Cholesky, scratch)
+//!                                  ├─ assemble(targets, cap, tol)   before the clock starts
+//!                                  ├─ tick(targets, dt) ──► TickReport + finger_outputs()
+//!                                  │     iterations × [evaluate C, C_q → Eq. 1–3]
+//!                                  │     evaluate at final q → violations
+//!                                  │     q history → b → C_q M⁻¹ C_qᵀ → λ_F → Eq. 8 + coupling
+//!                                  └─ adopt_state(&old)              at a hand-over
+//! ```
+//!
+//! # Real-time
+//! `tick`, `adopt_state` and `set_q` never allocate, lock or make syscalls
+//! (a counting-allocator test proves it on all three built-in mechanisms) and
+//! are deterministic: sequential faer, no hashing, no clock. A tick costs
+//! (iterations + 1) evaluations of C and C_q, `iterations` C_qᵀ products and
+//! vector updates, one assembly of C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky
+//! (symbolic factor fixed at construction) with 1 + m_f solves, and an
+//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one). All are
+//! bounded by the model's size; nothing iterates to a tolerance.
+
+mod report;
+mod state;
+mod tick;
+
+pub use report::{AssemblyReport, FingerOutput, ProgramError, TickOutcome, TickReport};
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use crate::al::SolverSettings;
+use crate::al::fused::Fused;
+use crate::al::scaling::{Scaling, check_stable};
+use crate::force::feedback::Feedback;
+use crate::{Evaluation, Model};
+
+/// The fast loop's solver state for one model. `Send`: build it on the slow
+/// thread, move it to the fast one. See the [module docs](self).
+#[derive(Debug)]
+pub struct Program {
+    model: Arc<Model>,
+    settings: SolverSettings,
+    scaling: Scaling,
+    sigma_max: f64,
+    h: f64,
+    ev: Evaluation,
+    q: Vec<f64>,
+    /// q₀ of the least-astonishment objective (the previous tick's q).
+    q_ref: Vec<f64>,
+    lambda: Vec<f64>,
+    saved_lambda: Vec<f64>,
+    g: Vec<f64>,
+    fused: Fused,
+    feedback: Feedback,
+    outputs: Vec<FingerOutput>,
+    report: TickReport,
+}
+
+impl Program {
+    /// Builds the program of `model` at its initial configuration q0 (at rest,
+    /// multipliers zero). Measures σ_max at q0 to set h and rejects settings
+    /// that would diverge. Allocates; call it off the real-time thread.
+    pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
+        settings.validate()?;
+        let mut ev = model.evaluation();
+        ev.evaluate(&model, model.q0(), &model.initial_targets())?;
+        let scaling = Scaling::new(&model, &settings);
+        let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
+        let h = settings.step / (1.0 + settings.gain * sigma_max);
+        check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
+            .map_err(|(a, beta)| ProgramError::Unstable { a, beta })?;
+        let feedback = Feedback::new(&model, &ev, &settings)
+            .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
+        let (n, m) = (model.n_coords(), model.n_rows());
+        Ok(Program {
+            q: model.q0().to_vec(),
+            q_ref: model.q0().to_vec(),
+            lambda: vec![0.0; m],
+            saved_lambda: vec![0.0; m],
+            g: vec![0.0; n],
+            fused: Fused::new(&model),
+            outputs: vec![FingerOutput::default(); model.fingers().len()],
+            report: TickReport::default(),
+            feedback,
+            ev,
+            h,
+            sigma_max,
+            scaling,
+            settings,
+            model,
+        })
+    }
+
+    /// The model this program iterates.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The shared model (to build a replacement program from it).
+    pub fn model_arc(&self) -> &Arc<Model> {
+        &self.model
+    }
+
+    /// The settings it was built with.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// The configuration after the last tick (layout order, see [`crate::Layout`]).
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// The AL multipliers, one per row of C. Equality rows: λ of Eq. 2–3 (in
+    /// the row's unit, scaled like C; not a physical force). Inequality rows:
+    /// ν ≥ 0, the projected multiplier (Eq. 3 uses −ν). Finger rows: always 0
+    /// (fingers are penalty rows).
+    pub fn lambda(&self) -> &[f64] {
+        &self.lambda
+    }
+
+    /// Per-finger outputs of the last tick, model finger order (zeros before
+    /// the first tick and after any tick whose status is not `Ok`).
+    pub fn finger_outputs(&self) -> &[FingerOutput] {
+        &self.outputs
+    }
+
+    /// The last tick's report.
+    pub fn last_report(&self) -> &TickReport {
+        &self.report
+    }
+
+    /// The absolute step h of Eq. 3 in use: `settings.step / (1 + K σ_max)`.
+    pub fn step_h(&self) -> f64 {
+        self.h
+    }
+
+    /// σ_max of the scaled Gram matrix D C_q W⁻¹ C_qᵀ D at q0 (dimensionless).
+    pub fn sigma_max(&self) -> f64 {
+        self.sigma_max
+    }
+
+    /// The length scale L in use, metres.
+    pub fn length_scale_m(&self) -> f64 {
+        self.scaling.length_m
+    }
+
+    /// Stored values of the Eq. 7 Cholesky factor (a size measure).
+    pub fn force_factor_nnz(&self) -> usize {
+        self.feedback.factor_nnz()
+    }
+
+    /// How far the velocity estimates lag at tick period `dt`: half a tick for
+    /// the backward difference plus the low-pass filter's low-frequency group
+    /// delay τ/dt ticks. Accelerations lag half a tick more.
+    pub fn motion_delay(&self, dt: Duration) -> Duration {
+        let (dt_s, tau) = (
+            dt.as_secs_f64(),
+            self.settings.velocity_filter.as_secs_f64(),
+        );
+        Duration::from_secs_f64(0.5 * dt_s + tau)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn program_is_send() {
+        fn is_send<T: Send>() {}
+        is_send::<super::Program>();
+    }
+}

@@ -1,0 +1,184 @@
+//! What a [`Program`](super::Program) reports: per-finger outputs, per-tick and
+//! assembly diagnostics, and construction errors. All tick-path types are
+//! `Copy` and heap-free.
+
+use nalgebra::Vector3;
+
+use crate::EvalError;
+use crate::al::InvalidSetting;
+
+/// One finger's output after a tick. World frame throughout.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FingerOutput {
+    /// Total force **on the finger** (what the device should render), newtons:
+    /// `constraint_force_n + coupling_force_n`. A body hanging from the finger
+    /// under gravity gives m g (pointing down); carried with acceleration a it
+    /// gives m (g − a).
+    pub force_n: Vector3<f64>,
+    /// Total torque on the finger about its attachment point, N·m (rigid
+    /// grasps; zero for point grasps).
+    pub torque_nm: Vector3<f64>,
+    /// The Eq. 7–8 part: the load the mechanism's inertia, gravity and
+    /// velocity terms put on the finger constraint, N.
+    pub constraint_force_n: Vector3<f64>,
+    /// The Eq. 7–8 torque about the attachment point, N·m.
+    pub constraint_torque_nm: Vector3<f64>,
+    /// The virtual-coupling part, k (p − t) + b d(p − t)/dt, N: pulls the
+    /// finger toward the attachment point p; the rigidity the user feels in
+    /// directions the mechanism cannot follow.
+    pub coupling_force_n: Vector3<f64>,
+    /// Torsional coupling torque (rigid grasps), N·m.
+    pub coupling_torque_nm: Vector3<f64>,
+    /// The finger's attachment point on the mechanism, metres.
+    pub attachment_m: Vector3<f64>,
+    /// The target (device point) this tick, metres.
+    pub target_m: Vector3<f64>,
+    /// |attachment − target|, metres.
+    pub tracking_error_m: f64,
+}
+
+impl Default for FingerOutput {
+    fn default() -> Self {
+        let z = Vector3::zeros();
+        Self {
+            force_n: z,
+            torque_nm: z,
+            constraint_force_n: z,
+            constraint_torque_nm: z,
+            coupling_force_n: z,
+            coupling_torque_nm: z,
+            attachment_m: z,
+            target_m: z,
+            tracking_error_m: 0.0,
+        }
+    }
+}
+
+impl FingerOutput {
+    /// True when every number is finite.
+    pub fn is_finite(&self) -> bool {
+        [
+            &self.force_n,
+            &self.torque_nm,
+            &self.constraint_force_n,
+            &self.constraint_torque_nm,
+            &self.coupling_force_n,
+            &self.coupling_torque_nm,
+            &self.attachment_m,
+            &self.target_m,
+        ]
+        .iter()
+        .all(|v| v.iter().all(|x| x.is_finite()))
+            && self.tracking_error_m.is_finite()
+    }
+}
+
+/// How a tick (or an assembly) ended. Anything but `Ok` leaves q and the
+/// multipliers as they were before the call and zeroes every finger output:
+/// the caller should cut forces for this tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TickOutcome {
+    /// Iterated and computed forces.
+    #[default]
+    Ok,
+    /// The iteration produced a NaN or infinity (divergence): state restored.
+    NonFinite,
+    /// The input could not be evaluated (wrong target count, non-finite
+    /// target, corrupted q).
+    Eval(EvalError),
+    /// The Eq. 7 multiplier solve failed (singular after regularisation).
+    ForceSolve,
+    /// `dt` was zero: no velocities can be formed.
+    ZeroDt,
+}
+
+/// Diagnostics of one tick. Violations are of the mechanism's constraints
+/// (joints, quaternion norms, inequalities) at the tick's final q; finger rows
+/// are excluded (see `max_tracking_error_m`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TickReport {
+    /// AL iterations run.
+    pub iterations: u32,
+    /// Largest violation of a length row, metres.
+    pub max_violation_m: f64,
+    /// Largest violation of an angle row, radians.
+    pub max_violation_rad: f64,
+    /// Largest |eᵀe − 1| (dimensionless).
+    pub max_norm_violation: f64,
+    /// RMS violation over length rows, metres.
+    pub rms_violation_m: f64,
+    /// Largest finger |attachment − target|, metres.
+    pub max_tracking_error_m: f64,
+    /// How it ended.
+    pub status: TickOutcome,
+}
+
+/// Result of [`Program::assemble`](super::Program::assemble).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AssemblyReport {
+    /// Iterations run.
+    pub iterations: u32,
+    /// Scaled violation < tolerance and the last step < tolerance / 100.
+    pub converged: bool,
+    /// Largest violation of any mechanism row with angle and norm rows scaled
+    /// to metres by the length scale L, at the final q.
+    pub max_scaled_violation_m: f64,
+    /// Largest violation of a length row, metres.
+    pub max_violation_m: f64,
+    /// Largest violation of an angle row, radians.
+    pub max_violation_rad: f64,
+    /// Largest scaled coordinate change of the last iteration, metres.
+    pub last_step_m: f64,
+    /// Largest finger |attachment − target|, metres.
+    pub max_tracking_error_m: f64,
+    /// `Ok`, or why it stopped early (q restored to the last finite iterate,
+    /// multipliers to their values before the call).
+    pub status: TickOutcome,
+}
+
+/// Why a [`Program`](super::Program) could not be built or changed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProgramError {
+    /// A setting is out of range.
+    #[error(transparent)]
+    Settings(#[from] InvalidSetting),
+    /// The model's initial configuration could not be evaluated.
+    #[error("evaluating the initial configuration: {0}")]
+    Eval(#[from] EvalError),
+    /// The settings would make the update diverge on this model.
+    #[error(
+        "unstable gains: h(1 + K σ_max) = {a:.3} (must be < 2) and h k₂ σ_max = {beta:.3} \
+         (must be < 4 − 2a); lower `step` or `multiplier_gain`"
+    )]
+    Unstable {
+        /// h (1 + K σ_max).
+        a: f64,
+        /// h k₂ σ_max.
+        beta: f64,
+    },
+    /// The symbolic Cholesky analysis failed (index overflow, out of memory).
+    #[error("symbolic factorisation of C_q M⁻¹ C_qᵀ failed: {0}")]
+    Factorization(String),
+    /// A vector given has the wrong length.
+    #[error("{got} coordinates given; the model has {expected}")]
+    Length {
+        /// Coordinates of the model.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// A coordinate given is NaN or infinite.
+    #[error("coordinate {index} is not finite")]
+    NonFinite {
+        /// Its index.
+        index: usize,
+    },
+}
+
+/// Largest |v| of the given outputs' tracking errors.
+pub(crate) fn max_tracking(outputs: &[FingerOutput]) -> f64 {
+    outputs
+        .iter()
+        .map(|o| o.tracking_error_m)
+        .fold(0.0, f64::max)
+}

@@ -1,0 +1,111 @@
+//! Moving state into a program: a placement result (`set_q`) or the state of
+//! the program it replaces (`adopt_state`).
+
+use super::{FingerOutput, Program, ProgramError};
+use crate::BodyId;
+
+impl Program {
+    /// Replaces q (e.g. with a Newton-KKT placement result). The motion history
+    /// restarts at rest at the new q (a jump is not a motion, so it must not
+    /// produce a velocity spike); multipliers are kept. Outputs are zeroed
+    /// until the next tick.
+    ///
+    /// # Real-time
+    /// No allocation; O(coordinates).
+    pub fn set_q(&mut self, q: &[f64]) -> Result<(), ProgramError> {
+        if q.len() != self.q.len() {
+            return Err(ProgramError::Length {
+                expected: self.q.len(),
+                got: q.len(),
+            });
+        }
+        if let Some(index) = q.iter().position(|v| !v.is_finite()) {
+            return Err(ProgramError::NonFinite { index });
+        }
+        self.q.copy_from_slice(q);
+        self.q_ref.copy_from_slice(q);
+        self.feedback.motion.reset(q);
+        self.outputs.fill(FingerOutput::default());
+        Ok(())
+    }
+
+    /// Takes over from `old` at a hand-over (called on the fast thread): q, its
+    /// motion history and the finger coupling history, matched body by body
+    /// and finger by finger (same index first, else by name); the multipliers
+    /// of every constraint that survives (same name, kind and row count; same
+    /// index first, else the first such constraint by name). Bodies, design
+    /// variables and constraints without a match keep this program's values
+    /// (q0, zero multipliers). The last report and outputs are carried too.
+    ///
+    /// # Real-time
+    /// No allocation. O(n) when the models share their structure (the usual
+    /// case: `Model::with_inequalities` keeps every index); O(n²) string
+    /// comparisons in the worst case of a re-ordered model.
+    pub fn adopt_state(&mut self, old: &Program) {
+        let (new_m, old_m) = (&*self.model, &*old.model);
+        let mo = &old.feedback.motion;
+        // Bodies: q, q_prev and velocity history.
+        // `masses` lists the moving bodies in layout order.
+        for (k, (id, no)) in new_m.layout().moving_bodies().enumerate() {
+            let same = |i: usize, j: usize| new_m.bodies()[i].name == old_m.bodies()[j].name;
+            let Some(from) = match_index(id.index(), old_m.bodies().len(), same) else {
+                continue;
+            };
+            let Some(oo) = old_m.layout().body_offset(BodyId(from as u32)) else {
+                continue;
+            };
+            self.q[no..no + 7].copy_from_slice(&old.q[oo..oo + 7]);
+            if let Some(ok) = old.feedback.masses.iter().position(|m| m.offset == oo) {
+                self.feedback.motion.copy_body(k, mo, ok);
+                self.feedback.motion.q_prev[no..no + 7].copy_from_slice(&mo.q_prev[oo..oo + 7]);
+            }
+        }
+        // Design variables.
+        let (nd, od) = (new_m.layout().design_vars(), old_m.layout().design_vars());
+        for (i, d) in nd.iter().enumerate() {
+            let found = match_index(i, od.len(), |a, b| nd[a].name == od[b].name);
+            if let Some(j) = found.filter(|&j| od[j].width == d.width) {
+                for c in 0..d.width {
+                    self.q[d.offset + c] = old.q[od[j].offset + c];
+                    self.feedback.motion.q_prev[d.offset + c] = mo.q_prev[od[j].offset + c];
+                }
+            }
+        }
+        self.feedback.motion.ticks = mo.ticks;
+        self.q_ref.copy_from_slice(&self.q);
+        // Multipliers of surviving constraints.
+        let (nc, oc) = (new_m.constraints(), old_m.constraints());
+        self.lambda.fill(0.0);
+        for (i, c) in nc.iter().enumerate() {
+            let same = |a: usize, b: usize| {
+                nc[a].name == oc[b].name
+                    && nc[a].kind == oc[b].kind
+                    && nc[a].rows.len() == oc[b].rows.len()
+            };
+            if let Some(j) = match_index(i, oc.len(), same) {
+                for (r_new, r_old) in c.rows.clone().zip(oc[j].rows.clone()) {
+                    self.lambda[r_new] = old.lambda[r_old];
+                }
+            }
+        }
+        self.saved_lambda.copy_from_slice(&self.lambda);
+        // Fingers.
+        let (nf, of) = (new_m.fingers(), old_m.fingers());
+        for k in 0..nf.len() {
+            if let Some(j) = match_index(k, of.len(), |a, b| nf[a].name == of[b].name) {
+                self.feedback.copy_finger(k, &old.feedback, j);
+                self.outputs[k] = old.outputs[j];
+            }
+        }
+        self.report = old.report;
+    }
+}
+
+/// Index in the old table of the item matching new item `i`: `i` itself when
+/// it matches, else the first match by `same(i, j)`.
+fn match_index(i: usize, n_old: usize, same: impl Fn(usize, usize) -> bool) -> Option<usize> {
+    if i < n_old && same(i, i) {
+        return Some(i);
+    }
+    (0..n_old).find(|&j| same(i, j))
+}

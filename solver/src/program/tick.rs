@@ -1,0 +1,219 @@
+//! The fast tick and the warm-up assembly.
+
+use std::time::Duration;
+
+use super::report::max_tracking;
+use super::{AssemblyReport, FingerOutput, Program, TickOutcome, TickReport};
+use crate::FingerTarget;
+use crate::al::update::Violation;
+
+impl Program {
+    /// One fast tick: `settings.iterations` AL iterations (Eq. 1–3) toward
+    /// `targets` (one per finger, model order), then the finger outputs
+    /// (Eq. 7–8 plus coupling) with velocities from q one `dt` ago.
+    ///
+    /// On any failure the status says why, q and the multipliers are restored
+    /// to their values before the call, the motion history restarts at rest,
+    /// and every finger output is zero: nothing non-finite ever leaves.
+    ///
+    /// # Real-time
+    /// No allocation, locks or syscalls; bounded time (see the
+    /// [module docs](super)): (iterations + 1) evaluations, a fixed-pattern
+    /// sparse Cholesky, no tolerance-driven loops.
+    pub fn tick(&mut self, targets: &[FingerTarget], dt: Duration) -> TickReport {
+        let n = self.settings.iterations;
+        let dt_s = dt.as_secs_f64();
+        self.report = if dt_s > 0.0 {
+            self.run_tick(targets, dt_s, n)
+        } else {
+            self.failed(TickOutcome::ZeroDt, 0)
+        };
+        self.report
+    }
+
+    /// `iterations` AL iterations toward `targets` from the current q, as the
+    /// first part of a tick (q₀ = q at the call), without evaluating at the
+    /// result, forces or history. For extra work between ticks and for
+    /// timing one iteration. On failure q and the multipliers are restored.
+    ///
+    /// # Real-time
+    /// No allocation; `iterations` evaluations and C_qᵀ products.
+    pub fn iterate(&mut self, targets: &[FingerTarget], iterations: u32) -> TickOutcome {
+        self.q_ref.copy_from_slice(&self.q);
+        self.saved_lambda.copy_from_slice(&self.lambda);
+        match self.iterations(targets, iterations) {
+            Ok(()) => TickOutcome::Ok,
+            Err((status, _)) => {
+                self.q.copy_from_slice(&self.q_ref);
+                self.lambda.copy_from_slice(&self.saved_lambda);
+                status
+            }
+        }
+    }
+
+    /// The AL iterations of a tick from q with q₀ = `q_ref` (already set).
+    fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<(), (TickOutcome, u32)> {
+        for k in 0..n {
+            self.fused
+                .iterate(
+                    &self.model,
+                    &self.scaling,
+                    self.h,
+                    &mut self.q,
+                    &self.q_ref,
+                    targets,
+                    &mut self.lambda,
+                    &mut self.g,
+                )
+                .map_err(|e| {
+                    let status = if k == 0 {
+                        TickOutcome::Eval(e)
+                    } else {
+                        TickOutcome::NonFinite
+                    };
+                    (status, k)
+                })?;
+        }
+        Ok(())
+    }
+
+    fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
+        self.q_ref.copy_from_slice(&self.q);
+        self.saved_lambda.copy_from_slice(&self.lambda);
+        if let Err((status, k)) = self.iterations(targets, n) {
+            return self.failed(status, k);
+        }
+        if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
+            return self.failed(TickOutcome::NonFinite, n);
+        }
+        let v = Violation::of(&self.model, &self.scaling, self.ev.values());
+        let solved = self.feedback.compute(
+            &self.model,
+            &self.scaling,
+            &self.settings,
+            &self.q,
+            &self.ev,
+            &self.lambda,
+            targets,
+            dt_s,
+            &mut self.outputs,
+        );
+        if solved.is_err() {
+            return self.failed(TickOutcome::ForceSolve, n);
+        }
+        if !self.outputs.iter().all(FingerOutput::is_finite) {
+            return self.failed(TickOutcome::NonFinite, n);
+        }
+        TickReport {
+            iterations: n,
+            max_violation_m: v.max_m,
+            max_violation_rad: v.max_rad,
+            max_norm_violation: v.max_norm,
+            rms_violation_m: v.rms_m,
+            max_tracking_error_m: max_tracking(&self.outputs),
+            status: TickOutcome::Ok,
+        }
+    }
+
+    /// Restores the state of the start of the call and zeroes the outputs.
+    fn failed(&mut self, status: TickOutcome, iterations: u32) -> TickReport {
+        self.q.copy_from_slice(&self.q_ref);
+        self.lambda.copy_from_slice(&self.saved_lambda);
+        self.feedback.motion.reset(&self.q);
+        self.outputs.fill(FingerOutput::default());
+        TickReport {
+            iterations,
+            status,
+            ..TickReport::default()
+        }
+    }
+
+    /// Warm-up before the clock starts: AL iterations with frozen `targets`
+    /// (each iteration a tick: q₀ is the previous iterate) until the scaled
+    /// violation of the mechanism's rows is below `tolerance_m` and the last
+    /// step moved no scaled coordinate more than `tolerance_m / 100`, or
+    /// `max_iterations` ran. Finger rows are penalties: an unreachable target
+    /// leaves a tracking error, reported, without blocking convergence. The
+    /// motion history restarts at rest at the result; outputs are zeroed.
+    ///
+    /// # Real-time
+    /// No allocation, but up to `max_iterations` evaluations: meant for
+    /// before the clock starts.
+    pub fn assemble(
+        &mut self,
+        targets: &[FingerTarget],
+        max_iterations: u32,
+        tolerance_m: f64,
+    ) -> AssemblyReport {
+        let mut r = AssemblyReport::default();
+        self.saved_lambda.copy_from_slice(&self.lambda);
+        let mut last_step = f64::INFINITY;
+        for k in 0..max_iterations {
+            self.q_ref.copy_from_slice(&self.q);
+            let done = self.fused.iterate(
+                &self.model,
+                &self.scaling,
+                self.h,
+                &mut self.q,
+                &self.q_ref,
+                targets,
+                &mut self.lambda,
+                &mut self.g,
+            );
+            if let Err(e) = done {
+                self.q.copy_from_slice(&self.q_ref);
+                self.lambda.copy_from_slice(&self.saved_lambda);
+                r.status = if k == 0 {
+                    TickOutcome::Eval(e)
+                } else {
+                    TickOutcome::NonFinite
+                };
+                break;
+            }
+            r.iterations = k + 1;
+            last_step = self
+                .q
+                .iter()
+                .zip(&self.q_ref)
+                .zip(&self.scaling.inv_metric)
+                .map(|((a, b), &wi)| (a - b).abs() / wi.sqrt())
+                .fold(0.0, f64::max);
+            let v = Violation::of(&self.model, &self.scaling, &self.fused.values);
+            if v.max_scaled_m < tolerance_m && last_step < 0.01 * tolerance_m {
+                break;
+            }
+        }
+        r.last_step_m = if r.iterations > 0 { last_step } else { 0.0 };
+        if let Err(e) = self.ev.evaluate(&self.model, &self.q, targets) {
+            if r.status == TickOutcome::Ok {
+                r.status = TickOutcome::Eval(e);
+            }
+        } else {
+            let v = Violation::of(&self.model, &self.scaling, self.ev.values());
+            r.max_scaled_violation_m = v.max_scaled_m;
+            r.max_violation_m = v.max_m;
+            r.max_violation_rad = v.max_rad;
+            r.converged = r.status == TickOutcome::Ok
+                && v.max_scaled_m < tolerance_m
+                && r.last_step_m < 0.01 * tolerance_m;
+        }
+        self.q_ref.copy_from_slice(&self.q);
+        self.feedback.motion.reset(&self.q);
+        self.outputs.fill(FingerOutput::default());
+        r.max_tracking_error_m = self.tracking_errors(targets);
+        r
+    }
+
+    /// Largest finger |attachment − target| at the current q (0 on a bad
+    /// targets slice).
+    fn tracking_errors(&self, targets: &[FingerTarget]) -> f64 {
+        (0..self.model.fingers().len())
+            .zip(targets)
+            .filter_map(|(k, t)| {
+                self.model
+                    .finger_point(&self.q, crate::FingerId(k as u32))
+                    .map(|p| (p - t.position_m).norm())
+            })
+            .fold(0.0, f64::max)
+    }
+}

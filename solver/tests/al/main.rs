@@ -1,0 +1,13 @@
+//! Integration tests of the fast update, force feedback and `Program`: one
+//! binary, a module per area. The counting allocator is installed so
+//! `alloc` can prove that ticks allocate nothing.
+
+#[global_allocator]
+static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
+
+mod common;
+mod convergence;
+mod force;
+mod limits;
+mod program;
+mod unreachable;
