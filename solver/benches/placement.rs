@@ -13,9 +13,9 @@
 //! - `placement/star50/{split,unsplit}`, `placement/chain50`: one numeric
 //!   step of the 50-spoke star with and without the dense-column split, and
 //!   of the same bodies joined in a chain;
-//! - `placement/crossover/{faer,nalgebra}/{100,500,2000}`: faer's sparse
-//!   numeric step vs nalgebra's dense Cholesky + solve of the same J Jᵀ + μI
-//!   (chains with 99, 499 and 1999 rows).
+//! - `placement/crossover/{faer,nalgebra}/{25,50,100,500,2000}`: faer's
+//!   sparse numeric step vs nalgebra's dense Cholesky + solve of the same
+//!   J Jᵀ + μI (chains with 23, 47, 99, 499 and 1999 rows).
 //!
 //! Run: `CARGO_TARGET_DIR=target/placement cargo bench -p haptloop-solver --bench placement`
 
@@ -169,7 +169,7 @@ fn crossover(c: &mut Criterion) {
     g.sample_size(10)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
-    for (size, bodies) in [(100, 24), (500, 124), (2000, 499)] {
+    for (size, bodies) in [(25, 5), (50, 11), (100, 24), (500, 124), (2000, 499)] {
         let model = chain(bodies);
         let opts = PlacementOptions::default();
         let q = start(&model);
