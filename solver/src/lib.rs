@@ -88,7 +88,7 @@ pub mod program;
 pub mod rotation;
 pub mod scene;
 
-pub use al::{InvalidSetting, SolverSettings};
+pub use al::{ForceSolver, InvalidSetting, SolverSettings, UpdateRule};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};
 pub use force::{FingerWrench, ReferenceError, reference_finger_wrenches};

@@ -1,6 +1,9 @@
-//! The fast update: Nelson & Cohen's augmented-Lagrangian iteration (Eq. 1–3)
-//! that keeps a mechanism assembled around the user's fingers, one sparse
-//! C_qᵀ product per iteration.
+//! The fast update that keeps a mechanism assembled around the user's fingers:
+//! Nelson & Cohen's augmented-Lagrangian iteration (Eq. 1–3,
+//! [`UpdateRule::Gradient`]) and a Gauss–Newton projection that reuses the
+//! force solve's factor ([`UpdateRule::Projected`], the default; see
+//! `projected`). This page documents the first; the second shares its
+//! finger formulation and pull limit.
 //!
 //! ```text
 //! Δq = −W⁻¹ (f_qᵀ + C_qᵀ (λ + K C)),   q ← q + h Δq,   λ ← λ + k₂ C
@@ -17,6 +20,9 @@
 //! - **Step**: h = step / (1 + K σ_max), σ_max the largest eigenvalue of the
 //!   scaled Gram matrix, measured once per program; `step` ≤ 1 keeps every
 //!   mode contracting (stability analysis in `scaling`).
+//! - **One pass** (`fused`): C and C_qᵀ w are formed together, per body in
+//!   world form, without writing the Jacobian: 2.0–2.3× faster than
+//!   evaluating C_q and multiplying (BENCHMARKS.md).
 //! - **Inequalities** (joint limits, contact witnesses, C ≥ 0) use the
 //!   projected multiplier ν ≥ 0; an inactive row contributes nothing.
 //! - **Fingers are penalty rows** (a weighted finger-distance objective term,
@@ -34,8 +40,9 @@
 //! physical load on a finger comes from Eq. 7 ([`crate::force`]).
 
 pub(crate) mod fused;
+pub(crate) mod projected;
 pub(crate) mod scaling;
 mod settings;
 pub(crate) mod update;
 
-pub use settings::{InvalidSetting, SolverSettings};
+pub use settings::{ForceSolver, InvalidSetting, SolverSettings, UpdateRule};

@@ -3,6 +3,35 @@
 
 use std::time::Duration;
 
+/// Which step the fast loop takes each iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UpdateRule {
+    /// Nelson & Cohen Eq. 1–3 as written: a first-order (gradient) step of
+    /// the augmented Lagrangian, one C_qᵀ product per iteration. Converges
+    /// linearly; slow modes (a finger dragging a whole linkage) lag.
+    Gradient,
+    /// A Gauss–Newton (chord) projection that reuses the factor of
+    /// C_q M⁻¹ C_qᵀ the force solve computed at the end of the previous tick
+    /// (see the `projected` module docs): fingers track within a tick, at
+    /// the cost of one pair of sparse triangular solves per iteration.
+    Projected,
+}
+
+/// How Eq. 7's joint block C_q M⁻¹ C_qᵀ is solved each tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceSolver {
+    /// faer sparse Cholesky: AMD ordering and symbolic factorisation once per
+    /// program, a numeric refactorisation per tick. Exact; its factor also
+    /// serves the projected update.
+    Cholesky,
+    /// Warm-started, Jacobi-preconditioned conjugate gradients, at most
+    /// `max_iterations` per right-hand side. Gradient update only.
+    ConjugateGradient {
+        /// Cap per right-hand side (bounds the tick's time).
+        max_iterations: u32,
+    },
+}
+
 /// Everything a [`Program`](crate::Program) needs to know besides the model.
 ///
 /// Gains are dimensionless because the update runs in *scaled* coordinates in
@@ -12,6 +41,11 @@ use std::time::Duration;
 /// BENCHMARKS.md shows what the knobs buy.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
+    /// Gradient (Eq. 3) or projected update. Default `Projected`: on the
+    /// four-bar circle it follows the converged solution within micrometres
+    /// where Eq. 3 lags by centimetres at any iteration count that fits a
+    /// tick (trade-off table, BENCHMARKS.md).
+    pub update: UpdateRule,
     /// Augmented-Lagrangian iterations per tick (Eq. 1–3 applied this many
     /// times). Default 4: the four-bar's finger error on the 2 cm, 0.5 Hz
     /// circle stays under 10 µm with 4, and each iteration costs one
@@ -39,13 +73,15 @@ pub struct SolverSettings {
     /// Default 1000 (= K, the method-of-multipliers choice); stability needs
     /// h k₂ σ_max < 4 − 2 h K σ_max, checked by `Program::new`.
     pub multiplier_gain: f64,
-    /// Pull limit d of a finger, metres: a finger's point (or, rigid, its
-    /// orientation times L) pulls with K·ℓ²·min(|error|, d) along the error.
-    /// Default 1 mm, the distance the device moves in one tick at 1 m/s:
-    /// targets the mechanism can follow are never limited, while one it cannot
-    /// reach (a 1-DOF linkage, a joint at its limit) stops loading the joints
-    /// with the whole distance (their violation stays at the micrometre level;
-    /// trade-off table). `f64::INFINITY` switches it off.
+    /// Pull limit d of a finger, metres: a finger's point error (or, rigid,
+    /// its orientation error times L) counts at most d, along its direction.
+    /// A trust region for far targets: with the projected rule an unlimited
+    /// pull toward a target 3 cm off a 1-DOF linkage's reach diverged (the
+    /// linearised step overshoots), and with the gradient rule it loads the
+    /// joints with K·ℓ²·(the whole distance). Default 1 cm: on the trade-off
+    /// circle, whose target is up to 1 cm off the reachable curve, it changes
+    /// nothing, while 1 mm (clamping the reachable part of the error too)
+    /// multiplied the lag by 100. `f64::INFINITY` switches it off.
     pub finger_pull_limit_m: f64,
     /// Weight of finger rows relative to K (fingers are penalty rows with no
     /// multiplier, see the module docs). Dimensionless, > 0. Default 1: the
@@ -79,6 +115,10 @@ pub struct SolverSettings {
     /// The filter delays velocities by about this much (plus the half tick of
     /// the backward difference): [`Program::motion_delay`](crate::Program::motion_delay).
     pub velocity_filter: Duration,
+    /// Solver of Eq. 7's joint block. Default `Cholesky`: faster than
+    /// warm-started CG on all three mechanisms, exact, and the projected
+    /// update reuses its factor (BENCHMARKS.md compares them).
+    pub force_solver: ForceSolver,
     /// Relative Tikhonov regularisation μ of the Eq. 7 multiplier solve:
     /// μ·(mean diagonal) is added to the joint block of the scaled
     /// C_q M⁻¹ C_qᵀ. Default 0: exactly redundant joint rows (a planar linkage
@@ -95,17 +135,19 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
+            update: UpdateRule::Projected,
             iterations: 4,
             step: 0.9,
             gain: 1000.0,
             multiplier_gain: 1000.0,
-            finger_pull_limit_m: 1e-3,
+            finger_pull_limit_m: 1e-2,
             finger_weight: 1.0,
             length_scale_m: None,
             coupling_stiffness_n_per_m: 400.0,
             coupling_damping_n_s_per_m: 0.05,
             coupling_angular_stiffness_nm_per_rad: 0.0,
             velocity_filter: Duration::ZERO,
+            force_solver: ForceSolver::Cholesky,
             force_regularization: 0.0,
         }
     }
@@ -177,6 +219,18 @@ impl SolverSettings {
         ] {
             if !nonneg(v) {
                 return bad(name, v, "finite and >= 0");
+            }
+        }
+        if let ForceSolver::ConjugateGradient { max_iterations } = self.force_solver {
+            if max_iterations == 0 {
+                return bad("force_solver.max_iterations", 0.0, ">= 1");
+            }
+            if self.update == UpdateRule::Projected {
+                return bad(
+                    "force_solver",
+                    max_iterations as f64,
+                    "the projected update needs the Cholesky factor",
+                );
             }
         }
         if !(nonneg(self.force_regularization) && self.force_regularization < 1.0) {

@@ -20,7 +20,8 @@
 //! ([`SolverSettings::finger_pull_limit_m`](crate::SolverSettings::finger_pull_limit_m))
 //! pulls as if it were d away, in the same direction: a target far outside
 //! the mechanism's reach drags it toward the closest reachable configuration
-//! without loading the joints with K·ℓ²·(the whole distance).
+//! without loading the joints with K·ℓ²·(the whole distance), and a
+//! linearised (projected) step cannot overshoot by more than d.
 
 use super::scaling::{Role, Scaling};
 use crate::{Model, RowUnit};

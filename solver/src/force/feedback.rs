@@ -10,10 +10,11 @@ use super::motion::Motion;
 use super::reference::INEQUALITY_ACTIVE_BAND;
 use super::solve::{FactorError, MultiplierSolve};
 use super::wrench::on_finger;
+use crate::al::ForceSolver;
 use crate::al::scaling::{Role, Scaling};
 use crate::program::FingerOutput;
 use crate::rotation::BodyFrame;
-use crate::{Evaluation, FingerTarget, Model, SolverSettings};
+use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// One finger's rows and where its body's columns sit in each of them.
 #[derive(Debug, Clone)]
@@ -53,7 +54,11 @@ impl Feedback {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
         let gram = Gram::new(model, jac, &masses);
-        let solve = MultiplierSolve::new(&gram)?;
+        let cg = match settings.force_solver {
+            ForceSolver::Cholesky => None,
+            ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
+        };
+        let solve = MultiplierSolve::new(&gram, cg)?;
         let fingers = model
             .fingers()
             .iter()
@@ -92,9 +97,35 @@ impl Feedback {
         })
     }
 
+    /// The projected update's solve (see `MultiplierSolve::project`) with the
+    /// factor of the last `compute`.
+    pub fn project(&mut self, r: &[f64], k_inv: &[f64], y: &mut [f64]) -> Result<(), FactorError> {
+        self.solve.project(&self.gram, r, k_inv, y)
+    }
+
+    /// out = M̃⁻¹ g at the configuration of the last `compute`.
+    pub fn apply_inverse_mass(&self, g: &[f64], out: &mut [f64]) {
+        self.gram.apply_inverse_mass(&self.masses, g, out);
+    }
+
+    /// Per row: ℓ_i if the row took part in the last `compute`, else 0.
+    pub fn row_scale(&self) -> &[f64] {
+        &self.scale
+    }
+
+    /// Mean mass of the moving bodies, kilograms.
+    pub fn mean_mass_kg(&self) -> f64 {
+        self.masses.iter().map(|m| m.mass).sum::<f64>() / self.masses.len().max(1) as f64
+    }
+
     /// Carries finger `from` of `old`'s coupling history into finger `to`.
     pub fn copy_finger(&mut self, to: usize, old: &Feedback, from: usize) {
         self.prev_error[to] = old.prev_error[from];
+    }
+
+    /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
+    pub fn cg_iterations(&self) -> u32 {
+        self.solve.cg.as_ref().map_or(0, |c| c.iterations)
     }
 
     /// Stored values of the sparse Cholesky factor (diagnostics).
@@ -102,9 +133,12 @@ impl Feedback {
         self.solve.factor_nnz()
     }
 
-    /// Advances the motion history to `q` and computes every finger's output
-    /// at the evaluated `ev` (C and C_q at `q` with `targets`). `lambda` holds
-    /// the AL multipliers (ν ≥ 0 of inequality rows decide the active set).
+    /// Advances the motion history to `q` (unless `advance` is false: a
+    /// refresh at an unchanged state) and computes every finger's output at
+    /// the evaluated `ev` (C and C_q at `q` with `targets`). `lambda` holds
+    /// the multipliers: an inequality row takes part (is active) when its
+    /// ν > 0 or it is violated by more than [`INEQUALITY_ACTIVE_BAND`]; an
+    /// active row that would pull is released for this tick.
     ///
     /// # Real-time
     /// No allocation, no locks. Time: O(bodies + Σ_b rows_b²) assembly, one
@@ -121,9 +155,12 @@ impl Feedback {
         lambda: &[f64],
         targets: &[FingerTarget],
         dt_s: f64,
+        advance: bool,
         out: &mut [FingerOutput],
     ) -> Result<(), FactorError> {
-        self.motion.advance(&self.masses, q, dt_s);
+        if advance {
+            self.motion.advance(&self.masses, q, dt_s);
+        }
         let g = model.gravity_m_s2();
         for (k, m) in self.masses.iter().enumerate() {
             let f = frame(q, m.offset).ok_or(FactorError)?;
@@ -138,18 +175,11 @@ impl Feedback {
                 &mut self.b[o..o + 7],
             );
         }
-        let c = ev.values();
-        for (i, sc) in self.scale.iter_mut().enumerate() {
-            let active = match s.role[i] {
-                Role::Inequality => lambda[i] > 0.0 || c[i] <= INEQUALITY_ACTIVE_BAND,
-                Role::Equality | Role::Finger => true,
-            };
-            *sc = if active { s.ell[i] } else { 0.0 };
-        }
+        self.activate(s, ev.values(), lambda);
         self.solve_multipliers(ev, settings)?;
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
-        // again, once: the bound keeps the tick's cost fixed.
+        // again: the bound keeps the tick's cost fixed.
         let mut released = false;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if s.role[row] == Role::Inequality
@@ -160,10 +190,33 @@ impl Feedback {
                 released = true;
             }
         }
-        if released {
+        if !released {
+            return self.wrenches(s, settings, q, ev, targets, dt_s, out);
+        }
+        self.solve_multipliers(ev, settings)?;
+        self.wrenches(s, settings, q, ev, targets, dt_s, out)?;
+        if settings.update == UpdateRule::Projected {
+            // The projected update steps with this factor and must keep the
+            // kinematic active set: whether a limit stops the motion the user
+            // asks for is its business, not the instantaneous inertial load's
+            // (a stop that just halted a rebound "pulls" for a tick). Third
+            // and last factorisation of the tick.
+            self.activate(s, ev.values(), lambda);
             self.solve_multipliers(ev, settings)?;
         }
-        self.wrenches(s, settings, q, ev, targets, dt_s, out)
+        Ok(())
+    }
+
+    /// Row scales: ℓ_i for equality and finger rows and for inequality rows
+    /// with ν > 0 or C < −band; 0 for the other inequality rows.
+    fn activate(&mut self, s: &Scaling, c: &[f64], lambda: &[f64]) {
+        for (i, sc) in self.scale.iter_mut().enumerate() {
+            let active = match s.role[i] {
+                Role::Inequality => lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND,
+                Role::Equality | Role::Finger => true,
+            };
+            *sc = if active { s.ell[i] } else { 0.0 };
+        }
     }
 
     /// Assembles the scaled Gram matrix with the current row scales (0 drops

@@ -13,7 +13,7 @@
 //! columns have no inertia: they are frozen in Eq. 7 (M⁻¹ = 0 there).
 
 use faer::sparse::SymbolicSparseColMat;
-use nalgebra::{Vector3, Vector4};
+use nalgebra::{Matrix4, Vector3, Vector4};
 
 use super::inertia::BodyMass;
 use crate::rotation::BodyFrame;
@@ -73,6 +73,8 @@ pub(crate) struct Gram {
     pub values: Vec<f64>,
     /// c and u of one body's entries (14 per entry).
     cu: Vec<f64>,
+    /// M̃_e⁻¹ of each body (layout order) at the last assembly.
+    minv_e: Vec<Matrix4<f64>>,
 }
 
 impl Gram {
@@ -164,12 +166,30 @@ impl Gram {
             products,
             values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
             cu: vec![0.0; 14 * max_entries],
+            minv_e: vec![Matrix4::zeros(); masses.len()],
         }
     }
 
     /// Number of stored values of A_JJ's lower triangle.
     pub fn nnz(&self) -> usize {
         self.pattern.row_idx().len()
+    }
+
+    /// out = M̃⁻¹ g at the configuration of the last assembly (zero on
+    /// design-variable columns, which have no inertia).
+    ///
+    /// # Real-time
+    /// No allocation; O(coordinates).
+    pub fn apply_inverse_mass(&self, masses: &[BodyMass], g: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (m, minv) in masses.iter().zip(&self.minv_e) {
+            let o = m.offset;
+            for c in 0..3 {
+                out[o + c] = g[o + c] / m.mass;
+            }
+            let ge = Vector4::new(g[o + 3], g[o + 4], g[o + 5], g[o + 6]);
+            out[o + 3..o + 7].copy_from_slice((minv * ge).as_slice());
+        }
     }
 
     /// Assembles A with row `i` scaled by `scale[i]` (ℓ_i, or 0 to drop an
@@ -198,6 +218,7 @@ impl Gram {
                 continue;
             };
             let minv = m.inv_rotational_mass(&frame, &e);
+            self.minv_e[body.mass] = minv;
             for c in 0..3 {
                 y[o + c] = b[o + c] / m.mass;
             }

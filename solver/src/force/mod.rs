@@ -32,6 +32,7 @@
 //! [`reference_finger_wrenches`] solves the same physics densely by the
 //! null-space method (tests, and the slow thread's force-error measurement).
 
+mod cg;
 pub(crate) mod feedback;
 mod gram;
 mod inertia;

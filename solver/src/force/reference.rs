@@ -23,8 +23,11 @@ use super::wrench::on_finger;
 use crate::rotation::BodyFrame;
 use crate::{EvalError, FingerId, FingerTarget, Model, RowUnit, Sense};
 
-/// An inequality row with C ≤ this (metres or radians) carries load in Eq. 7;
-/// one further inside its feasible side is inactive.
+/// Tolerance of the inequality active sets, metres or radians. The reference
+/// counts a row as active (carrying load in Eq. 7) when C ≤ this. A
+/// [`Program`](crate::Program), which knows each row's multiplier ν, when
+/// ν > 0 or C < −this (violated): a row resting exactly on its bound without
+/// load is free to leave it.
 pub const INEQUALITY_ACTIVE_BAND: f64 = 1e-6;
 
 /// The wrench a mechanism exerts on one finger.

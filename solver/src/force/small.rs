@@ -76,6 +76,49 @@ pub(crate) fn min_norm_solve(a: &mut [f64], b: &[f64], x: &mut [f64], v: &mut [f
     rank
 }
 
+/// Solves A x = b in place (`b` becomes x) for the symmetric positive
+/// definite n × n matrix `a` (row-major, destroyed: its lower triangle becomes
+/// L). Returns false, leaving `b` unspecified, if a pivot is not positive.
+///
+/// # Real-time
+/// No allocation; n³/6 multiply-adds.
+pub(crate) fn cholesky_solve(a: &mut [f64], b: &mut [f64]) -> bool {
+    let n = b.len();
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if d.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut v = a[i * n + j];
+            for k in 0..j {
+                v -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = v / d;
+        }
+    }
+    for i in 0..n {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= a[i * n + k] * b[k];
+        }
+        b[i] = v / a[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut v = b[i];
+        for k in i + 1..n {
+            v -= a[k * n + i] * b[k];
+        }
+        b[i] = v / a[i * n + i];
+    }
+    true
+}
+
 /// A ← Jᵀ A J for the Jacobi rotation J in the (p, q) plane.
 fn rotate(a: &mut [f64], n: usize, p: usize, q: usize, c: f64, s: f64) {
     for k in 0..n {
@@ -104,6 +147,19 @@ mod tests {
             let r: f64 = (0..3).map(|j| a0[i * 3 + j] * x[j]).sum::<f64>() - b[i];
             assert!(r.abs() < 1e-14, "row {i}: {r}");
         }
+    }
+
+    #[test]
+    fn cholesky_solves_an_spd_system_and_refuses_an_indefinite_one() {
+        let a0 = [4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0];
+        let (mut a, mut x) = (a0, [1.0, -2.0, 0.5]);
+        assert!(cholesky_solve(&mut a, &mut x));
+        for i in 0..3 {
+            let r: f64 = (0..3).map(|j| a0[i * 3 + j] * x[j]).sum::<f64>() - [1.0, -2.0, 0.5][i];
+            assert!(r.abs() < 1e-14);
+        }
+        let mut bad = [1.0, 2.0, 2.0, 1.0];
+        assert!(!cholesky_solve(&mut bad, &mut [1.0, 1.0]));
     }
 
     #[test]

@@ -21,12 +21,14 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::{Conj, MatMut, Par, Side};
 
+use super::cg::Cg;
 use super::gram::Gram;
-use super::small::min_norm_solve;
+use super::small::{cholesky_solve, min_norm_solve};
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
@@ -41,12 +43,20 @@ pub(crate) struct MultiplierSolve {
     /// n_J × (1 + m_f), column-major: r_J, then A_JF's columns; solved in place.
     rhs: Vec<f64>,
     schur: Vec<f64>,
+    /// S as assembled (the eigensolve destroys `schur`), for `project`.
+    schur_keep: Vec<f64>,
     schur_rhs: Vec<f64>,
+    /// Scratch of `project`: A_JJ⁻¹ r_J, then (S + K⁻¹) and its right-hand side.
+    proj: Vec<f64>,
+    small: Vec<f64>,
+    small_rhs: Vec<f64>,
     eig: Vec<f64>,
     /// Scaled finger multipliers λ̃_F.
     pub lambda_f: Vec<f64>,
     /// Numerical rank of S at the last solve.
     pub rank: usize,
+    /// `Some`: conjugate gradients instead of the numeric Cholesky.
+    pub cg: Option<Cg>,
 }
 
 impl std::fmt::Debug for MultiplierSolve {
@@ -60,8 +70,10 @@ impl std::fmt::Debug for MultiplierSolve {
 }
 
 impl MultiplierSolve {
-    /// Symbolic analysis of `gram`'s A_JJ pattern. Allocates.
-    pub fn new(gram: &Gram) -> Result<Self, faer::sparse::FaerError> {
+    /// Symbolic analysis of `gram`'s A_JJ pattern; with `cg_iterations`, a
+    /// capped conjugate-gradient solve replaces the numeric Cholesky.
+    /// Allocates.
+    pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
         let symbolic = factorize_symbolic_cholesky(
             gram.pattern.as_ref(),
             Side::Lower,
@@ -79,10 +91,15 @@ impl MultiplierSolve {
             mem: MemBuffer::new(req),
             rhs: vec![0.0; n * (1 + m)],
             schur: vec![0.0; m * m],
+            schur_keep: vec![0.0; m * m],
             schur_rhs: vec![0.0; m],
+            proj: vec![0.0; n],
+            small: vec![0.0; m * m],
+            small_rhs: vec![0.0; m],
             eig: vec![0.0; m * m],
             lambda_f: vec![0.0; m],
             rank: 0,
+            cg: cg_iterations.map(|it| Cg::new(n, 1 + m, it)),
         })
     }
 
@@ -100,29 +117,6 @@ impl MultiplierSolve {
     /// triangular solve pairs, and an m_f × m_f Jacobi eigensolve.
     pub fn solve(&mut self, gram: &Gram, r: &[f64]) -> Result<(), FactorError> {
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
-        let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
-        let max_diag = gram
-            .diag
-            .iter()
-            .map(|&d| gram.values[d])
-            .fold(0.0, f64::max);
-        let reg = LltRegularization {
-            dynamic_regularization_delta: 1e-10 * max_diag,
-            dynamic_regularization_epsilon: 1e-14 * max_diag,
-        };
-        let stack = MemStack::new(&mut self.mem);
-        let llt = self
-            .symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                a,
-                Side::Lower,
-                reg,
-                Par::Seq,
-                stack,
-                Default::default(),
-            )
-            .map_err(|_| FactorError)?;
         let a_fj = &gram.values[nnz..nnz + m * n];
         let a_ff = &gram.values[nnz + m * n..];
         for (row, slot) in r.iter().zip(&gram.slot) {
@@ -131,13 +125,38 @@ impl MultiplierSolve {
             }
         }
         self.rhs[n..].copy_from_slice(a_fj);
-        let stack = MemStack::new(&mut self.mem);
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
-            Par::Seq,
-            stack,
-        );
+        if let Some(cg) = &mut self.cg {
+            cg.solve(gram, &mut self.rhs);
+        } else {
+            let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
+            let max_diag = gram
+                .diag
+                .iter()
+                .map(|&d| gram.values[d])
+                .fold(0.0, f64::max);
+            let reg = LltRegularization {
+                dynamic_regularization_delta: 1e-10 * max_diag,
+                dynamic_regularization_epsilon: 1e-14 * max_diag,
+            };
+            let llt = self
+                .symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut self.l_values,
+                    a,
+                    Side::Lower,
+                    reg,
+                    Par::Seq,
+                    MemStack::new(&mut self.mem),
+                    Default::default(),
+                )
+                .map_err(|_| FactorError)?;
+            llt.solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
+                Par::Seq,
+                MemStack::new(&mut self.mem),
+            );
+        }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
             self.schur_rhs[f] = r[gram.finger_rows[f]] - dot(a_f, &self.rhs[..n]);
@@ -154,6 +173,7 @@ impl MultiplierSolve {
                 self.schur[g * m + f] = avg;
             }
         }
+        self.schur_keep.copy_from_slice(&self.schur);
         self.rank = min_norm_solve(
             &mut self.schur,
             &self.schur_rhs,
@@ -169,6 +189,64 @@ impl MultiplierSolve {
 }
 
 impl MultiplierSolve {
+    /// Solves the regularised normal equations of the projected update with
+    /// the factor and Schur data of the last [`solve`](Self::solve):
+    ///
+    /// ```text
+    /// [A_JJ  A_JF             ] [y_J]   [r_J]
+    /// [A_FJ  A_FF + diag(k_inv)] [y_F] = [r_F]
+    /// ```
+    ///
+    /// by y_F = (S + diag(k_inv))⁻¹ (r_F − A_FJ A_JJ⁻¹ r_J), y_J = A_JJ⁻¹ r_J −
+    /// X y_F. `r`, `y`: one entry per row of C; `k_inv`: one per finger row.
+    ///
+    /// # Real-time
+    /// No allocation; one pair of sparse triangular solves, an m_f × m_f
+    /// Cholesky, O(n_J m_f).
+    pub fn project(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        k_inv: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FactorError> {
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        if self.cg.is_some() {
+            // The projected update needs the factor (checked by Program::new).
+            return Err(FactorError);
+        }
+        for (j, &row) in gram.j_rows.iter().enumerate() {
+            self.proj[j] = r[row];
+        }
+        let llt = LltRef::new(&self.symbolic, &self.l_values);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut self.proj, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+        let a_fj = &gram.values[nnz..nnz + m * n];
+        self.small.copy_from_slice(&self.schur_keep);
+        for f in 0..m {
+            self.small[f * m + f] += k_inv[f];
+            self.small_rhs[f] = r[gram.finger_rows[f]] - dot(&a_fj[f * n..(f + 1) * n], &self.proj);
+        }
+        if !cholesky_solve(&mut self.small, &mut self.small_rhs) {
+            return Err(FactorError);
+        }
+        for (j, &row) in gram.j_rows.iter().enumerate() {
+            let mut v = self.proj[j];
+            for (f, yf) in self.small_rhs.iter().enumerate() {
+                v -= self.rhs[(1 + f) * n + j] * yf;
+            }
+            y[row] = v;
+        }
+        for (f, &row) in gram.finger_rows.iter().enumerate() {
+            y[row] = self.small_rhs[f];
+        }
+        Ok(())
+    }
+
     /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:
     /// A_JJ⁻¹ (r_J − A_JF λ̃_F) = z_j − Σ_f X_jf λ̃_f.
     pub fn joint_multiplier(&self, n_j: usize, j: usize) -> f64 {

@@ -6,9 +6,11 @@
 //!                                  │             Gram pattern, symbolic Cholesky, scratch)
 //!                                  ├─ assemble(targets, cap, tol)   before the clock starts
 //!                                  ├─ tick(targets, dt) ──► TickReport + finger_outputs()
-//!                                  │     iterations × [evaluate C, C_q → Eq. 1–3]
-//!                                  │     evaluate at final q → violations
-//!                                  │     q history → b → C_q M⁻¹ C_qᵀ → λ_F → Eq. 8 + coupling
+//!                                  │     iterations × [projected step with last tick's factor
+//!                                  │                   | or Eq. 1–3 gradient step]
+//!                                  │     evaluate C, C_q at final q → violations
+//!                                  │     q history → b → factor C_q M⁻¹ C_qᵀ → λ_F → Eq. 8
+//!                                  │     + coupling (the factor serves the next tick)
 //!                                  └─ adopt_state(&old)              at a hand-over
 //! ```
 //!
@@ -16,11 +18,15 @@
 //! `tick`, `adopt_state` and `set_q` never allocate, lock or make syscalls
 //! (a counting-allocator test proves it on all three built-in mechanisms) and
 //! are deterministic: sequential faer, no hashing, no clock. A tick costs
-//! (iterations + 1) evaluations of C and C_q, `iterations` C_qᵀ products and
-//! vector updates, one assembly of C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky
-//! (symbolic factor fixed at construction) with 1 + m_f solves, and an
-//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one). All are
-//! bounded by the model's size; nothing iterates to a tolerance.
+//! `iterations` update steps (gradient: one fused pass over the constraints;
+//! projected: a value-only evaluation, C_q·v, C_qᵀ·v and one pair of sparse
+//! triangular solves), one evaluation of C and C_q, one assembly of
+//! C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky (symbolic factor fixed at
+//! construction; a second, and with the projected rule a third, only when a
+//! limit must be released) with 1 + m_f solves, and an m_f × m_f eigensolve
+//! (m_f = 3 per point finger, 6 per rigid one). All are bounded by the
+//! model's size; nothing iterates to a tolerance. Measured: four-bar 8 µs,
+//! Stewart 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
 mod report;
 mod state;
@@ -33,9 +39,10 @@ use std::time::Duration;
 
 use crate::al::SolverSettings;
 use crate::al::fused::Fused;
+use crate::al::projected::Projected;
 use crate::al::scaling::{Scaling, check_stable};
 use crate::force::feedback::Feedback;
-use crate::{Evaluation, Model};
+use crate::{Evaluation, FingerTarget, Model};
 
 /// The fast loop's solver state for one model. `Send`: build it on the slow
 /// thread, move it to the fast one. See the [module docs](self).
@@ -54,6 +61,11 @@ pub struct Program {
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
     fused: Fused,
+    projected: Projected,
+    /// The targets of the last successful tick (for refreshes between ticks).
+    last_targets: Vec<FingerTarget>,
+    /// Outputs of a refresh, which must not replace the tick's.
+    spare_outputs: Vec<FingerOutput>,
     feedback: Feedback,
     outputs: Vec<FingerOutput>,
     report: TickReport,
@@ -75,13 +87,22 @@ impl Program {
         let feedback = Feedback::new(&model, &ev, &settings)
             .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
         let (n, m) = (model.n_coords(), model.n_rows());
-        Ok(Program {
+        let projected = Projected::new(
+            &model,
+            settings.gain,
+            settings.finger_weight,
+            feedback.mean_mass_kg(),
+        );
+        let mut p = Program {
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
             g: vec![0.0; n],
             fused: Fused::new(&model),
+            projected,
+            last_targets: model.initial_targets(),
+            spare_outputs: vec![FingerOutput::default(); model.fingers().len()],
             outputs: vec![FingerOutput::default(); model.fingers().len()],
             report: TickReport::default(),
             feedback,
@@ -91,7 +112,13 @@ impl Program {
             scaling,
             settings,
             model,
-        })
+        };
+        if p.refresh() != TickOutcome::Ok {
+            return Err(ProgramError::Factorization(
+                "the multiplier solve failed at the initial configuration".into(),
+            ));
+        }
+        Ok(p)
     }
 
     /// The model this program iterates.
@@ -146,6 +173,12 @@ impl Program {
     /// The length scale L in use, metres.
     pub fn length_scale_m(&self) -> f64 {
         self.scaling.length_m
+    }
+
+    /// Conjugate-gradient iterations of the last force solve, summed over its
+    /// right-hand sides (0 with the Cholesky).
+    pub fn force_cg_iterations(&self) -> u32 {
+        self.feedback.cg_iterations()
     }
 
     /// Stored values of the Eq. 7 Cholesky factor (a size measure).

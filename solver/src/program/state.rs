@@ -7,11 +7,13 @@ use crate::BodyId;
 impl Program {
     /// Replaces q (e.g. with a Newton-KKT placement result). The motion history
     /// restarts at rest at the new q (a jump is not a motion, so it must not
-    /// produce a velocity spike); multipliers are kept. Outputs are zeroed
-    /// until the next tick.
+    /// produce a velocity spike); multipliers are kept; the Eq. 7 matrix is
+    /// refactored at the new q (the projected update steps with it). Outputs
+    /// are zeroed until the next tick.
     ///
     /// # Real-time
-    /// No allocation; O(coordinates).
+    /// No allocation; one evaluation and one force solve (the cost of a
+    /// tick's force part).
     pub fn set_q(&mut self, q: &[f64]) -> Result<(), ProgramError> {
         if q.len() != self.q.len() {
             return Err(ProgramError::Length {
@@ -25,6 +27,9 @@ impl Program {
         self.q.copy_from_slice(q);
         self.q_ref.copy_from_slice(q);
         self.feedback.motion.reset(q);
+        // A failed refresh (a q that cannot be evaluated) shows up as the
+        // status of the next tick.
+        let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
         Ok(())
     }
@@ -40,9 +45,13 @@ impl Program {
     /// # Real-time
     /// No allocation. O(n) when the models share their structure (the usual
     /// case: `Model::with_inequalities` keeps every index); O(n²) string
-    /// comparisons in the worst case of a re-ordered model.
+    /// comparisons in the worst case of a re-ordered model; plus one
+    /// evaluation and force solve (the new program's factor at the adopted q).
     pub fn adopt_state(&mut self, old: &Program) {
-        let (new_m, old_m) = (&*self.model, &*old.model);
+        // A reference count, not an allocation: keeps the model borrowable
+        // while `self` is refreshed below.
+        let model = std::sync::Arc::clone(&self.model);
+        let (new_m, old_m) = (&*model, &*old.model);
         let mo = &old.feedback.motion;
         // Bodies: q, q_prev and velocity history.
         // `masses` lists the moving bodies in layout order.
@@ -91,6 +100,12 @@ impl Program {
         self.saved_lambda.copy_from_slice(&self.lambda);
         // Fingers.
         let (nf, of) = (new_m.fingers(), old_m.fingers());
+        for k in 0..nf.len() {
+            if let Some(j) = match_index(k, of.len(), |a, b| nf[a].name == of[b].name) {
+                self.last_targets[k] = old.last_targets[j];
+            }
+        }
+        let _ = self.refresh();
         for k in 0..nf.len() {
             if let Some(j) = match_index(k, of.len(), |a, b| nf[a].name == of[b].name) {
                 self.feedback.copy_finger(k, &old.feedback, j);

@@ -4,13 +4,14 @@ use std::time::Duration;
 
 use super::report::max_tracking;
 use super::{AssemblyReport, FingerOutput, Program, TickOutcome, TickReport};
-use crate::FingerTarget;
 use crate::al::update::Violation;
+use crate::{FingerTarget, UpdateRule};
 
 impl Program {
-    /// One fast tick: `settings.iterations` AL iterations (Eq. 1–3) toward
-    /// `targets` (one per finger, model order), then the finger outputs
-    /// (Eq. 7–8 plus coupling) with velocities from q one `dt` ago.
+    /// One fast tick: `settings.iterations` update steps (projected or Eq. 1–3,
+    /// per `settings.update`) toward `targets` (one per finger, model order),
+    /// then the finger outputs (Eq. 7–8 plus coupling) with velocities from q
+    /// one `dt` ago; the force solve's factor is kept for the next tick.
     ///
     /// On any failure the status says why, q and the multipliers are restored
     /// to their values before the call, the motion history restarts at rest,
@@ -31,13 +32,16 @@ impl Program {
         self.report
     }
 
-    /// `iterations` AL iterations toward `targets` from the current q, as the
+    /// `iterations` update steps toward `targets` from the current q, as the
     /// first part of a tick (q₀ = q at the call), without evaluating at the
     /// result, forces or history. For extra work between ticks and for
-    /// timing one iteration. On failure q and the multipliers are restored.
+    /// timing one iteration. The projected rule steps with the factor of the
+    /// last tick (or `set_q`, `assemble`): a few calls per tick are fine; to
+    /// converge from far away use [`assemble`](Self::assemble), which
+    /// refactors. On failure q and the multipliers are restored.
     ///
     /// # Real-time
-    /// No allocation; `iterations` evaluations and C_qᵀ products.
+    /// No allocation; `iterations` update steps.
     pub fn iterate(&mut self, targets: &[FingerTarget], iterations: u32) -> TickOutcome {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
@@ -51,30 +55,71 @@ impl Program {
         }
     }
 
-    /// The AL iterations of a tick from q with q₀ = `q_ref` (already set).
+    /// The iterations of a tick from q with q₀ = `q_ref` (already set).
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<(), (TickOutcome, u32)> {
         for k in 0..n {
-            self.fused
-                .iterate(
+            let done = match self.settings.update {
+                UpdateRule::Gradient => self
+                    .fused
+                    .iterate(
+                        &self.model,
+                        &self.scaling,
+                        self.h,
+                        &mut self.q,
+                        &self.q_ref,
+                        targets,
+                        &mut self.lambda,
+                        &mut self.g,
+                    )
+                    .map_err(TickOutcome::Eval),
+                UpdateRule::Projected => self.projected.step(
                     &self.model,
                     &self.scaling,
-                    self.h,
+                    &mut self.ev,
+                    &mut self.feedback,
                     &mut self.q,
                     &self.q_ref,
                     targets,
+                    self.settings.step,
                     &mut self.lambda,
-                    &mut self.g,
-                )
-                .map_err(|e| {
-                    let status = if k == 0 {
-                        TickOutcome::Eval(e)
-                    } else {
-                        TickOutcome::NonFinite
-                    };
-                    (status, k)
-                })?;
+                ),
+            };
+            if let Err(status) = done {
+                let status = match status {
+                    TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
+                    s => s,
+                };
+                return Err((status, k));
+            }
         }
         Ok(())
+    }
+
+    /// Re-evaluates C_q and refactors the Eq. 7 matrix at the current q and the
+    /// last targets without advancing the motion history (the projected
+    /// update's factor must match q after a jump). Outputs are untouched.
+    ///
+    /// # Real-time
+    /// No allocation; one evaluation and one force solve.
+    pub(crate) fn refresh(&mut self) -> TickOutcome {
+        if let Err(e) = self.ev.evaluate(&self.model, &self.q, &self.last_targets) {
+            return TickOutcome::Eval(e);
+        }
+        match self.feedback.compute(
+            &self.model,
+            &self.scaling,
+            &self.settings,
+            &self.q,
+            &self.ev,
+            &self.lambda,
+            &self.last_targets,
+            1e-3,
+            false,
+            &mut self.spare_outputs,
+        ) {
+            Ok(()) => TickOutcome::Ok,
+            Err(_) => TickOutcome::ForceSolve,
+        }
     }
 
     fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
@@ -96,6 +141,7 @@ impl Program {
             &self.lambda,
             targets,
             dt_s,
+            true,
             &mut self.outputs,
         );
         if solved.is_err() {
@@ -103,6 +149,9 @@ impl Program {
         }
         if !self.outputs.iter().all(FingerOutput::is_finite) {
             return self.failed(TickOutcome::NonFinite, n);
+        }
+        if self.last_targets.len() == targets.len() {
+            self.last_targets.copy_from_slice(targets);
         }
         TickReport {
             iterations: n,
@@ -120,6 +169,8 @@ impl Program {
         self.q.copy_from_slice(&self.q_ref);
         self.lambda.copy_from_slice(&self.saved_lambda);
         self.feedback.motion.reset(&self.q);
+        // The stored Jacobian and factor may come from the failed state.
+        let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
         TickReport {
             iterations,
@@ -148,25 +199,17 @@ impl Program {
         let mut r = AssemblyReport::default();
         self.saved_lambda.copy_from_slice(&self.lambda);
         let mut last_step = f64::INFINITY;
+        if self.last_targets.len() == targets.len() {
+            self.last_targets.copy_from_slice(targets);
+        }
         for k in 0..max_iterations {
             self.q_ref.copy_from_slice(&self.q);
-            let done = self.fused.iterate(
-                &self.model,
-                &self.scaling,
-                self.h,
-                &mut self.q,
-                &self.q_ref,
-                targets,
-                &mut self.lambda,
-                &mut self.g,
-            );
-            if let Err(e) = done {
+            if let Err(status) = self.assembly_step(targets) {
                 self.q.copy_from_slice(&self.q_ref);
                 self.lambda.copy_from_slice(&self.saved_lambda);
-                r.status = if k == 0 {
-                    TickOutcome::Eval(e)
-                } else {
-                    TickOutcome::NonFinite
+                r.status = match status {
+                    TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
+                    s => s,
                 };
                 break;
             }
@@ -178,7 +221,11 @@ impl Program {
                 .zip(&self.scaling.inv_metric)
                 .map(|((a, b), &wi)| (a - b).abs() / wi.sqrt())
                 .fold(0.0, f64::max);
-            let v = Violation::of(&self.model, &self.scaling, &self.fused.values);
+            let c = match self.settings.update {
+                UpdateRule::Gradient => &self.fused.values[..],
+                UpdateRule::Projected => self.ev.values(),
+            };
+            let v = Violation::of(&self.model, &self.scaling, c);
             if v.max_scaled_m < tolerance_m && last_step < 0.01 * tolerance_m {
                 break;
             }
@@ -199,9 +246,48 @@ impl Program {
         }
         self.q_ref.copy_from_slice(&self.q);
         self.feedback.motion.reset(&self.q);
+        let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
         r.max_tracking_error_m = self.tracking_errors(targets);
         r
+    }
+
+    /// One assembly iteration from q (= `q_ref`): a gradient step, or a full
+    /// Gauss–Newton step with the factor refreshed at q (an assembly may start
+    /// far from the last factorisation).
+    fn assembly_step(&mut self, targets: &[FingerTarget]) -> Result<(), TickOutcome> {
+        match self.settings.update {
+            UpdateRule::Gradient => self
+                .fused
+                .iterate(
+                    &self.model,
+                    &self.scaling,
+                    self.h,
+                    &mut self.q,
+                    &self.q_ref,
+                    targets,
+                    &mut self.lambda,
+                    &mut self.g,
+                )
+                .map_err(TickOutcome::Eval),
+            UpdateRule::Projected => {
+                match self.refresh() {
+                    TickOutcome::Ok => {}
+                    status => return Err(status),
+                }
+                self.projected.step(
+                    &self.model,
+                    &self.scaling,
+                    &mut self.ev,
+                    &mut self.feedback,
+                    &mut self.q,
+                    &self.q_ref,
+                    targets,
+                    1.0,
+                    &mut self.lambda,
+                )
+            }
+        }
     }
 
     /// Largest finger |attachment − target| at the current q (0 on a bad

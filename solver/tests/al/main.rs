@@ -10,4 +10,5 @@ mod convergence;
 mod force;
 mod limits;
 mod program;
+mod rules;
 mod unreachable;
