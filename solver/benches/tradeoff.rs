@@ -18,7 +18,7 @@
 //! - lag: |attachment − attachment of a converged run| (the projected rule
 //!   with 64 iterations per tick, converged to round-off), the solver's own
 //!   share of the error;
-//! - |F₇|: largest Eq. 7 force on the finger;
+//! - norm F₇: largest Eq. 7 force on the finger, newtons;
 //! - µs/tick: mean wall time of `Program::tick` (median of 5 runs).
 //!
 //! A last table compares the two solvers of Eq. 7's joint block (sparse
@@ -138,7 +138,7 @@ fn lag(a: &Run, reference: &Run) -> (f64, f64) {
 fn table(circle: &Circle, title: &str, rows: &[(String, SolverSettings)], reference: &Run) {
     println!("\n{title}\n");
     println!(
-        "| setting | max viol. (m) | RMS viol. (m) | max track (mm) | RMS track (mm) | max lag (µm) | RMS lag (µm) | max |F₇| (N) | µs/tick |"
+        "| setting | max viol. (m) | RMS viol. (m) | max track (mm) | RMS track (mm) | max lag (m) | RMS lag (m) | max norm F₇ (N) | µs/tick |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for (name, s) in rows {
@@ -146,13 +146,13 @@ fn table(circle: &Circle, title: &str, rows: &[(String, SolverSettings)], refere
         let (ml, rl) = lag(&a, reference);
         let n = TICKS as f64;
         println!(
-            "| {name} | {:.2e} | {:.2e} | {:.2} | {:.2} | {:.1} | {:.1} | {:.2} | {:.1} |",
+            "| {name} | {:.2e} | {:.2e} | {:.2} | {:.2} | {:.1e} | {:.1e} | {:.2} | {:.1} |",
             a.max_v,
             (a.sum_v2 / n).sqrt(),
             a.max_t * 1e3,
             (a.sum_t2 / n).sqrt() * 1e3,
-            ml * 1e6,
-            rl * 1e6,
+            ml,
+            rl,
             a.max_f,
             a.us_per_tick
         );
@@ -204,7 +204,6 @@ fn main() {
         })
         .collect();
     table(&circle, "Finger pull limit", &pull, &reference);
-    force_solvers();
     let scale: Vec<(String, SolverSettings)> = [None, Some(1.0)]
         .iter()
         .map(|&l| {
@@ -223,6 +222,7 @@ fn main() {
         &scale,
         &reference,
     );
+    force_solvers();
 }
 
 /// Per-tick forces, mean µs per tick (median of 3 runs) and mean CG
@@ -266,7 +266,7 @@ fn force_run(model: &Arc<Model>, solver: ForceSolver) -> (Vec<Vector3<f64>>, f64
 
 fn force_solvers() {
     println!("\nEq. 7 joint-block solver (gradient rule, 4 it.; µs/tick includes the AL part)\n");
-    println!("| mechanism | solver | µs/tick | CG it./tick | max |ΔF₇| / max |F₇| |");
+    println!("| mechanism | solver | µs/tick | CG it./tick | max norm ΔF₇ / max norm F₇ |");
     println!("|---|---|---|---|---|");
     for (name, model) in [
         ("four-bar", four_bar()),
