@@ -1,6 +1,7 @@
 //! haptloop-solver: augmented-coordinate mechanism models, a constraint library
-//! with analytic Jacobians, and the sparse Jacobian the fast loop and the
-//! placement solver iterate on.
+//! with analytic Jacobians, the sparse Jacobian the fast loop and the
+//! placement solver iterate on, and the fast loop's [`Program`] (constraint
+//! update and force feedback).
 //!
 //! Principal types and how data flows through them:
 //!
@@ -37,11 +38,12 @@
 //!   cached by [`PlacementCache`]), then allocation-free damped Newton
 //!   iterations with slack inequalities ([`Placement::solve`] → [`SolveInfo`]).
 //! - [`Program`] ([`al`], [`force`]): the fast loop's solver. Built once per
-//!   model from [`SolverSettings`]; [`Program::tick`] runs the
-//!   augmented-Lagrangian update (Nelson & Cohen Eq. 1–3) toward the finger
-//!   targets, then the finger loads of Eq. 7–8 plus a virtual coupling
-//!   ([`FingerOutput`], force on the finger, world frame), with zero
-//!   allocation; [`reference_finger_wrenches`] is the dense reference.
+//!   model from [`SolverSettings`]; [`Program::tick`] runs the update toward
+//!   the finger targets (a Gauss–Newton projection with the force solve's
+//!   factor, or Nelson & Cohen's Eq. 1–3: [`UpdateRule`]), then the finger
+//!   loads of Eq. 7–8 plus a virtual coupling ([`FingerOutput`], force on the
+//!   finger, world frame), with zero allocation; [`reference_finger_wrenches`]
+//!   is the dense reference.
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
