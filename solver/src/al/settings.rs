@@ -42,24 +42,27 @@ pub enum ForceSolver {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     /// Gradient (Eq. 3) or projected update. Default `Projected`: on the
-    /// four-bar circle it follows the converged solution within micrometres
-    /// where Eq. 3 lags by centimetres at any iteration count that fits a
-    /// tick (trade-off table, BENCHMARKS.md).
+    /// trade-off circle it lags the converged solution by nanometres where
+    /// Eq. 3 lags by 0.2–3 mm at 1–16 iterations per tick, for 1.3× the
+    /// tick's time (BENCHMARKS.md).
     pub update: UpdateRule,
-    /// Augmented-Lagrangian iterations per tick (Eq. 1–3 applied this many
-    /// times). Default 4: the four-bar's finger error on the 2 cm, 0.5 Hz
-    /// circle stays under 10 µm with 4, and each iteration costs one
-    /// evaluation of C and C_q plus one C_qᵀ product (BENCHMARKS.md).
+    /// Update steps per tick. Default 4: with the projected rule each step
+    /// gains about a decade (4 steps: 4 nm of lag on the trade-off circle, 8:
+    /// round-off); a step costs one value evaluation, C_q·v, C_qᵀ·v and a
+    /// pair of sparse triangular solves (gradient: one fused pass).
     pub iterations: u32,
-    /// h as a **fraction of the largest stable step**: the update uses
-    /// h = step / (1 + K σ_max), where σ_max is the largest eigenvalue of the
-    /// scaled Gram matrix D C_q W⁻¹ C_qᵀ D, measured by
-    /// [`Program::new`](crate::Program::new) at the model's configuration. Dimensionless,
-    /// in (0, 1.3]. Default 0.9.
+    /// The step size, dimensionless, in (0, 1.3]. Default 0.9.
     ///
-    /// Why relative: σ_max differs by a factor of several between mechanisms
-    /// (the absolute h used is [`Program::step_h`](crate::Program::step_h)), so
-    /// no absolute h is both stable on the stiffest and fast on the softest.
+    /// Gradient rule: h as a **fraction of the largest stable step**, the
+    /// update uses h = step / (1 + K σ_max), where σ_max is the largest
+    /// eigenvalue of the scaled Gram matrix D C_q W⁻¹ C_qᵀ D, measured by
+    /// [`Program::new`](crate::Program::new) at the model's configuration.
+    /// Projected rule: the fraction of the Gauss–Newton step taken (1 = full).
+    ///
+    /// Why relative: σ_max is 11.5, 14.3 and 27.1 on the four-bar, Stewart
+    /// platform and sphere toy (the absolute h used is
+    /// [`Program::step_h`](crate::Program::step_h)), so no absolute h is both
+    /// stable on the stiffest and fast on the softest.
     pub step: f64,
     /// K, the base penalty gain of Eq. 3, dimensionless (penalty per square
     /// metre of scaled violation relative to the least-astonishment objective
@@ -67,7 +70,9 @@ pub struct SolverSettings {
     /// module docs). Default 1000: a finger the mechanism can follow then lags
     /// at most 1/(1 + K) = 0.1 % of one tick's motion at the fixed point of a
     /// tick, and K ≫ 1 makes h ≈ step/(K σ_max), so the objective acts as a
-    /// mild proximal term and never fights the constraints.
+    /// mild proximal term and never fights the constraints. The projected
+    /// rule weighs fingers with K m̄ (m̄ the mean body mass) against its
+    /// mass-metric objective, so the same K means the same 0.1 %.
     pub gain: f64,
     /// k₂ of Eq. 2, same scaling and unit as K (row i integrates k₂·ℓ_i²·C_i).
     /// Default 1000 (= K, the method-of-multipliers choice); stability needs
