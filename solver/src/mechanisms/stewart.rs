@@ -16,6 +16,11 @@
 //! 13 moving bodies, 91 coordinates. Grübler: 6·13 − 6·(4 + 5 + 3) = 6 degrees
 //! of freedom (the platform's pose; rank-tested). Finger `index`: rigid grasp
 //! of the platform 1 cm above its centre, which pins all 6. Gravity −z.
+//!
+//! Masses are a tabletop model's: a 150 g platform, 30 g cylinders and 15 g
+//! pistons (0.42 kg in all). The legs are unactuated, so a finger holding the
+//! platform carries all of it; rendering a heavier mechanism's inertia from
+//! quantised encoder positions is noisy (BENCHMARKS.md, sessions).
 
 use std::f64::consts::PI;
 
@@ -49,8 +54,8 @@ pub fn stewart_builder() -> ModelBuilder {
         UnitQuaternion::identity(),
     );
     let platform = BodySpec::new("platform")
-        .mass(1.0)
-        .inertia([4e-3, 4e-3, 7e-3]);
+        .mass(0.15)
+        .inertia([6e-4, 6e-4, 1.05e-3]);
     m.body(
         platform,
         Vector3::new(0.0, 0.0, height),
@@ -65,11 +70,11 @@ pub fn stewart_builder() -> ModelBuilder {
         let u = (top - base) / len;
         let (cyl, pis) = (format!("cylinder{k}"), format!("piston{k}"));
         let cylinder = BodySpec::new(&cyl)
-            .mass(0.2)
-            .inertia(rod_inertia(0.2, 0.6 * len));
+            .mass(0.03)
+            .inertia(rod_inertia(0.03, 0.6 * len));
         let piston = BodySpec::new(&pis)
-            .mass(0.1)
-            .inertia(rod_inertia(0.1, 0.6 * len));
+            .mass(0.015)
+            .inertia(rod_inertia(0.015, 0.6 * len));
         m.body(cylinder, base + u * (0.3 * len), z_to(&u));
         m.body(piston, top - u * (0.3 * len), z_to(&u));
         let h_base = Vector3::z().cross(&u).normalize();

@@ -34,6 +34,38 @@ impl Program {
         Ok(())
     }
 
+    /// Shifts q by `dq` as a *correction*, not a motion: q, the least-
+    /// astonishment anchor and the motion history move together, so velocities
+    /// and accelerations (and with them the Eq. 7 inertial force) carry on
+    /// unchanged. This is how a re-projection computed on the slow thread for
+    /// an earlier q is applied to the q the fast loop has moved on to. A failed
+    /// refresh shows up as the next tick's status.
+    ///
+    /// # Real-time
+    /// No allocation; one evaluation and one force solve.
+    pub fn shift_q(&mut self, dq: &[f64]) -> Result<(), ProgramError> {
+        if dq.len() != self.q.len() {
+            return Err(ProgramError::Length {
+                expected: self.q.len(),
+                got: dq.len(),
+            });
+        }
+        if let Some(index) = dq
+            .iter()
+            .zip(&self.q)
+            .position(|(d, q)| !(d + q).is_finite())
+        {
+            return Err(ProgramError::NonFinite { index });
+        }
+        for (i, d) in dq.iter().enumerate() {
+            self.q[i] += d;
+            self.q_ref[i] += d;
+            self.feedback.motion.q_prev[i] += d;
+        }
+        let _ = self.refresh();
+        Ok(())
+    }
+
     /// Takes over from `old` at a hand-over (called on the fast thread): q, its
     /// motion history and the finger coupling history, matched body by body
     /// and finger by finger (same index first, else by name); the multipliers

@@ -44,6 +44,8 @@ pub struct SceneSettings {
     pub coupling_stiffness: Option<f64>,
     /// Virtual-coupling damping, N·s/m.
     pub coupling_damping: Option<f64>,
+    /// Velocity low-pass time constant, s.
+    pub velocity_filter: Option<f64>,
 }
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
@@ -154,6 +156,7 @@ fn settings(s: &SolverSection) -> SceneSettings {
         violation_tolerance: f(&s.violation_tolerance),
         coupling_stiffness: f(&s.coupling_stiffness),
         coupling_damping: f(&s.coupling_damping),
+        velocity_filter: f(&s.velocity_filter),
     }
 }
 

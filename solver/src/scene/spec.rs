@@ -84,6 +84,9 @@ pub struct SolverSection {
     pub coupling_stiffness: Option<Spanned<f64>>,
     /// Extra: virtual-coupling damping, N·s/m.
     pub coupling_damping: Option<Spanned<f64>>,
+    /// Extra: time constant of the low-pass filter on body velocities
+    /// estimated from q, seconds (0 turns it off).
+    pub velocity_filter: Option<Spanned<f64>>,
 }
 
 /// `[[body]]`.

@@ -132,10 +132,22 @@ impl Checker<'_> {
             (&v.release_distance, "release_distance"),
             (&v.coupling_stiffness, "coupling_stiffness"),
             (&v.coupling_damping, "coupling_damping"),
+            (&v.velocity_filter, "velocity_filter"),
         ] {
             if let Some(x) = x {
                 self.non_negative(x, what)?;
             }
+        }
+        if let Some(f) = &v.velocity_filter
+            && *f.get_ref() > 1.0
+        {
+            return Err(self.err(
+                f.span(),
+                format!(
+                    "velocity_filter {} s is over 1 s; expected seconds, e.g. 0.01",
+                    f.get_ref()
+                ),
+            ));
         }
         if let (Some(c), Some(r)) = (&v.contact_distance, &v.release_distance)
             && r.get_ref() < c.get_ref()
