@@ -15,3 +15,4 @@
 pub mod cli;
 pub mod report;
 pub mod scenes;
+pub mod session;

@@ -3,6 +3,7 @@
 
 mod check;
 mod probe;
+mod run;
 mod scenes;
 
 use anyhow::Result;
@@ -23,6 +24,15 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run a scene on simulated PHANToM arms and report what happened.
+    ///
+    /// The fast loop (pinned, SCHED_FIFO when permitted) reads every device,
+    /// keeps the mechanism assembled around each finger and writes the force
+    /// through the safety layer; the slow loop watches it; a status line
+    /// prints once a second. At the end: latency percentiles, misses,
+    /// constraint violation, tracking error, force per finger, safety events.
+    /// Files go to --out DIR (default runs/<scene>-<time>/).
+    Run(run::RunArgs),
     /// Measure this machine's timer and the scheduler's added jitter.
     ///
     /// Runs the hard-rate scheduler with a synthetic tick load, alternating in
@@ -49,8 +59,9 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene }) => check::run(&scene),
-        // Until the end-to-end session lands, the main job is the probe.
-        None => probe::run(&probe::ProbeArgs::default(), &stop),
+        Some(Command::Run(args)) => run::run(&args, &stop),
+        // The main job: the default scene on a simulated PHANToM, with a report.
+        None => run::run(&run::RunArgs::default(), &stop),
     }
 }
 

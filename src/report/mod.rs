@@ -1,3 +1,7 @@
-//! Human-readable reports.
+//! Reports: the probe's and the session's text reports, `summary.json`, and
+//! the SVG plots.
 
+pub mod plots;
 pub mod probe;
+pub mod session;
+pub mod summary;

@@ -1,4 +1,10 @@
-//! Workspace-level integration tests: one binary, a module per area.
+//! Workspace-level integration tests: one binary, a module per area. The
+//! counting allocator is installed so a test can prove a path allocates
+//! nothing (counting is per thread and only inside `haptloop_rt::alloc::count`).
+
+#[global_allocator]
+static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod docs;
 mod scenes;
+mod session;

@@ -78,6 +78,18 @@ fn mechanism_scenes_are_exactly_the_solver_builders() {
             "{name}"
         );
         assert_eq!(m.q0(), model.q0(), "{name}: q0 differs");
+        for (a, b) in m.bodies().iter().zip(model.bodies()) {
+            assert_eq!(
+                (&a.name, a.fixed, a.mass_kg, a.inertia_kg_m2),
+                (&b.name, b.fixed, b.mass_kg, b.inertia_kg_m2),
+                "{name}"
+            );
+        }
+        assert_eq!(
+            m.gravity_m_s2() == model.gravity_m_s2(),
+            name != "stewart",
+            "only the Stewart scene turns gravity off"
+        );
         let (mut a, mut b) = (m.evaluation(), model.evaluation());
         a.evaluate(m, m.q0(), &m.initial_targets()).unwrap();
         b.evaluate(&model, model.q0(), &model.initial_targets())

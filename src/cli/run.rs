@@ -1,0 +1,234 @@
+//! `haptloop run`: a scene on simulated devices, with a report.
+
+use crate::report::{plots, session as text, summary::Summary};
+use crate::scenes::{DEFAULT_SCENE, resolve};
+use crate::session::{self, Plan, SessionOptions};
+use anyhow::{Context, Result};
+use clap::Args;
+use haptloop_rt::schedule::StopFlag;
+use haptloop_rt::thread::CoreChoice;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+/// Flags of `haptloop run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// A built-in scene (see `haptloop scenes`) or a scene file (TOML).
+    #[arg(default_value = DEFAULT_SCENE)]
+    pub scene: String,
+    /// Session length in seconds.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Fast-loop rate in Hz (100–20000); default: the scene's, else 1000.
+    #[arg(long)]
+    pub rate: Option<u32>,
+    /// Augmented-Lagrangian iterations per tick: more is more accurate and
+    /// costs more per tick. Default: the scene's, else the solver's.
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Constraint gain K of the fast update. Default: the scene's, else the
+    /// solver's.
+    #[arg(long)]
+    pub gain: Option<f64>,
+    /// Time constant of the low-pass filter on the velocities behind the
+    /// Eq. 7 inertial force, ms (0 turns it off). Default: the scene's, else
+    /// 10 ms: encoder quantisation makes unfiltered accelerations buzz.
+    #[arg(long, value_name = "MS")]
+    pub velocity_filter_ms: Option<f64>,
+    /// Run on a mock clock as fast as possible: bit-identical results across
+    /// runs (every summary.json field but wall_clock_s), no real-time figures.
+    #[arg(long)]
+    pub deterministic: bool,
+    /// Output directory (default `runs/<scene>-<UTC time>/`).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Write no files; print the report only.
+    #[arg(long, conflicts_with = "out")]
+    pub no_files: bool,
+    /// Record every device's trace into DIR (`<device>.trace`).
+    #[arg(long, value_name = "DIR")]
+    pub record: Option<PathBuf>,
+    /// Replay every device from DIR (`<device>.trace`) instead of simulating.
+    #[arg(long, value_name = "DIR")]
+    pub replay: Option<PathBuf>,
+    /// Spin window before each deadline, µs (see `haptloop probe --help`).
+    #[arg(long, default_value_t = 0)]
+    pub spin_us: u64,
+    /// Core for the fast thread (default: the last core).
+    #[arg(long)]
+    pub core: Option<usize>,
+    /// SCHED_FIFO priority 1–99 for the fast thread; 0 stays SCHED_OTHER.
+    #[arg(long, default_value_t = 80)]
+    pub priority: u8,
+    /// Do not request mlockall.
+    #[arg(long)]
+    pub no_mlock: bool,
+    /// No live status line.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl Default for RunArgs {
+    fn default() -> Self {
+        RunArgs {
+            scene: DEFAULT_SCENE.into(),
+            seconds: 10.0,
+            rate: None,
+            iterations: None,
+            gain: None,
+            velocity_filter_ms: None,
+            deterministic: false,
+            out: None,
+            no_files: false,
+            record: None,
+            replay: None,
+            spin_us: 0,
+            core: None,
+            priority: 80,
+            no_mlock: false,
+            quiet: false,
+        }
+    }
+}
+
+/// `YYYYMMDD-HHMMSS` in UTC, for default run directories.
+fn utc_stamp() -> String {
+    let secs = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // Days since 1970-01-01 → civil date (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}{m:02}{d:02}-{:02}{:02}{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+/// Runs a session and prints (and writes) its report.
+pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
+    let scene = match resolve(&args.scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::from(1));
+        }
+    };
+    if args.priority > 99 {
+        anyhow::bail!("--priority must be 0–99, got {}", args.priority);
+    }
+    let out_dir = match (&args.out, args.no_files) {
+        (_, true) => None,
+        (Some(d), false) => Some(d.clone()),
+        (None, false) => {
+            Some(Path::new("runs").join(format!("{}-{}", scene.compiled.name, utc_stamp())))
+        }
+    };
+    if let Some(d) = &out_dir {
+        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    let options = SessionOptions {
+        seconds: args.seconds,
+        rate_hz: args.rate,
+        iterations: args.iterations,
+        gain: args.gain,
+        velocity_filter: match args.velocity_filter_ms {
+            Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => {
+                Some(Duration::from_secs_f64(ms / 1000.0))
+            }
+            Some(ms) => anyhow::bail!("--velocity-filter-ms must be 0–1000, got {ms}"),
+            None => None,
+        },
+        deterministic: args.deterministic,
+        out_dir: out_dir.clone(),
+        record: args.record.clone(),
+        replay: args.replay.clone(),
+        spin: Duration::from_micros(args.spin_us),
+        core: args.core.map_or(CoreChoice::Last, CoreChoice::Id),
+        fifo_priority: (args.priority > 0).then_some(args.priority),
+        lock_memory: !args.no_mlock,
+    };
+    let plan = Plan::new(&scene, &options)?;
+    eprintln!(
+        "haptloop: running `{}` for {:.1} s at {} Hz{}; Ctrl-C stops cleanly",
+        plan.scene,
+        plan.seconds,
+        plan.rate_hz,
+        if plan.deterministic {
+            " (deterministic)"
+        } else {
+            ""
+        }
+    );
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("valid template"));
+        b
+    });
+    let quiet = args.quiet;
+    let mut status = |line: &str| match &bar {
+        Some(b) => b.set_message(line.to_string()),
+        None if !quiet => eprintln!("{line}"),
+        None => {}
+    };
+    let outcome = session::run(&scene, plan, stop, &mut status)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let summary = Summary::of(&outcome);
+    let fingers: Vec<(String, String)> = outcome
+        .fingers
+        .iter()
+        .cloned()
+        .zip(outcome.finger_devices.iter().cloned())
+        .collect();
+    println!("{}", text::render(&summary, &fingers));
+    if let Some(dir) = &out_dir {
+        write_files(dir, &outcome, &summary)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Result<()> {
+    let write = |name: &str, text: String| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))
+    };
+    write(
+        "summary.json",
+        serde_json::to_string_pretty(summary)? + "\n",
+    )?;
+    write(
+        "lateness.hgrm",
+        o.histograms.lateness.percentile_distribution(1000.0),
+    )?;
+    write(
+        "compute.hgrm",
+        o.histograms.compute.percentile_distribution(1000.0),
+    )?;
+    write(
+        "read-to-write.hgrm",
+        o.stats.read_to_write.percentile_distribution(1000.0),
+    )?;
+    plots::latency(&dir.join("latency.svg"), o)?;
+    plots::force(&dir.join("force.svg"), o)?;
+    plots::violation(&dir.join("violation.svg"), o)?;
+    println!(
+        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg",
+        dir.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,224 @@
+//! SVG plots of a session (plotters): the latency percentile distribution, and
+//! force and constraint violation over time.
+
+use crate::session::{Series, SessionOutcome};
+use anyhow::{Result, anyhow};
+use haptloop_rt::hist::LatencyHistogram;
+use plotters::prelude::*;
+use std::path::Path;
+
+const SIZE: (u32, u32) = (900, 480);
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("plotting: {e}")
+}
+
+/// (1/(1−p), µs) points of a histogram's percentile distribution.
+fn percentile_points(h: &LatencyHistogram) -> Vec<(f64, f64)> {
+    if h.count() == 0 {
+        return Vec::new();
+    }
+    h.inner()
+        .iter_quantiles(5)
+        .map(|v| {
+            (
+                v.quantile_iterated_to(),
+                v.value_iterated_to().min(h.max()) as f64 / 1e3,
+            )
+        })
+        .filter(|(q, _)| *q < 1.0)
+        .map(|(q, us)| (1.0 / (1.0 - q), us.max(0.01)))
+        .collect()
+}
+
+/// Lateness, compute and read → write time against percentile, log-log:
+/// the usual HdrHistogram percentile plot.
+pub fn latency(path: &Path, o: &SessionOutcome) -> Result<()> {
+    let series = [
+        (
+            "wake-up lateness",
+            percentile_points(&o.histograms.lateness),
+        ),
+        ("compute", percentile_points(&o.histograms.compute)),
+        (
+            "device read → force write",
+            percentile_points(&o.stats.read_to_write),
+        ),
+    ];
+    let xmax = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|x| x.0))
+        .fold(10.0, f64::max);
+    let ymax = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|x| x.1))
+        .fold(1.0, f64::max);
+    let root = SVGBackend::new(path, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!(
+                "{}: latency percentiles at {} Hz",
+                o.plan.scene, o.plan.rate_hz
+            ),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (1.0..xmax * 1.5).log_scale(),
+            (0.01..ymax * 2.0).log_scale(),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("1/(1 − percentile): 10 = p90, 100 = p99, 1000 = p99.9")
+        .y_desc("µs")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v}"))
+        .draw()
+        .map_err(err)?;
+    for (k, (name, pts)) in series.into_iter().enumerate() {
+        let c = COLOURS[k % COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
+
+fn time_plot(
+    path: &Path,
+    title: &str,
+    y_desc: &str,
+    series: &[(&str, &Series)],
+    log_y: bool,
+) -> Result<()> {
+    let tmax = series
+        .iter()
+        .flat_map(|(_, s)| s.points.iter().map(|p| p.0))
+        .fold(1e-3, f64::max);
+    let ymax = series
+        .iter()
+        .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
+        .fold(0.0, f64::max);
+    let root = SVGBackend::new(path, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let mut builder = ChartBuilder::on(&root);
+    builder
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70);
+    // Log axis: start a decade below the smallest positive value (zeros are
+    // drawn on the floor).
+    let floor = series
+        .iter()
+        .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min)
+        .min(ymax)
+        / 10.0;
+    let floor = if floor.is_finite() && floor > 0.0 {
+        floor
+    } else {
+        1e-16
+    };
+    macro_rules! draw {
+        ($chart:expr, $map:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc("session time, s")
+                .y_desc(y_desc)
+                .y_label_formatter(&|v| {
+                    if log_y {
+                        format!("{v:.0e}")
+                    } else {
+                        format!("{v:.2}")
+                    }
+                })
+                .draw()
+                .map_err(err)?;
+            for (k, (name, s)) in series.iter().enumerate() {
+                let c = COLOURS[k % COLOURS.len()];
+                chart
+                    .draw_series(LineSeries::new(
+                        s.points.iter().map($map),
+                        c.stroke_width(1),
+                    ))
+                    .map_err(err)?
+                    .label(*name)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.9))
+                .border_style(BLACK)
+                .draw()
+                .map_err(err)?;
+        }};
+    }
+    if log_y {
+        let chart = builder
+            .build_cartesian_2d(
+                0.0..tmax,
+                (floor..(ymax * 2.0).max(floor * 10.0)).log_scale(),
+            )
+            .map_err(err)?;
+        draw!(chart, |&(t, v): &(f64, f64)| (t, v.max(floor)));
+    } else {
+        let chart = builder
+            .build_cartesian_2d(0.0..tmax, 0.0..(ymax * 1.1).max(1e-3))
+            .map_err(err)?;
+        draw!(chart, |&(t, v): &(f64, f64)| (t, v));
+    }
+    root.present().map_err(err)
+}
+
+/// |force| rendered on each finger over time.
+pub fn force(path: &Path, o: &SessionOutcome) -> Result<()> {
+    let series: Vec<(&str, &Series)> = o
+        .fingers
+        .iter()
+        .map(String::as_str)
+        .zip(&o.recorder.force)
+        .collect();
+    time_plot(
+        path,
+        &format!("{}: force rendered on each finger", o.plan.scene),
+        "|F|, N",
+        &series,
+        false,
+    )
+}
+
+/// The largest constraint violation over time, log scale.
+pub fn violation(path: &Path, o: &SessionOutcome) -> Result<()> {
+    time_plot(
+        path,
+        &format!("{}: largest constraint violation per tick", o.plan.scene),
+        "violation, m",
+        &[("max |C| (length rows)", &o.recorder.violation)],
+        true,
+    )
+}

@@ -1,0 +1,121 @@
+//! The end-of-session text report.
+
+use super::probe::granted_lines;
+use super::summary::Summary;
+use haptloop_rt::probe::Percentiles;
+use std::fmt::Write as _;
+
+fn row(out: &mut String, label: &str, p: &Percentiles) {
+    let us = |ns: u64| ns as f64 / 1e3;
+    let _ = writeln!(
+        out,
+        "  {label:<14} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
+        us(p.p50),
+        us(p.p99),
+        us(p.p999),
+        us(p.p9999),
+        us(p.max)
+    );
+}
+
+/// The report printed when a session ends; `fingers` lists (finger name,
+/// device model) in model order.
+pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
+    let mut out = String::new();
+    let mode = if s.deterministic {
+        "deterministic (mock clock)"
+    } else {
+        "real time"
+    };
+    let _ = writeln!(
+        out,
+        "haptloop run {}: {:.1} s at {} Hz, {mode}, {} AL iteration{} per tick{}",
+        s.scene,
+        s.seconds,
+        s.rate_hz,
+        s.iterations,
+        if s.iterations == 1 { "" } else { "s" },
+        if s.stopped_early {
+            " — stopped early"
+        } else {
+            ""
+        }
+    );
+    if let Some(g) = &s.granted {
+        let _ = writeln!(out, "{}", granted_lines(g));
+    }
+    let _ = writeln!(
+        out,
+        "assembly (Newton-KKT placement): {} after {} iteration{}, residual {:.2e} m",
+        s.assembly.status,
+        s.assembly.iterations,
+        if s.assembly.iterations == 1 { "" } else { "s" },
+        s.assembly.residual_m
+    );
+    if !s.deterministic {
+        let _ = writeln!(
+            out,
+            "\n  {:<14} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
+            "", "p50", "p99", "p99.9", "p99.99", "max"
+        );
+        row(&mut out, "lateness", &s.lateness_ns);
+        row(&mut out, "compute", &s.compute_ns);
+        row(&mut out, "read → write", &s.read_to_write_ns);
+        let _ = writeln!(out);
+    }
+    let _ = writeln!(
+        out,
+        "ticks: {} of {} slots; misses: {} late, {} overrun, {} skipped",
+        s.ticks,
+        s.ticks + s.misses.skipped,
+        s.misses.late,
+        s.misses.overrun,
+        s.misses.skipped
+    );
+    let verdict = match s.violation.tolerance {
+        Some(t) if s.violation.max <= t => format!(" (scene tolerance {t:.0e} m: kept)"),
+        Some(t) => format!(" (scene tolerance {t:.0e} m: EXCEEDED)"),
+        None => String::new(),
+    };
+    let _ = writeln!(
+        out,
+        "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m{verdict}",
+        s.violation.max, s.violation.max_rad, s.violation.rms
+    );
+    let _ = writeln!(
+        out,
+        "finger tracking error: max {:.2} mm, RMS {:.2} mm",
+        s.tracking_m.max * 1e3,
+        s.tracking_m.rms * 1e3
+    );
+    for (name, dev) in fingers {
+        let Some(f) = s.force_n.get(name) else {
+            continue;
+        };
+        let _ = writeln!(
+            out,
+            "force on {name} ({dev}): mean {:.3} N, max {:.3} N rendered (solver asked up to {:.3} N)",
+            f.mean, f.max, f.commanded_max
+        );
+    }
+    let _ = writeln!(
+        out,
+        "safety: {} force cuts, {} miss streaks, {} solver failures; faults: {}",
+        s.safety.force_cuts, s.safety.miss_streaks, s.safety.solver_failures, s.faults
+    );
+    for e in &s.safety.device_events {
+        let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
+    }
+    let _ = write!(
+        out,
+        "slow loop: {} re-projections ({} recoveries, {} not converged); programs swapped in: {}; \
+         trace samples dropped: {}; wall clock {:.2} s",
+        s.slow_loop.reprojections,
+        s.slow_loop.recoveries,
+        s.slow_loop.placements_not_converged,
+        s.programs_swapped,
+        s.trace_dropped,
+        s.wall_clock_s
+    );
+    out
+}

@@ -1,0 +1,231 @@
+//! `summary.json`: every figure of a session, machine-readable.
+//!
+//! In deterministic mode every field except `wall_clock_s` is bit-identical
+//! across runs (the mock clock makes every timing field a function of the
+//! tick count).
+
+use crate::session::SessionOutcome;
+use haptloop_rt::probe::Percentiles;
+use haptloop_rt::schedule::MissCounts;
+use haptloop_rt::thread::Granted;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Largest and RMS value of a quantity.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MaxRms {
+    /// Largest value.
+    pub max: f64,
+    /// Root mean square.
+    pub rms: f64,
+}
+
+/// Constraint violation over the run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Violation {
+    /// Largest length-row violation of any tick, m.
+    pub max: f64,
+    /// RMS over ticks and length rows, m.
+    pub rms: f64,
+    /// Largest angle-row violation of any tick, rad.
+    pub max_rad: f64,
+    /// The scene's stated tolerance, m, if it states one.
+    pub tolerance: Option<f64>,
+}
+
+/// One finger's force, rendered by its device (scene frame).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FingerForce {
+    /// Mean |F|, N.
+    pub mean: f64,
+    /// Largest |F|, N.
+    pub max: f64,
+    /// Largest |F| the solver asked for before the safety layer, N.
+    pub commanded_max: f64,
+}
+
+/// One device safety event kind and how often it happened.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DeviceEvent {
+    /// Device name.
+    pub device: String,
+    /// What happened (clamp, ramp, thermal, watchdog, NaN …).
+    pub event: String,
+    /// Times (ticks or episodes, per the event).
+    pub count: u64,
+}
+
+/// Safety actions taken during the run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Safety {
+    /// Times the session cut all forces (miss streaks, faults).
+    pub force_cuts: u64,
+    /// Miss streaks that reached the scheduler's limit.
+    pub miss_streaks: u64,
+    /// Ticks whose solve failed (zero force written).
+    pub solver_failures: u64,
+    /// Per-device safety-layer events.
+    pub device_events: Vec<DeviceEvent>,
+}
+
+/// The initial assembly (Newton-KKT placement) before the clock started.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Assembly {
+    /// Newton iterations used.
+    pub iterations: u32,
+    /// Constraint residual after assembly (2-norm over length rows), m.
+    pub residual_m: f64,
+    /// Converged | MaxIterations | Stalled | LeastSquares.
+    pub status: String,
+    /// True if it converged to the tolerance.
+    pub converged: bool,
+}
+
+/// What the slow loop did.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SlowLoop {
+    /// Re-projections (violation over the threshold).
+    pub reprojections: u64,
+    /// Of which recoveries from a broken configuration.
+    pub recoveries: u64,
+    /// Placements that did not converge.
+    pub placements_not_converged: u64,
+    /// Largest violation the slow loop saw in a snapshot, m.
+    pub max_seen_violation_m: f64,
+}
+
+/// The whole summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Requested length, s.
+    pub seconds: f64,
+    /// Loop rate, Hz.
+    pub rate_hz: u32,
+    /// Mock clock?
+    pub deterministic: bool,
+    /// AL iterations per tick.
+    pub iterations: u32,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Missed deadlines (late + overrun + skipped).
+    pub missed: u64,
+    /// Missed deadlines by kind.
+    pub misses: MissCounts,
+    /// Wake-up lateness.
+    pub lateness_ns: Percentiles,
+    /// Tick compute time.
+    pub compute_ns: Percentiles,
+    /// Start-to-start period.
+    pub period_ns: Percentiles,
+    /// First device read → last force write, per tick.
+    pub read_to_write_ns: Percentiles,
+    /// Constraint violation.
+    pub violation: Violation,
+    /// Finger tracking error (attachment point vs device tip), m, all fingers.
+    pub tracking_m: MaxRms,
+    /// Force per finger.
+    pub force_n: BTreeMap<String, FingerForce>,
+    /// Faults reported to the safety hook (solver and device).
+    pub faults: u64,
+    /// Safety actions.
+    pub safety: Safety,
+    /// Initial assembly.
+    pub assembly: Assembly,
+    /// The slow loop's re-projections.
+    pub slow_loop: SlowLoop,
+    /// Programs the slow loop handed over.
+    pub programs_swapped: u64,
+    /// Trace samples dropped (queue full).
+    pub trace_dropped: u64,
+    /// What the OS granted the fast thread (real-time mode).
+    pub granted: Option<Granted>,
+    /// True if stopped early (Ctrl-C).
+    pub stopped_early: bool,
+    /// Wall-clock seconds (not deterministic).
+    pub wall_clock_s: f64,
+}
+
+impl Summary {
+    /// Collects the summary of a finished session.
+    pub fn of(o: &SessionOutcome) -> Summary {
+        let s = &o.stats;
+        let model_fingers = s.fingers.len();
+        let n: u64 = s.fingers.iter().map(|f| f.n).sum();
+        let tracking_rms = if n == 0 {
+            0.0
+        } else {
+            (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt()
+        };
+        Summary {
+            scene: o.plan.scene.clone(),
+            seconds: o.plan.seconds,
+            rate_hz: o.plan.rate_hz,
+            deterministic: o.plan.deterministic,
+            iterations: o.plan.solver.iterations,
+            ticks: o.report.ticks,
+            missed: o.report.misses.total(),
+            misses: o.report.misses,
+            lateness_ns: o.report.lateness_ns.into(),
+            compute_ns: o.report.compute_ns.into(),
+            period_ns: o.report.period_ns.into(),
+            read_to_write_ns: s.read_to_write.summary().into(),
+            violation: Violation {
+                max: s.violation_max_m,
+                rms: s.violation_rms_m(),
+                max_rad: s.violation_max_rad,
+                tolerance: o.plan.violation_tolerance_m,
+            },
+            tracking_m: MaxRms {
+                max: s.fingers.iter().map(|f| f.tracking_max).fold(0.0, f64::max),
+                rms: tracking_rms,
+            },
+            force_n: (0..model_fingers)
+                .map(|i| {
+                    let f = &s.fingers[i];
+                    (
+                        o.fingers[i].clone(),
+                        FingerForce {
+                            mean: f.force_mean(),
+                            max: f.force_max,
+                            commanded_max: f.commanded_max,
+                        },
+                    )
+                })
+                .collect(),
+            faults: s.faults,
+            safety: Safety {
+                force_cuts: s.force_cuts,
+                miss_streaks: s.miss_streaks,
+                solver_failures: s.solver_failures,
+                device_events: o
+                    .device_events
+                    .iter()
+                    .map(|(d, e, c)| DeviceEvent {
+                        device: d.clone(),
+                        event: e.clone(),
+                        count: *c,
+                    })
+                    .collect(),
+            },
+            assembly: Assembly {
+                iterations: o.assembly.iterations,
+                residual_m: o.assembly.residual_length_m,
+                status: format!("{:?}", o.assembly.status),
+                converged: o.assembly.status == haptloop_solver::SolveStatus::Converged,
+            },
+            slow_loop: SlowLoop {
+                reprojections: o.slow.reprojections,
+                recoveries: o.slow.recoveries,
+                placements_not_converged: o.slow.placements_not_converged,
+                max_seen_violation_m: o.slow.max_seen_violation_m,
+            },
+            programs_swapped: s.programs_swapped,
+            trace_dropped: o.trace_dropped,
+            granted: o.granted.clone(),
+            stopped_early: o.stopped_early,
+            wall_clock_s: o.wall_clock_s,
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! The fast loop's tick body: device → program → force, every period.
+//!
+//! ```text
+//!  swap in a new program (if the slow loop sent one; the old one goes back)
+//!  read every device (scene frame) → finger targets
+//!  Program::tick (AL iterations + Eq. 7–8 force + coupling)
+//!  write each finger's force through its device's safety layer
+//!  record statistics; publish a snapshot; queue one trace row per finger
+//! ```
+//!
+//! # Real-time
+//! `FastLoop::tick` allocates nothing, takes no lock and does no I/O: every
+//! buffer (targets, snapshot, statistics, the trace queue) is allocated when
+//! the session is built; the trace rows go to a lock-free queue that the
+//! reporter drains (a full queue drops and counts rows). Its run time is
+//! bounded by the program's fixed iteration count and the devices' sub-steps.
+
+use super::rig::Rig;
+use super::slow::Handover;
+use super::stats::{FingerStats, RunStats};
+use crossbeam::queue::ArrayQueue;
+use haptloop_devices::{FaultKind, Health, TraceRecorder, TraceRow};
+use haptloop_rt::clock::Clock;
+use haptloop_rt::exchange::{MailboxWriter, ProgramReceiver};
+use haptloop_rt::schedule::{SafetyEvent, Tick, TickBody, TickStatus};
+use haptloop_solver::{FingerTarget, Program, TickOutcome};
+use nalgebra::Vector3;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// What the fast loop hands the slow loop every tick (newest wins).
+#[derive(Debug, Clone, Default)]
+pub struct Snapshot {
+    /// Grid slot of the tick.
+    pub tick: u64,
+    /// Session time, grid-aligned.
+    pub time: Duration,
+    /// Configuration after the tick (program layout).
+    pub q: Vec<f64>,
+    /// Largest length-row violation, m.
+    pub max_violation_m: f64,
+    /// Largest angle-row violation, rad.
+    pub max_violation_rad: f64,
+    /// False if the tick's solve failed or the mechanism came apart.
+    pub solved: bool,
+}
+
+/// One finger at one tick, for `trace.csv` and the plots.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TraceSample {
+    /// Session time, s.
+    pub t_s: f64,
+    /// Model finger index.
+    pub finger: u16,
+    /// Device tip (finger target), m, scene frame.
+    pub target_m: [f64; 3],
+    /// Finger attachment point on the mechanism, m, scene frame.
+    pub position_m: [f64; 3],
+    /// Force the device's motors produced, N, scene frame (after the safety
+    /// layer and the motors' saturation and thermal limits).
+    pub force_n: [f64; 3],
+    /// Largest length-row violation this tick, m.
+    pub violation_m: f64,
+}
+
+/// Heap-free faults the tick reports to the scheduler's safety hook.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SessionFault {
+    /// The solver produced a non-finite state or could not evaluate; zero force
+    /// was written this tick.
+    Solver,
+    /// A device latched a fault (its safety layer cut its force).
+    Device {
+        /// Device index.
+        device: u16,
+        /// What went wrong.
+        kind: FaultKind,
+    },
+}
+
+/// Ticks during which force stays cut after a safety event; forces then come
+/// back through each device's rate limiter. 50 ms: long enough for a stalled
+/// host to settle, short enough not to feel like a dropout.
+const CUT_SECONDS: f64 = 0.05;
+
+/// The fast loop's state. Built on the main thread, moved to the fast thread.
+pub struct FastLoop<C: Clock> {
+    pub(super) clock: C,
+    pub(super) period: Duration,
+    pub(super) program: Box<Handover>,
+    pub(super) programs: ProgramReceiver<Handover>,
+    /// A tick whose violation exceeds this is treated as a failed solve
+    /// (force cut, re-projection): the mechanism has come apart, m.
+    pub(super) broken_m: f64,
+    pub(super) rig: Rig,
+    pub(super) targets: Vec<FingerTarget>,
+    pub(super) snapshot: MailboxWriter<Snapshot>,
+    pub(super) trace: Arc<ArrayQueue<TraceSample>>,
+    pub(super) stats: RunStats,
+    pub(super) last_index: Option<u64>,
+    pub(super) cut_until: u64,
+    pub(super) health: Vec<Health>,
+    /// Encoder counts read this tick, per device.
+    pub(super) counts: Vec<[i32; 3]>,
+    /// One per device when recording (`--record`), else empty.
+    pub(super) recorders: Vec<TraceRecorder>,
+}
+
+impl<C: Clock> FastLoop<C> {
+    fn session_time(&self, tick: &Tick) -> Duration {
+        // Grid time, not wake-up time: slot k is due (k + 1) periods after the
+        // devices were registered at t = 0, so device physics and the solver's
+        // differences see exact periods. A jittery wake-up changes when the
+        // work happens, never what it computes.
+        self.periods(tick.index + 1)
+    }
+
+    /// `n` loop periods as a duration (exact in nanoseconds).
+    fn periods(&self, n: u64) -> Duration {
+        Duration::from_nanos((self.period.as_nanos() as u64).saturating_mul(n))
+    }
+
+    fn cut_forces(&mut self, index: u64) {
+        let ticks = (CUT_SECONDS / self.period.as_secs_f64()).ceil() as u64;
+        self.cut_until = self.cut_until.max(index + ticks);
+        self.stats.force_cuts += 1;
+    }
+
+    /// The statistics so far.
+    pub fn stats(&self) -> &RunStats {
+        &self.stats
+    }
+
+    /// The running program.
+    pub fn program(&self) -> &Program {
+        &self.program.program
+    }
+
+    /// The devices.
+    pub fn rig(&self) -> &Rig {
+        &self.rig
+    }
+
+    /// Takes the device-trace recorders (empty unless recording).
+    pub fn take_recorders(&mut self) -> Vec<TraceRecorder> {
+        std::mem::take(&mut self.recorders)
+    }
+}
+
+impl<C: Clock> TickBody for FastLoop<C> {
+    type Fault = SessionFault;
+
+    fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
+        let now = self.session_time(tick);
+        let read_start = self.clock.now();
+        self.stats.programs_swapped +=
+            self.programs
+                .try_swap(&mut self.program, |old, new| new.take_over(old)) as u64;
+
+        for i in 0..self.targets.len() {
+            let dev = &mut self.rig.devices[self.rig.finger_device[i]];
+            let r = dev.read_scene(now);
+            self.counts[self.rig.finger_device[i]] = r.reading.joint_counts;
+            self.targets[i] = self.rig.target(i, r.tip_m_scene, r.orientation_scene);
+        }
+        let steps = self
+            .last_index
+            .map_or(1, |last| tick.index.saturating_sub(last).max(1));
+        self.last_index = Some(tick.index);
+        let dt = self.periods(steps);
+        let report = self.program.program.tick(&self.targets, dt);
+        // A finite but absurd violation (a linkage that came apart) is a
+        // failure too: never render forces computed from it.
+        let solved =
+            matches!(report.status, TickOutcome::Ok) && report.max_violation_m <= self.broken_m;
+        let cut = !solved || tick.index < self.cut_until;
+
+        let t_s = now.as_secs_f64();
+        let mut fault = None;
+        for i in 0..self.targets.len() {
+            let d = self.rig.finger_device[i];
+            let out = self.program.program.finger_outputs()[i];
+            let command = if cut { Vector3::zeros() } else { out.force_n };
+            let dev = &mut self.rig.devices[d];
+            let written = dev.write_scene(command, now);
+            // What the user feels: the motors' output after the safety layer
+            // and the device's own limits (saturation, thermal cut).
+            let rendered = dev.mount.force_to_scene(&written.motor.force_n_device);
+            if let Some(rec) = self.recorders.get_mut(d) {
+                rec.record(TraceRow {
+                    time: now,
+                    counts: self.counts[d],
+                    command_n_device: dev.mount.force_to_device(&command),
+                    output_n_device: written.force_n_device,
+                    hand_offset_m_device: dev.device.device().hand_offset_m_device(now),
+                });
+            }
+            let health = dev.device.health();
+            if let Health::Fault(kind) = health
+                && self.health[d] != health
+            {
+                fault = Some(SessionFault::Device {
+                    device: d as u16,
+                    kind,
+                });
+            }
+            self.health[d] = health;
+            let fs: &mut FingerStats = &mut self.stats.fingers[i];
+            fs.record(&command, &rendered, out.tracking_error_m);
+            let _ = self.trace.push(TraceSample {
+                t_s,
+                finger: i as u16,
+                target_m: self.targets[i].position_m.into(),
+                position_m: out.attachment_m.into(),
+                force_n: rendered.into(),
+                violation_m: report.max_violation_m,
+            });
+        }
+        self.stats
+            .read_to_write
+            .record((self.clock.now() - read_start).0);
+        self.stats.record_tick(&report, solved);
+
+        let program = &self.program.program;
+        self.snapshot.publish_with(|s| {
+            s.tick = tick.index;
+            s.time = now;
+            s.q.clear();
+            s.q.extend_from_slice(program.q());
+            s.max_violation_m = report.max_violation_m;
+            s.max_violation_rad = report.max_violation_rad;
+            s.solved = solved;
+        });
+
+        match (solved, fault) {
+            (false, _) => TickStatus::Fault(SessionFault::Solver),
+            (true, Some(f)) => TickStatus::Fault(f),
+            (true, None) => TickStatus::Ok,
+        }
+    }
+
+    fn on_safety(&mut self, event: SafetyEvent<SessionFault>) {
+        let index = self.last_index.unwrap_or(0);
+        match event {
+            SafetyEvent::MissStreak { .. } => self.stats.miss_streaks += 1,
+            SafetyEvent::Fault(_) => self.stats.faults += 1,
+        }
+        self.cut_forces(index);
+    }
+
+    fn on_stop(&mut self) {
+        // Leave the hardware safe: zero force on every device.
+        let now = self.periods(self.last_index.map_or(0, |i| i + 1));
+        for dev in &mut self.rig.devices {
+            dev.write_scene(Vector3::zeros(), now);
+        }
+    }
+}

@@ -1,0 +1,467 @@
+//! The session: a scene, its devices, the pinned fast loop, the slow loop and
+//! a reporter, wired together. This is where device → fast loop → force lives.
+//!
+//! ```text
+//!  main thread: build Program + Rig, assemble, then report (status line, trace.csv)
+//!  fast thread (rt::schedule, pinned): FastLoop::tick  ──snapshot──►  slow thread: SlowLoop::step
+//!                                                       ◄──programs──
+//! ```
+//!
+//! Deterministic mode runs the same fast loop on a mock clock, as fast as
+//! possible, with the slow loop stepped in lockstep every few ticks on the same
+//! thread, so two runs produce bit-identical results.
+
+mod fast;
+mod plan;
+mod recorder;
+mod rig;
+mod slow;
+mod stats;
+
+pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
+pub use plan::{Plan, SessionOptions};
+pub use recorder::{Recorder, Series};
+pub use rig::{Rig, SessionDevice};
+pub use slow::{Correction, Handover, SlowLoop, SlowStats};
+pub use stats::{FingerStats, RunStats};
+
+use crate::scenes::Scene;
+use anyhow::{Context, Result};
+use crossbeam::queue::ArrayQueue;
+use haptloop_devices::{TraceHeader, TraceRecorder};
+use haptloop_rt::clock::{Clock, MockClock, MonotonicClock, Nanos};
+use haptloop_rt::exchange::{mailbox, program_channel};
+use haptloop_rt::schedule::{
+    IntervalReceiver, LoopHistograms, LoopReport, Periodic, RunLimit, StopFlag, Tick, TickBody,
+    TickStatus, spawn_loop,
+};
+use haptloop_rt::thread::Granted;
+use haptloop_solver::{Placement, PlacementOptions, Program, SolveInfo};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// Slots in the trace queue: 32 s of one finger at 1 kHz, so a stalled
+/// reporter loses nothing for a long while (drops are counted, never hidden).
+const TRACE_QUEUE: usize = 1 << 15;
+/// Programs in flight between the slow and fast loops.
+const PROGRAM_QUEUE: usize = 4;
+/// The slow loop's period in real time, and in ticks in deterministic mode at
+/// 1 kHz (scaled with the rate).
+const SLOW_PERIOD: Duration = Duration::from_millis(5);
+
+/// Everything a finished session measured.
+pub struct SessionOutcome {
+    /// The resolved plan (settings, rate, duration).
+    pub plan: Plan,
+    /// The scheduler's counts and percentiles.
+    pub report: LoopReport,
+    /// The scheduler's histograms.
+    pub histograms: LoopHistograms,
+    /// What the OS granted (None in deterministic mode).
+    pub granted: Option<Granted>,
+    /// The fast loop's statistics.
+    pub stats: RunStats,
+    /// The slow loop's statistics.
+    pub slow: SlowStats,
+    /// Initial assembly before the clock started.
+    pub assembly: SolveInfo,
+    /// Trace series for plots, and the newest sample per finger.
+    pub recorder: Recorder,
+    /// Model finger names, in model order.
+    pub fingers: Vec<String>,
+    /// Device model per model finger.
+    pub finger_devices: Vec<String>,
+    /// Trace samples dropped because the queue was full.
+    pub trace_dropped: u64,
+    /// Safety events per device: (device name, event text, count).
+    pub device_events: Vec<(String, String, u64)>,
+    /// True if the run was stopped early (Ctrl-C).
+    pub stopped_early: bool,
+    /// Wall-clock seconds the run took (the only field that differs between
+    /// two deterministic runs).
+    pub wall_clock_s: f64,
+}
+
+/// Everything the loops need, built before the clock starts.
+pub struct Built<C: Clock> {
+    /// The fast loop's tick body.
+    pub fast: FastLoop<C>,
+    /// The slow loop.
+    pub slow: SlowLoop,
+    /// The queue of trace samples the reporter drains.
+    pub trace: Arc<ArrayQueue<TraceSample>>,
+    /// The initial assembly.
+    pub assembly: SolveInfo,
+}
+
+/// Builds the program (and assembles the scene), the devices (registered on
+/// their fingers), the exchange between the loops and every buffer the fast
+/// loop will use. All allocation of a session happens here.
+pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
+    let model = Arc::new(scene.compiled.model.clone());
+    let mut program =
+        Program::new(model.clone(), plan.solver).context("building the fast-loop program")?;
+    // Initial assembly: Newton-KKT placement from q0 onto the constraints and
+    // the fingers' initial positions, before the clock starts.
+    let options = PlacementOptions::from_scene(
+        Some(plan.assembly_tolerance_m),
+        scene.compiled.settings.damping,
+    );
+    let mut placement =
+        Placement::analyze(&model, &options).context("analysing the scene for placement")?;
+    let mut q = model.q0().to_vec();
+    let assembly = placement
+        .solve(&model, &mut q, model.q0(), &model.initial_targets())
+        .context("assembling the scene")?;
+    program
+        .set_q(&q)
+        .context("starting from the assembled configuration")?;
+    let program = Box::new(Handover::new(program));
+    let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref())?;
+    let n = model.n_coords();
+    let (snapshot, snapshots) = mailbox(|| Snapshot {
+        q: Vec::with_capacity(n),
+        solved: true,
+        ..Snapshot::default()
+    });
+    let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
+    let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
+    let fingers = model.fingers().len();
+    let targets = model.initial_targets();
+    let health = vec![haptloop_devices::Health::Ok; rig.devices.len()];
+    let recorders = match &plan.record {
+        Some(_) => rig
+            .devices
+            .iter()
+            .zip(&scene.compiled.devices)
+            .map(|(_, d)| {
+                let header = TraceHeader {
+                    model: d.model.clone(),
+                    rate_hz: plan.rate_hz,
+                };
+                TraceRecorder::with_capacity(header, plan.ticks() as usize + 16)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let counts = vec![[0; 3]; rig.devices.len()];
+    // A violation above the scene's tolerance (else 0.1 mm) triggers a
+    // re-projection; one above a tenth of the mechanism's size means it came
+    // apart.
+    let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
+    let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
+    let fast = FastLoop {
+        clock,
+        period: plan.period(),
+        program,
+        broken_m,
+        programs: programs_rx,
+        rig,
+        targets,
+        snapshot,
+        trace: trace.clone(),
+        stats: RunStats::new(fingers),
+        last_index: None,
+        cut_until: 0,
+        health,
+        counts,
+        recorders,
+    };
+    let slow = SlowLoop {
+        snapshots,
+        programs: programs_tx,
+        model: model.clone(),
+        settings: plan.solver,
+        placement,
+        threshold_m,
+        broken_m,
+        last_good: q.clone(),
+        stats: SlowStats::default(),
+    };
+    Ok(Built {
+        fast,
+        slow,
+        trace,
+        assembly,
+    })
+}
+
+/// Runs `scene` as planned. `stop` ends it early (at a tick boundary) and the
+/// outcome is still complete. `on_status` receives a one-line status about
+/// once a second (real time) in real-time mode.
+pub fn run(
+    scene: &Scene,
+    plan: Plan,
+    stop: &StopFlag,
+    on_status: &mut dyn FnMut(&str),
+) -> Result<SessionOutcome> {
+    let names: Vec<String> = scene
+        .compiled
+        .model
+        .fingers()
+        .iter()
+        .map(|f| f.name.clone())
+        .collect();
+    let wall_start = MonotonicClock::new().now();
+    let ticks = plan.ticks();
+    let mut recorder = Recorder::new(&names, ticks, plan.out_dir.as_deref())?;
+    if plan.deterministic {
+        let f = run_deterministic(scene, &plan, stop, &mut recorder, &names)?;
+        finish(scene, plan, stop, recorder, names, f, wall_start)
+    } else {
+        let f = run_real_time(scene, &plan, stop, &mut recorder, &names, on_status)?;
+        finish(scene, plan, stop, recorder, names, f, wall_start)
+    }
+}
+
+/// Saves recorded device traces and gathers everything into the outcome.
+fn finish<C: Clock>(
+    scene: &Scene,
+    plan: Plan,
+    stop: &StopFlag,
+    mut recorder: Recorder,
+    names: Vec<String>,
+    finished: Finished<C>,
+    wall_start: Nanos,
+) -> Result<SessionOutcome> {
+    recorder.finish()?;
+    let (report, histograms, granted, mut fast, slow, assembly, trace) = finished;
+    if let Some(dir) = &plan.record {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        for (rec, d) in fast
+            .take_recorders()
+            .into_iter()
+            .zip(&scene.compiled.devices)
+        {
+            let path = dir.join(format!("{}.trace", d.name));
+            rec.finish()
+                .save(&path)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+    }
+    let device_events = fast
+        .rig()
+        .devices
+        .iter()
+        .flat_map(|d| {
+            d.device
+                .counters()
+                .events()
+                .map(|(e, n)| (d.name.clone(), e.to_string(), n))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok(SessionOutcome {
+        stopped_early: stop.is_requested(),
+        trace_dropped: trace,
+        plan,
+        report,
+        histograms,
+        granted,
+        stats: fast.stats().clone(),
+        slow,
+        assembly,
+        recorder,
+        finger_devices: scene
+            .compiled
+            .fingers
+            .iter()
+            .map(|f| scene.compiled.devices[f.device].model.clone())
+            .collect(),
+        fingers: names,
+        device_events,
+        wall_clock_s: (MonotonicClock::new().now() - wall_start).0 as f64 / 1e9,
+    })
+}
+
+type Finished<C> = (
+    LoopReport,
+    LoopHistograms,
+    Option<Granted>,
+    FastLoop<C>,
+    SlowStats,
+    SolveInfo,
+    u64,
+);
+
+/// The fast loop and the slow loop on one thread, in lockstep: deterministic.
+struct Lockstep<'a> {
+    fast: FastLoop<MockClock>,
+    slow: SlowLoop,
+    every: u64,
+    recorder: &'a mut Recorder,
+    trace: &'a ArrayQueue<TraceSample>,
+    names: &'a [String],
+    error: Option<anyhow::Error>,
+}
+
+impl TickBody for Lockstep<'_> {
+    type Fault = SessionFault;
+    fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
+        let status = self.fast.tick(tick);
+        if tick.index % self.every == self.every - 1 {
+            self.slow.step();
+            if let Err(e) = self.recorder.drain(self.trace, self.names) {
+                self.error.get_or_insert(e);
+            }
+        }
+        status
+    }
+    fn on_safety(&mut self, event: haptloop_rt::schedule::SafetyEvent<SessionFault>) {
+        self.fast.on_safety(event);
+    }
+    fn on_stop(&mut self) {
+        self.fast.on_stop();
+    }
+}
+
+fn run_deterministic(
+    scene: &Scene,
+    plan: &Plan,
+    stop: &StopFlag,
+    recorder: &mut Recorder,
+    names: &[String],
+) -> Result<Finished<MockClock>> {
+    let clock = MockClock::new(Nanos(0));
+    let built = build(scene, plan, clock.clone())?;
+    let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
+    let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
+    let mut body = Lockstep {
+        fast: built.fast,
+        slow: built.slow,
+        every,
+        recorder,
+        trace: &built.trace,
+        names,
+        error: None,
+    };
+    periodic.run(&mut body, RunLimit::slots(plan.ticks()), stop);
+    body.on_stop();
+    body.slow.step();
+    body.recorder.drain(&built.trace, names)?;
+    if let Some(e) = body.error {
+        return Err(e);
+    }
+    let dropped =
+        (body.fast.stats().ticks * names.len() as u64).saturating_sub(body.recorder.samples);
+    Ok((
+        periodic.report(),
+        periodic.histograms().clone(),
+        None,
+        body.fast,
+        body.slow.stats(),
+        built.assembly,
+        dropped,
+    ))
+}
+
+fn run_real_time(
+    scene: &Scene,
+    plan: &Plan,
+    stop: &StopFlag,
+    recorder: &mut Recorder,
+    names: &[String],
+    on_status: &mut dyn FnMut(&str),
+) -> Result<Finished<MonotonicClock>> {
+    let built = build(scene, plan, MonotonicClock::new())?;
+    let Built {
+        fast,
+        mut slow,
+        trace,
+        assembly,
+    } = built;
+    let handle = spawn_loop(
+        &plan.schedule(),
+        MonotonicClock::new(),
+        fast,
+        stop.clone(),
+        RunLimit::duration(plan.duration()),
+    )?;
+    let done = Arc::new(AtomicBool::new(false));
+    let slow_done = done.clone();
+    let slow_thread = std::thread::Builder::new()
+        .name("haptloop-slow".into())
+        .spawn(move || {
+            while !slow_done.load(Ordering::Acquire) {
+                slow.step();
+                std::thread::sleep(SLOW_PERIOD);
+            }
+            slow.step();
+            slow
+        })
+        .context("spawning the slow loop")?;
+    report_live(
+        &handle.intervals,
+        &trace,
+        recorder,
+        names,
+        plan,
+        &|| handle.is_finished(),
+        on_status,
+    )?;
+    let out = handle.join()?;
+    done.store(true, Ordering::Release);
+    let slow = slow_thread
+        .join()
+        .map_err(|_| anyhow::anyhow!("the slow loop panicked"))?;
+    recorder.drain(&trace, names)?;
+    let dropped = (out.body.stats().ticks * names.len() as u64).saturating_sub(recorder.samples);
+    Ok((
+        out.report,
+        out.histograms,
+        Some(out.granted),
+        out.body,
+        slow.stats(),
+        assembly,
+        dropped,
+    ))
+}
+
+/// The reporter: drains trace samples and interval snapshots every 100 ms and
+/// emits a status line about once a second, until the loop has finished.
+fn report_live(
+    intervals: &IntervalReceiver,
+    trace: &ArrayQueue<TraceSample>,
+    recorder: &mut Recorder,
+    names: &[String],
+    plan: &Plan,
+    finished: &dyn Fn() -> bool,
+    on_status: &mut dyn FnMut(&str),
+) -> Result<()> {
+    let mut misses = 0u64;
+    while !finished() {
+        std::thread::sleep(Duration::from_millis(100));
+        recorder.drain(trace, names)?;
+        while let Some(iv) = intervals.try_recv() {
+            misses += iv.misses.total();
+            let secs = (iv.ended - iv.started).0 as f64 / 1e9;
+            let rate = if secs > 0.0 {
+                iv.ticks.saturating_sub(1) as f64 / secs
+            } else {
+                0.0
+            };
+            let force: Vec<String> = recorder
+                .latest
+                .iter()
+                .zip(names)
+                .map(|(s, n)| {
+                    let f = s.force_n;
+                    format!(
+                        "{n} {:.2} N",
+                        (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
+                    )
+                })
+                .collect();
+            let t = recorder.latest.first().map_or(0.0, |s| s.t_s);
+            on_status(&format!(
+                "t {t:5.1}/{:.0} s | {rate:6.0} Hz | misses {misses} | lateness p99 {:6.1} µs | violation {:8.2e} m | {}",
+                plan.seconds,
+                iv.lateness.quantile(0.99) as f64 / 1e3,
+                recorder.latest.first().map_or(0.0, |s| s.violation_m),
+                force.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,198 @@
+//! Resolving what a session will do: command-line flags override the scene's
+//! `[solver]` table, which overrides the solver's defaults.
+
+use crate::scenes::Scene;
+use anyhow::{Result, bail};
+use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
+use haptloop_rt::thread::{CoreChoice, ThreadConfig};
+use haptloop_solver::SolverSettings;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Default time constant of the velocity low-pass filter in sessions: 10 ms.
+///
+/// The solver's own default is 0 (exact inputs need none), but a session reads
+/// quantised encoders: a 0.03 mm count at 1 kHz is a 30 m/s² step in the
+/// finite-difference acceleration, so the Eq. 7 inertial force of a 0.08 kg
+/// coupler buzzes by about 2.4 N per count. Measured on the default scene
+/// (BENCHMARKS.md, sessions): tick-to-tick force change p99 7.0 N unfiltered,
+/// 1.4 N at 2 ms, 0.66 N at 5 ms, 0.33 N at 10 ms. 10 ms delays only the
+/// inertial part of the force (gravity and coupling are undelayed), and is in
+/// line with the 15–20 ms velocity windows CHAI3D and Force Dimension use.
+pub const DEFAULT_VELOCITY_FILTER: Duration = Duration::from_millis(10);
+
+/// What the user asked for (typed flags of `haptloop run`).
+#[derive(Debug, Clone)]
+pub struct SessionOptions {
+    /// Session length, s.
+    pub seconds: f64,
+    /// Loop rate override, Hz.
+    pub rate_hz: Option<u32>,
+    /// AL iterations per tick override.
+    pub iterations: Option<u32>,
+    /// Constraint gain K override.
+    pub gain: Option<f64>,
+    /// Velocity low-pass time constant override (zero: off).
+    pub velocity_filter: Option<Duration>,
+    /// Mock clock, as fast as possible, bit-identical across runs.
+    pub deterministic: bool,
+    /// Where to write summary.json, histograms, trace.csv and plots.
+    pub out_dir: Option<PathBuf>,
+    /// Record each device's trace into this directory (`<device>.trace`).
+    pub record: Option<PathBuf>,
+    /// Replay each device from `<device>.trace` in this directory.
+    pub replay: Option<PathBuf>,
+    /// Spin window before each deadline.
+    pub spin: Duration,
+    /// Core for the fast thread.
+    pub core: CoreChoice,
+    /// `SCHED_FIFO` priority, or `None`.
+    pub fifo_priority: Option<u8>,
+    /// Request `mlockall`.
+    pub lock_memory: bool,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        SessionOptions {
+            seconds: 10.0,
+            rate_hz: None,
+            iterations: None,
+            gain: None,
+            velocity_filter: None,
+            deterministic: false,
+            out_dir: None,
+            record: None,
+            replay: None,
+            spin: Duration::ZERO,
+            core: CoreChoice::Last,
+            fifo_priority: Some(80),
+            lock_memory: true,
+        }
+    }
+}
+
+/// A resolved session plan.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Scene name.
+    pub scene: String,
+    /// Session length, s.
+    pub seconds: f64,
+    /// Loop rate, Hz.
+    pub rate_hz: u32,
+    /// Fast-loop solver settings.
+    pub solver: SolverSettings,
+    /// Violation the initial assembly must reach, m.
+    pub assembly_tolerance_m: f64,
+    /// Violation the scene promises to stay under while running, m.
+    pub violation_tolerance_m: Option<f64>,
+    /// Mock clock?
+    pub deterministic: bool,
+    /// Output directory.
+    pub out_dir: Option<PathBuf>,
+    /// Device-trace recording directory.
+    pub record: Option<PathBuf>,
+    /// Device-trace replay directory.
+    pub replay: Option<PathBuf>,
+    /// Scheduler and thread settings.
+    pub spin: Duration,
+    /// Core for the fast thread.
+    pub core: CoreChoice,
+    /// `SCHED_FIFO` priority.
+    pub fifo_priority: Option<u8>,
+    /// `mlockall`.
+    pub lock_memory: bool,
+}
+
+impl Plan {
+    /// Resolves `options` against `scene`. Rejects values no loop can run.
+    pub fn new(scene: &Scene, options: &SessionOptions) -> Result<Plan> {
+        let s = &scene.compiled.settings;
+        if !(options.seconds.is_finite() && options.seconds > 0.0 && options.seconds <= 86_400.0) {
+            bail!("--seconds must be in (0, 86400], got {}", options.seconds);
+        }
+        let rate_hz = options.rate_hz.or(s.rate_hz).unwrap_or(1000);
+        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+            bail!("--rate must be {MIN_RATE_HZ}–{MAX_RATE_HZ} Hz, got {rate_hz}");
+        }
+        let mut solver = SolverSettings::default();
+        if let Some(n) = options.iterations.or(s.iterations) {
+            if n == 0 || n > 10_000 {
+                bail!("--iterations must be 1–10000, got {n}");
+            }
+            solver.iterations = n;
+        }
+        if let Some(k) = options.gain.or(s.gain) {
+            if !(k.is_finite() && k > 0.0) {
+                bail!("--gain must be a finite number > 0, got {k}");
+            }
+            solver.gain = k;
+        }
+        if let Some(h) = s.step {
+            solver.step = h;
+        }
+        if let Some(k2) = s.multiplier_gain {
+            solver.multiplier_gain = k2;
+        }
+        if let Some(k) = s.coupling_stiffness {
+            solver.coupling_stiffness_n_per_m = k;
+        }
+        if let Some(b) = s.coupling_damping {
+            solver.coupling_damping_n_s_per_m = b;
+        }
+        solver.velocity_filter = match options
+            .velocity_filter
+            .or(s.velocity_filter.map(Duration::from_secs_f64))
+        {
+            Some(tau) => tau,
+            None => DEFAULT_VELOCITY_FILTER,
+        };
+        Ok(Plan {
+            scene: scene.compiled.name.clone(),
+            seconds: options.seconds,
+            rate_hz,
+            solver,
+            assembly_tolerance_m: s.placement_tolerance.unwrap_or(1e-9),
+            violation_tolerance_m: s.violation_tolerance,
+            deterministic: options.deterministic,
+            out_dir: options.out_dir.clone(),
+            record: options.record.clone(),
+            replay: options.replay.clone(),
+            spin: options.spin,
+            core: options.core,
+            fifo_priority: options.fifo_priority,
+            lock_memory: options.lock_memory,
+        })
+    }
+
+    /// The loop period.
+    pub fn period(&self) -> Duration {
+        Duration::from_nanos(1_000_000_000 / u64::from(self.rate_hz))
+    }
+
+    /// The session length.
+    pub fn duration(&self) -> Duration {
+        Duration::from_secs_f64(self.seconds)
+    }
+
+    /// Grid slots in the session.
+    pub fn ticks(&self) -> u64 {
+        (self.seconds * f64::from(self.rate_hz)).round() as u64
+    }
+
+    /// The scheduler configuration.
+    pub fn schedule(&self) -> ScheduleConfig {
+        ScheduleConfig {
+            rate_hz: self.rate_hz,
+            spin: self.spin,
+            thread: ThreadConfig {
+                core: self.core,
+                fifo_priority: self.fifo_priority,
+                lock_memory: self.lock_memory,
+                ..ThreadConfig::default()
+            },
+            ..ScheduleConfig::default()
+        }
+    }
+}

@@ -1,0 +1,113 @@
+//! The reporter's side of the trace: drains the fast loop's lock-free queue of
+//! [`TraceSample`]s into `trace.csv` (written as it goes) and into decimated
+//! series for the plots. Runs off the real-time thread.
+
+use super::fast::TraceSample;
+use anyhow::{Context, Result};
+use crossbeam::queue::ArrayQueue;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+/// Most points kept per plotted series; beyond it every k-th sample is kept.
+const MAX_POINTS: usize = 20_000;
+
+/// One plotted series: (t, value).
+#[derive(Debug, Clone, Default)]
+pub struct Series {
+    /// Points.
+    pub points: Vec<(f64, f64)>,
+    every: u64,
+    seen: u64,
+}
+
+impl Series {
+    fn with_budget(expected: u64) -> Self {
+        Series {
+            points: Vec::with_capacity(MAX_POINTS.min(expected as usize + 1)),
+            every: (expected / MAX_POINTS as u64).max(1),
+            seen: 0,
+        }
+    }
+
+    fn push(&mut self, t: f64, v: f64) {
+        if self.seen.is_multiple_of(self.every) && self.points.len() < MAX_POINTS * 2 {
+            self.points.push((t, v));
+        }
+        self.seen += 1;
+    }
+}
+
+/// Drains trace samples into a CSV file and plot series.
+pub struct Recorder {
+    csv: Option<BufWriter<File>>,
+    /// |force| per finger.
+    pub force: Vec<Series>,
+    /// Largest length-row violation per tick (from finger 0's rows).
+    pub violation: Series,
+    /// The newest sample per finger (for the status line).
+    pub latest: Vec<TraceSample>,
+    /// Samples drained.
+    pub samples: u64,
+}
+
+impl Recorder {
+    /// A recorder for `fingers` fingers over about `ticks` ticks, writing
+    /// `trace.csv` into `dir` when given.
+    pub fn new(fingers: &[String], ticks: u64, dir: Option<&Path>) -> Result<Self> {
+        let csv = match dir {
+            Some(d) => {
+                let path = d.join("trace.csv");
+                let mut w = BufWriter::new(
+                    File::create(&path).with_context(|| format!("creating {}", path.display()))?,
+                );
+                writeln!(
+                    w,
+                    "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m"
+                )?;
+                Some(w)
+            }
+            None => None,
+        };
+        Ok(Recorder {
+            csv,
+            force: fingers.iter().map(|_| Series::with_budget(ticks)).collect(),
+            violation: Series::with_budget(ticks),
+            latest: vec![TraceSample::default(); fingers.len()],
+            samples: 0,
+        })
+    }
+
+    /// Moves every queued sample into the file and the series.
+    pub fn drain(&mut self, queue: &ArrayQueue<TraceSample>, names: &[String]) -> Result<()> {
+        while let Some(s) = queue.pop() {
+            let i = usize::from(s.finger);
+            if let Some(w) = &mut self.csv {
+                let [tx, ty, tz] = s.target_m;
+                let [px, py, pz] = s.position_m;
+                let [fx, fy, fz] = s.force_n;
+                writeln!(
+                    w,
+                    "{:.6},{},{tx:e},{ty:e},{tz:e},{px:e},{py:e},{pz:e},{fx:e},{fy:e},{fz:e},{:e}",
+                    s.t_s, names[i], s.violation_m
+                )?;
+            }
+            let f = s.force_n;
+            self.force[i].push(s.t_s, (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt());
+            if i == 0 {
+                self.violation.push(s.t_s, s.violation_m);
+            }
+            self.latest[i] = s;
+            self.samples += 1;
+        }
+        Ok(())
+    }
+
+    /// Flushes the CSV file.
+    pub fn finish(&mut self) -> Result<()> {
+        if let Some(w) = &mut self.csv {
+            w.flush()?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,200 @@
+//! The session's devices: one mounted, safety-wrapped device per
+//! `[[device]]`, registered ("clutched") so its tip maps onto its finger's
+//! initial world position, plus the grasp offset a rigid finger needs.
+
+use crate::scenes::Scene;
+use anyhow::{Context, Result};
+use haptloop_devices::{
+    Device, DeviceFault, DeviceInfo, DeviceReading, Grip, Hand, MotorReport, Mount, MountedDevice,
+    ReplayDevice, SafetyConfig, SimOptions, SimPhantom, Trace, Trajectory,
+};
+use haptloop_solver::scene::HandPath;
+use haptloop_solver::{FingerId, FingerTarget, Grasp};
+use nalgebra::{UnitQuaternion, Vector3};
+use std::path::Path;
+use std::time::Duration;
+
+/// A simulated arm, or a recorded one played back. An enum, not a trait
+/// object, so the fast loop dispatches statically and can still ask the
+/// simulator for its hand target.
+#[derive(Debug)]
+pub enum SessionDevice {
+    /// A simulated PHANToM held by a simulated hand.
+    Sim(Box<SimPhantom>),
+    /// A trace recorded by `--record`, played back tick by tick.
+    Replay(Box<ReplayDevice>),
+}
+
+impl SessionDevice {
+    /// The simulated hand's target offset at `now`, device frame (zero when
+    /// replaying).
+    pub fn hand_offset_m_device(&self, now: Duration) -> Vector3<f64> {
+        match self {
+            SessionDevice::Sim(s) => s.hand().trajectory.sample(now).offset_m,
+            SessionDevice::Replay(_) => Vector3::zeros(),
+        }
+    }
+}
+
+impl Device for SessionDevice {
+    fn info(&self) -> &DeviceInfo {
+        match self {
+            SessionDevice::Sim(d) => d.info(),
+            SessionDevice::Replay(d) => d.info(),
+        }
+    }
+    fn read(&mut self, now: Duration) -> Result<DeviceReading, DeviceFault> {
+        match self {
+            SessionDevice::Sim(d) => d.read(now),
+            SessionDevice::Replay(d) => d.read(now),
+        }
+    }
+    fn write(
+        &mut self,
+        force_n_device: Vector3<f64>,
+        now: Duration,
+    ) -> Result<MotorReport, DeviceFault> {
+        match self {
+            SessionDevice::Sim(d) => d.write(force_n_device, now),
+            SessionDevice::Replay(d) => d.write(force_n_device, now),
+        }
+    }
+    fn motors_off(&mut self, now: Duration) {
+        match self {
+            SessionDevice::Sim(d) => d.motors_off(now),
+            SessionDevice::Replay(d) => d.motors_off(now),
+        }
+    }
+}
+
+/// All devices of a session and how fingers map onto them.
+pub struct Rig {
+    /// One per `[[device]]`, scene order.
+    pub devices: Vec<MountedDevice<SessionDevice>>,
+    /// For each model finger: the index of its device.
+    pub finger_device: Vec<usize>,
+    /// For each model finger: the body orientation relative to the device's
+    /// sensed orientation at registration (rigid grasps hold it).
+    pub grasp_offset: Vec<UnitQuaternion<f64>>,
+    /// For each model finger: point or rigid.
+    pub grasp: Vec<Grasp>,
+}
+
+fn scene_to_device_trajectory(
+    path: &HandPath,
+    trace: Option<&haptloop_devices::HandTrace>,
+    mount: &Mount,
+) -> Trajectory {
+    let v = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
+    let scene = match path {
+        HandPath::Still => Trajectory::Still,
+        HandPath::Circle {
+            radius_m,
+            hz,
+            u,
+            v: w,
+        } => Trajectory::Circle {
+            radius_m: *radius_m,
+            frequency_hz: *hz,
+            u: v(*u).normalize(),
+            v: v(*w).normalize(),
+        },
+        HandPath::Line { to_m, seconds } => Trajectory::Line {
+            to_m: v(*to_m),
+            duration: Duration::from_secs_f64(*seconds),
+        },
+        HandPath::Trace { .. } => {
+            Trajectory::Trace(trace.cloned().expect("traces are loaded with the scene"))
+        }
+    };
+    // Offsets are written in the scene frame; the hand acts in the device frame.
+    mount.trajectory_to_device(&scene)
+}
+
+impl Rig {
+    /// Builds every device of `scene` for a loop at `rate_hz`, replaying the
+    /// traces in `replay` (one `<device>.trace` each) instead of simulating when
+    /// given, and registers each on its finger's initial world position.
+    pub fn build(scene: &Scene, rate_hz: u32, replay: Option<&Path>) -> Result<Rig> {
+        let c = &scene.compiled;
+        let model = &c.model;
+        let q0 = model.q0();
+        let mut devices = Vec::with_capacity(c.devices.len());
+        let mut finger_device = vec![0; model.fingers().len()];
+        for f in &c.fingers {
+            finger_device[f.finger.index()] = f.device;
+        }
+        for (k, d) in c.devices.iter().enumerate() {
+            let mount = Mount::new(Vector3::zeros(), d.orientation_wxyz, d.scale)
+                .with_context(|| format!("device `{}`", d.name))?;
+            let device = match replay {
+                Some(dir) => {
+                    let path = dir.join(format!("{}.trace", d.name));
+                    let trace = Trace::load(&path)
+                        .with_context(|| format!("replaying device `{}`", d.name))?;
+                    SessionDevice::Replay(Box::new(ReplayDevice::new(trace)?))
+                }
+                None => {
+                    // The grip is the user's hand on the physical stylus: its
+                    // stiffness and damping are device-frame figures, unscaled.
+                    let mut grip = Grip::default();
+                    if let Some(k) = d.hand.stiffness_n_per_m {
+                        grip.stiffness_n_per_m = k;
+                    }
+                    if let Some(b) = d.hand.damping_n_s_per_m {
+                        grip.damping_n_s_per_m = b;
+                    }
+                    let trajectory =
+                        scene_to_device_trajectory(&d.hand.path, scene.traces[k].as_ref(), &mount);
+                    let hand = Hand::new(trajectory).with_grip(grip);
+                    let sim = SimPhantom::by_name(&d.model, SimOptions::for_rate_hz(rate_hz), hand)
+                        .with_context(|| format!("device `{}`", d.name))?;
+                    SessionDevice::Sim(Box::new(sim))
+                }
+            };
+            let safety = SafetyConfig {
+                loop_period: Duration::from_nanos(1_000_000_000 / u64::from(rate_hz)),
+                ..SafetyConfig::default()
+            };
+            devices.push(MountedDevice::new(d.name.clone(), device, safety, mount)?);
+        }
+        let mut rig = Rig {
+            devices,
+            finger_device,
+            grasp_offset: vec![UnitQuaternion::identity(); model.fingers().len()],
+            grasp: model.fingers().iter().map(|f| f.grasp).collect(),
+        };
+        // Register (clutch): each tip maps onto its finger's initial position,
+        // and a rigid grasp remembers the body's orientation relative to the
+        // sensed orientation, so the initial target is the initial pose.
+        for (i, f) in model.fingers().iter().enumerate() {
+            let id = FingerId(i as u32);
+            let at = model
+                .finger_point(q0, id)
+                .expect("every finger has a point");
+            let dev = &mut rig.devices[rig.finger_device[i]];
+            let reading = dev.register(Duration::ZERO, &at);
+            let sensed = dev.mount.orientation_to_scene(&reading.orientation_device);
+            let body = model
+                .body_rotation(q0, f.body)
+                .map(|r| UnitQuaternion::from_matrix(&r))
+                .unwrap_or_else(UnitQuaternion::identity);
+            rig.grasp_offset[i] = sensed.inverse() * body;
+        }
+        Ok(rig)
+    }
+
+    /// The finger target of model finger `i` from its device's scene reading.
+    #[inline]
+    pub fn target(
+        &self,
+        i: usize,
+        tip_m_scene: Vector3<f64>,
+        sensed_scene: UnitQuaternion<f64>,
+    ) -> FingerTarget {
+        FingerTarget {
+            position_m: tip_m_scene,
+            orientation: sensed_scene * self.grasp_offset[i],
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! What the fast loop counts and accumulates per tick, allocated up front.
+//!
+//! # Real-time
+//! Every `record*` method is a handful of arithmetic operations on
+//! preallocated fields: no allocation, no lock.
+
+use haptloop_rt::hist::LatencyHistogram;
+use haptloop_solver::TickReport;
+use nalgebra::Vector3;
+
+/// Per-finger accumulators.
+#[derive(Debug, Clone, Default)]
+pub struct FingerStats {
+    /// Ticks recorded.
+    pub n: u64,
+    /// Σ |rendered force|, N.
+    pub force_sum: f64,
+    /// max |rendered force|, N.
+    pub force_max: f64,
+    /// max |force the solver asked for| (before the safety layer), N.
+    pub commanded_max: f64,
+    /// max |attachment point − target|, m.
+    pub tracking_max: f64,
+    /// Σ |attachment point − target|², m².
+    pub tracking_sumsq: f64,
+}
+
+impl FingerStats {
+    /// Records one tick.
+    #[inline]
+    pub fn record(&mut self, commanded: &Vector3<f64>, rendered: &Vector3<f64>, tracking_m: f64) {
+        let f = rendered.norm();
+        self.n += 1;
+        self.force_sum += f;
+        self.force_max = self.force_max.max(f);
+        self.commanded_max = self.commanded_max.max(commanded.norm());
+        self.tracking_max = self.tracking_max.max(tracking_m);
+        self.tracking_sumsq += tracking_m * tracking_m;
+    }
+
+    /// Mean rendered force magnitude, N.
+    pub fn force_mean(&self) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            self.force_sum / self.n as f64
+        }
+    }
+
+    /// RMS tracking error, m.
+    pub fn tracking_rms(&self) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            (self.tracking_sumsq / self.n as f64).sqrt()
+        }
+    }
+}
+
+/// Session-wide accumulators.
+#[derive(Debug, Clone)]
+pub struct RunStats {
+    /// Device read → force write, ns.
+    pub read_to_write: LatencyHistogram,
+    /// Ticks recorded.
+    pub ticks: u64,
+    /// AL iterations run in all.
+    pub iterations: u64,
+    /// max over ticks of the largest length-row violation, m.
+    pub violation_max_m: f64,
+    /// max over ticks of the largest angle-row violation, rad.
+    pub violation_max_rad: f64,
+    /// Σ over ticks of (RMS length-row violation)², m².
+    pub violation_sumsq: f64,
+    /// One per model finger.
+    pub fingers: Vec<FingerStats>,
+    /// Ticks whose solve failed (zero force written).
+    pub solver_failures: u64,
+    /// Safety-hook calls for miss streaks.
+    pub miss_streaks: u64,
+    /// Safety-hook calls for faults.
+    pub faults: u64,
+    /// Times forces were cut for a safety event.
+    pub force_cuts: u64,
+    /// Programs swapped in from the slow loop.
+    pub programs_swapped: u64,
+}
+
+impl RunStats {
+    /// Empty statistics for `fingers` fingers (allocates the histogram).
+    pub fn new(fingers: usize) -> Self {
+        let mut read_to_write = LatencyHistogram::new();
+        read_to_write.reset(); // make its pages resident before the loop
+        RunStats {
+            read_to_write,
+            ticks: 0,
+            iterations: 0,
+            violation_max_m: 0.0,
+            violation_max_rad: 0.0,
+            violation_sumsq: 0.0,
+            fingers: vec![FingerStats::default(); fingers],
+            solver_failures: 0,
+            miss_streaks: 0,
+            faults: 0,
+            force_cuts: 0,
+            programs_swapped: 0,
+        }
+    }
+
+    /// Records one tick's solver diagnostics.
+    #[inline]
+    pub fn record_tick(&mut self, r: &TickReport, solved: bool) {
+        self.ticks += 1;
+        self.iterations += u64::from(r.iterations);
+        if solved {
+            self.violation_max_m = self.violation_max_m.max(r.max_violation_m);
+            self.violation_max_rad = self.violation_max_rad.max(r.max_violation_rad);
+            self.violation_sumsq += r.rms_violation_m * r.rms_violation_m;
+        } else {
+            self.solver_failures += 1;
+        }
+    }
+
+    /// RMS length-row violation over the run, m.
+    pub fn violation_rms_m(&self) -> f64 {
+        let n = self.ticks - self.solver_failures;
+        if n == 0 {
+            0.0
+        } else {
+            (self.violation_sumsq / n as f64).sqrt()
+        }
+    }
+}

@@ -1,0 +1,304 @@
+//! End-to-end sessions: built-in scenes on simulated arms, deterministic runs,
+//! record and replay, the fast loop's zero-allocation rule, a clean early stop.
+
+use haptloop::report::summary::Summary;
+use haptloop::scenes::{BUILTIN, Scene, resolve};
+use haptloop::session::{self, Plan, SessionOptions, SessionOutcome};
+use haptloop_devices::PhantomModel;
+use haptloop_rt::alloc::count;
+use haptloop_rt::clock::{MockClock, Nanos};
+use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag};
+use std::path::Path;
+
+fn deterministic(seconds: f64) -> SessionOptions {
+    SessionOptions {
+        seconds,
+        deterministic: true,
+        ..SessionOptions::default()
+    }
+}
+
+fn run(scene: &Scene, options: &SessionOptions) -> SessionOutcome {
+    let plan = Plan::new(scene, options).unwrap();
+    session::run(scene, plan, &StopFlag::new(), &mut |_| {}).unwrap()
+}
+
+/// Every built-in scene runs 2 s deterministically, keeps its violation under
+/// the tolerance it states, and renders finite forces within its devices'
+/// peak force.
+#[test]
+fn every_builtin_scene_runs_within_its_stated_tolerance() {
+    for b in BUILTIN {
+        let scene = resolve(b.name).unwrap();
+        let o = run(&scene, &deterministic(2.0));
+        let s = Summary::of(&o);
+        let tol = s
+            .violation
+            .tolerance
+            .unwrap_or_else(|| panic!("{} states no violation_tolerance", b.name));
+        assert_eq!(s.ticks, 2000, "{}", b.name);
+        assert!(
+            s.assembly.converged,
+            "{}: assembly {:?}",
+            b.name, s.assembly
+        );
+        assert!(
+            s.violation.max.is_finite() && s.violation.max <= tol,
+            "{}: violation {:e} > {tol:e}",
+            b.name,
+            s.violation.max
+        );
+        assert_eq!(s.safety.solver_failures, 0, "{}", b.name);
+        for (i, (finger, f)) in s.force_n.iter().enumerate() {
+            let peak = PhantomModel::by_name(&o.finger_devices[i])
+                .unwrap()
+                .peak_force_n;
+            assert!(
+                f.max.is_finite() && f.mean.is_finite(),
+                "{}: {finger} force not finite",
+                b.name
+            );
+            assert!(
+                f.max <= peak + 1e-9,
+                "{}: {finger} rendered {} N > peak {peak} N",
+                b.name,
+                f.max
+            );
+        }
+        assert!(s.tracking_m.max.is_finite());
+    }
+}
+
+fn without_wall_clock(s: &Summary) -> serde_json::Value {
+    let mut v = serde_json::to_value(s).unwrap();
+    v.as_object_mut().unwrap().remove("wall_clock_s");
+    v
+}
+
+#[test]
+fn deterministic_runs_are_bit_identical() {
+    let scene = resolve("four-bar").unwrap();
+    let a = run(&scene, &deterministic(1.5));
+    let b = run(&scene, &deterministic(1.5));
+    assert_eq!(
+        without_wall_clock(&Summary::of(&a)),
+        without_wall_clock(&Summary::of(&b))
+    );
+    assert_eq!(
+        a.recorder.force[0].points, b.recorder.force[0].points,
+        "force traces differ"
+    );
+    assert_eq!(a.recorder.violation.points, b.recorder.violation.points);
+    // And the run did something: the hand moved the coupler.
+    let moving = a.recorder.force[0].points.iter().any(|p| p.1 > 1e-3);
+    assert!(moving, "no force was ever rendered");
+}
+
+/// Record a deterministic grasp session's devices, replay them (recording
+/// again): the forces the session commanded, before and after each device's
+/// safety layer, are identical bit for bit, and so is every solver-side column
+/// of `trace.csv` (targets, positions, violation). Only the motors' output
+/// differs: a replayed device has no motors, so it reports the command.
+#[test]
+fn replaying_a_recorded_session_reproduces_its_forces_bit_for_bit() {
+    let scene = resolve("grasp-2").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (rec_out, rep_out) = (dir.path().join("recorded"), dir.path().join("replayed"));
+    std::fs::create_dir_all(&rec_out).unwrap();
+    std::fs::create_dir_all(&rep_out).unwrap();
+    let (traces, again) = (dir.path().join("traces"), dir.path().join("traces-again"));
+    run(
+        &scene,
+        &SessionOptions {
+            record: Some(traces.clone()),
+            out_dir: Some(rec_out.clone()),
+            ..deterministic(1.0)
+        },
+    );
+    run(
+        &scene,
+        &SessionOptions {
+            replay: Some(traces.clone()),
+            record: Some(again.clone()),
+            out_dir: Some(rep_out.clone()),
+            ..deterministic(1.0)
+        },
+    );
+    // Columns 4.. of a trace row: cmd_x,cmd_y,cmd_z,out_x,out_y,out_z.
+    let forces = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.starts_with("t_ns"))
+            .map(|l| l.split(',').skip(4).take(6).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    for device in ["left", "right"] {
+        let (a, b) = (
+            forces(&traces.join(format!("{device}.trace"))),
+            forces(&again.join(format!("{device}.trace"))),
+        );
+        assert_eq!(a.len(), 1000, "{device}: one row per tick");
+        assert!(
+            a.iter().any(|r| r != "0,0,0,0,0,0" && r != "0,0,0,0,0,-0"),
+            "{device}: no force was ever commanded"
+        );
+        assert!(
+            a == b,
+            "{device}: replayed forces differ from the recording"
+        );
+    }
+    let solver_side = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                format!("{},{}", c[..8].join(","), c[11])
+            })
+            .collect()
+    };
+    let (a, b) = (
+        solver_side(&rec_out.join("trace.csv")),
+        solver_side(&rep_out.join("trace.csv")),
+    );
+    assert_eq!(a.len(), 1 + 2 * 1000, "header + 2 fingers × 1000 ticks");
+    assert!(
+        a == b,
+        "replayed targets/positions/violations differ from the recording"
+    );
+}
+
+/// After warm-up, the fast loop's tick (devices, solver, safety layer,
+/// statistics, snapshot, trace queue, scheduler) allocates nothing.
+#[test]
+fn the_fast_loop_tick_allocates_nothing() {
+    for name in ["four-bar", "stewart", "grasp-3"] {
+        let scene = resolve(name).unwrap();
+        let plan = Plan::new(&scene, &deterministic(30.0)).unwrap();
+        let clock = MockClock::new(Nanos(0));
+        let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
+        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
+        let stop = StopFlag::new();
+        periodic.run(&mut built.fast, RunLimit::slots(200), &stop);
+        let (_, stats) = count(|| periodic.run(&mut built.fast, RunLimit::slots(2000), &stop));
+        assert_eq!(
+            stats.total(),
+            0,
+            "{name}: the fast loop allocated: {stats:?}"
+        );
+        assert_eq!(built.fast.stats().ticks, 2200);
+        while built.trace.pop().is_some() {}
+    }
+}
+
+/// A stop request mid-run ends the loop at a tick boundary and the outcome is
+/// complete (this is what Ctrl-C does). Real scheduler: asserts structure only.
+#[test]
+fn a_stop_request_ends_a_real_session_cleanly() {
+    let scene = resolve("four-bar").unwrap();
+    let options = SessionOptions {
+        seconds: 30.0,
+        fifo_priority: None,
+        lock_memory: false,
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options).unwrap();
+    let stop = StopFlag::new();
+    let flag = stop.clone();
+    let mut seen = 0;
+    let o = session::run(&scene, plan, &stop, &mut |_line| {
+        seen += 1;
+        flag.request(); // after the first status line (about 1 s in)
+    })
+    .unwrap();
+    assert!(o.stopped_early);
+    assert!(seen >= 1);
+    assert!(o.report.ticks > 0 && o.report.ticks < 30_000);
+    assert_eq!(
+        o.stats.ticks, o.report.ticks,
+        "every tick was accounted for"
+    );
+    let s = Summary::of(&o);
+    assert!(s.stopped_early && s.violation.max.is_finite());
+}
+
+#[test]
+fn the_cli_runs_a_scene_and_writes_every_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .args([
+            "run",
+            "peaucellier",
+            "--deterministic",
+            "--seconds",
+            "0.5",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(stdout.contains("constraint violation"), "{stdout}");
+    for f in [
+        "summary.json",
+        "trace.csv",
+        "lateness.hgrm",
+        "compute.hgrm",
+        "read-to-write.hgrm",
+        "latency.svg",
+        "force.svg",
+        "violation.svg",
+    ] {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "scene",
+        "seconds",
+        "rate_hz",
+        "ticks",
+        "missed",
+        "lateness_ns",
+        "compute_ns",
+        "violation",
+        "tracking_m",
+        "force_n",
+        "faults",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks `{key}`");
+    }
+    assert_eq!(summary["ticks"], 500);
+    assert!(summary["lateness_ns"]["p999"].is_u64() && summary["violation"]["rms"].is_f64());
+    assert!(summary["force_n"]["index"]["max"].is_f64());
+    let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 501);
+}
+
+#[test]
+fn the_cli_check_reports_a_bad_scene_with_its_location_and_exit_status_1() {
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/bad-scenes/unknown-body-in-joint.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .arg("check")
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown-body-in-joint.toml:20:21:"), "{err}");
+    let ok = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .args(["check", "grasp-3"])
+        .output()
+        .unwrap();
+    assert!(ok.status.success());
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("rigid grasp, 6 rows"));
+}
