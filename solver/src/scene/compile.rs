@@ -129,6 +129,9 @@ pub struct CompiledScene {
     pub description: String,
     /// The mechanism.
     pub model: Model,
+    /// The mechanism without its fingers: the same q layout, joint and
+    /// quaternion-norm rows only.
+    pub joints_only: Model,
     /// `[solver]` values the file set.
     pub settings: SceneSettings,
     /// One per `[[device]]`, in file order.
@@ -236,6 +239,11 @@ impl LoadedScene {
         for j in &s.joints {
             builder.joint(joint_spec(j));
         }
+        // The same mechanism without fingers: same bodies, same layout of q,
+        // joint rows only (for re-projection onto the nearest assembled
+        // configuration, which must not hold a finger where the mechanism
+        // cannot reach).
+        let joints_only = builder.build().map_err(|e| self.build_error(&e))?;
         for f in &s.fingers {
             let point = f.point.as_ref().map_or([0.0; 3], |p| *p.get_ref());
             let spec = match f.grasp.as_ref().map_or(GraspSpec::Point, |g| *g.get_ref()) {
@@ -284,6 +292,7 @@ impl LoadedScene {
             name: s.scene.name.get_ref().clone(),
             description: s.scene.description.clone().unwrap_or_default(),
             model,
+            joints_only,
             settings: settings(&s.solver),
             devices,
             fingers,
