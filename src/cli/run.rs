@@ -42,6 +42,11 @@ pub struct RunArgs {
     /// runs (every summary.json field but wall_clock_s), no real-time figures.
     #[arg(long)]
     pub deterministic: bool,
+    /// Start from the scene file's configuration as written, without the
+    /// Newton-KKT assembly (watch the fast loop and the slow loop pull it
+    /// together).
+    #[arg(long)]
+    pub no_assembly: bool,
     /// Output directory (default `runs/<scene>-<UTC time>/`).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -81,6 +86,7 @@ impl Default for RunArgs {
             gain: None,
             velocity_filter_ms: None,
             deterministic: false,
+            no_assembly: false,
             out: None,
             no_files: false,
             record: None,
@@ -153,6 +159,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             None => None,
         },
         deterministic: args.deterministic,
+        assemble: !args.no_assembly,
         out_dir: out_dir.clone(),
         record: args.record.clone(),
         replay: args.replay.clone(),

@@ -44,14 +44,24 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     if let Some(g) = &s.granted {
         let _ = writeln!(out, "{}", granted_lines(g));
     }
-    let _ = writeln!(
-        out,
-        "assembly (Newton-KKT placement): {} after {} iteration{}, residual {:.2e} m",
-        s.assembly.status,
-        s.assembly.iterations,
-        if s.assembly.iterations == 1 { "" } else { "s" },
-        s.assembly.residual_m
-    );
+    match &s.assembly {
+        Some(a) => {
+            let _ = writeln!(
+                out,
+                "assembly (Newton-KKT placement): {} after {} iteration{}, residual {:.2e} m",
+                a.status,
+                a.iterations,
+                if a.iterations == 1 { "" } else { "s" },
+                a.residual_m
+            );
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "assembly: skipped (--no-assembly): started from the file's configuration"
+            );
+        }
+    }
     if !s.deterministic {
         let _ = writeln!(
             out,
@@ -105,6 +115,21 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     );
     for e in &s.safety.device_events {
         let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
+    }
+    if s.slow_loop.reference_samples > 0 {
+        let _ = writeln!(
+            out,
+            "against the Newton-converged reference ({} samples): configuration within {:.2e} m, \
+             static finger force within {:.2e} N",
+            s.slow_loop.reference_samples,
+            s.slow_loop.reference_q_error_m,
+            s.slow_loop.reference_force_error_n
+        );
+    } else {
+        let _ = writeln!(
+            out,
+            "no reference samples (the dense reference is skipped above 300 coordinates)"
+        );
     }
     let _ = write!(
         out,

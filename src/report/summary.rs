@@ -92,6 +92,14 @@ pub struct SlowLoop {
     pub placements_not_converged: u64,
     /// Largest violation the slow loop saw in a snapshot, m.
     pub max_seen_violation_m: f64,
+    /// Snapshots compared with a Newton-converged reference (none for models
+    /// over 300 coordinates, whose dense reference is too slow to sample).
+    pub reference_samples: u64,
+    /// Largest body-position distance from the reference configuration, m.
+    pub reference_q_error_m: f64,
+    /// Largest difference of a finger's static Eq. 7 force from the
+    /// reference's, N.
+    pub reference_force_error_n: f64,
 }
 
 /// The whole summary.
@@ -131,8 +139,8 @@ pub struct Summary {
     pub faults: u64,
     /// Safety actions.
     pub safety: Safety,
-    /// Initial assembly.
-    pub assembly: Assembly,
+    /// Initial assembly (null when skipped with `--no-assembly`).
+    pub assembly: Option<Assembly>,
     /// The slow loop's re-projections.
     pub slow_loop: SlowLoop,
     /// Programs the slow loop handed over.
@@ -209,17 +217,20 @@ impl Summary {
                     })
                     .collect(),
             },
-            assembly: Assembly {
-                iterations: o.assembly.iterations,
-                residual_m: o.assembly.residual_length_m,
-                status: format!("{:?}", o.assembly.status),
-                converged: o.assembly.status == haptloop_solver::SolveStatus::Converged,
-            },
+            assembly: o.assembly.map(|a| Assembly {
+                iterations: a.iterations,
+                residual_m: a.residual_length_m,
+                status: format!("{:?}", a.status),
+                converged: a.status == haptloop_solver::SolveStatus::Converged,
+            }),
             slow_loop: SlowLoop {
                 reprojections: o.slow.reprojections,
                 recoveries: o.slow.recoveries,
                 placements_not_converged: o.slow.placements_not_converged,
                 max_seen_violation_m: o.slow.max_seen_violation_m,
+                reference_samples: o.slow.reference_samples,
+                reference_q_error_m: o.slow.reference_q_error_m,
+                reference_force_error_n: o.slow.reference_force_error_n,
             },
             programs_swapped: s.programs_swapped,
             trace_dropped: o.trace_dropped,

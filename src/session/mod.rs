@@ -65,7 +65,7 @@ pub struct SessionOutcome {
     /// The slow loop's statistics.
     pub slow: SlowStats,
     /// Initial assembly before the clock started.
-    pub assembly: SolveInfo,
+    pub assembly: Option<SolveInfo>,
     /// Trace series for plots, and the newest sample per finger.
     pub recorder: Recorder,
     /// Model finger names, in model order.
@@ -92,7 +92,7 @@ pub struct Built<C: Clock> {
     /// The queue of trace samples the reporter drains.
     pub trace: Arc<ArrayQueue<TraceSample>>,
     /// The initial assembly.
-    pub assembly: SolveInfo,
+    pub assembly: Option<SolveInfo>,
 }
 
 /// Builds the program (and assembles the scene), the devices (registered on
@@ -111,12 +111,17 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let mut placement =
         Placement::analyze(&model, &options).context("analysing the scene for placement")?;
     let mut q = model.q0().to_vec();
-    let assembly = placement
-        .solve(&model, &mut q, model.q0(), &model.initial_targets())
-        .context("assembling the scene")?;
-    program
-        .set_q(&q)
-        .context("starting from the assembled configuration")?;
+    let assembly = if plan.assemble {
+        let info = placement
+            .solve(&model, &mut q, model.q0(), &model.initial_targets())
+            .context("assembling the scene")?;
+        program
+            .set_q(&q)
+            .context("starting from the assembled configuration")?;
+        Some(info)
+    } else {
+        None
+    };
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref())?;
     let n = model.n_coords();
@@ -173,11 +178,15 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         programs: programs_tx,
         model: model.clone(),
         settings: plan.solver,
-        placement,
+        placement: Placement::analyze(&scene.compiled.joints_only, &options)
+            .context("analysing the scene's joints for re-projection")?,
+        joints_only: scene.compiled.joints_only.clone(),
         threshold_m,
         broken_m,
         last_good: q.clone(),
         stats: SlowStats::default(),
+        // Every 100 ms of slow-loop steps (each about 5 ms).
+        reference_every: 20,
     };
     Ok(Built {
         fast,
@@ -281,7 +290,7 @@ type Finished<C> = (
     Option<Granted>,
     FastLoop<C>,
     SlowStats,
-    SolveInfo,
+    Option<SolveInfo>,
     u64,
 );
 

@@ -36,6 +36,9 @@ pub struct SessionOptions {
     pub velocity_filter: Option<Duration>,
     /// Mock clock, as fast as possible, bit-identical across runs.
     pub deterministic: bool,
+    /// Assemble the scene with Newton-KKT placement before the clock starts
+    /// (default); false starts from the file's configuration as written.
+    pub assemble: bool,
     /// Where to write summary.json, histograms, trace.csv and plots.
     pub out_dir: Option<PathBuf>,
     /// Record each device's trace into this directory (`<device>.trace`).
@@ -61,6 +64,7 @@ impl Default for SessionOptions {
             gain: None,
             velocity_filter: None,
             deterministic: false,
+            assemble: true,
             out_dir: None,
             record: None,
             replay: None,
@@ -89,6 +93,8 @@ pub struct Plan {
     pub violation_tolerance_m: Option<f64>,
     /// Mock clock?
     pub deterministic: bool,
+    /// Assemble with placement before the clock starts?
+    pub assemble: bool,
     /// Output directory.
     pub out_dir: Option<PathBuf>,
     /// Device-trace recording directory.
@@ -156,6 +162,7 @@ impl Plan {
             assembly_tolerance_m: s.placement_tolerance.unwrap_or(1e-9),
             violation_tolerance_m: s.violation_tolerance,
             deterministic: options.deterministic,
+            assemble: options.assemble,
             out_dir: options.out_dir.clone(),
             record: options.record.clone(),
             replay: options.replay.clone(),

@@ -8,9 +8,8 @@
 use super::fast::Snapshot;
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
 use haptloop_solver::{
-    FingerId, FingerTarget, Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings,
+    Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings, reference_finger_wrenches,
 };
-use nalgebra::UnitQuaternion;
 use std::sync::Arc;
 
 /// How a handed-over program corrects the configuration it adopts.
@@ -83,6 +82,15 @@ pub struct SlowStats {
     pub programs_dropped: u64,
     /// The last placement's outcome.
     pub last_placement: Option<SolveInfo>,
+    /// Snapshots compared with a Newton-converged reference.
+    pub reference_samples: u64,
+    /// Largest distance of a fast-loop body position from the reference
+    /// configuration, m.
+    pub reference_q_error_m: f64,
+    /// Largest difference of a finger's static Eq. 7 force (gravity and joint
+    /// loads at rest, dense reference solve) between the fast loop's
+    /// configuration and the reference, N.
+    pub reference_force_error_n: f64,
 }
 
 /// The slow loop's state.
@@ -90,7 +98,13 @@ pub struct SlowLoop {
     pub(super) snapshots: MailboxReader<Snapshot>,
     pub(super) programs: ProgramSender<Handover>,
     pub(super) model: Arc<Model>,
+    /// The same mechanism without fingers (same q layout): re-projection finds
+    /// the nearest assembled configuration and lets the fingers land where
+    /// they land (holding a finger where a 1-DOF linkage cannot reach would
+    /// make the problem infeasible).
+    pub(super) joints_only: Model,
     pub(super) settings: SolverSettings,
+    /// Placement analysed for `joints_only`.
     pub(super) placement: Placement,
     /// Violation above which the fast loop's configuration is re-projected, m.
     pub(super) threshold_m: f64,
@@ -98,7 +112,13 @@ pub struct SlowLoop {
     pub(super) broken_m: f64,
     pub(super) last_good: Vec<f64>,
     pub(super) stats: SlowStats,
+    /// Steps between reference measurements (0: never).
+    pub(super) reference_every: u64,
 }
+
+/// Largest model (coordinates) whose snapshots are compared with the dense
+/// reference: its SVD costs O(n³) on the slow thread.
+pub const REFERENCE_MAX_COORDS: usize = 300;
 
 impl SlowLoop {
     /// One pass: collect returned programs, read the newest snapshot, and
@@ -117,6 +137,10 @@ impl SlowLoop {
         if snap.solved && finite && v <= self.threshold_m {
             self.last_good.clear();
             self.last_good.extend_from_slice(&snap.q);
+            if self.reference_every > 0 && self.stats.steps % self.reference_every == 0 {
+                let q = snap.q.clone();
+                self.measure_against_reference(&q);
+            }
             return;
         }
         // One re-projection in flight at a time: wait until the fast loop has
@@ -130,6 +154,43 @@ impl SlowLoop {
         self.reproject(&snapshot_q, recover);
     }
 
+    /// Compares the fast loop's configuration `q` with the Newton-converged
+    /// assembled configuration nearest to it, and the static finger forces of
+    /// the two (dense reference solve).
+    fn measure_against_reference(&mut self, q: &[f64]) {
+        if self.model.n_coords() > REFERENCE_MAX_COORDS {
+            return;
+        }
+        let mut q_star = q.to_vec();
+        let Ok(info) = self.placement.solve(&self.joints_only, &mut q_star, q, &[]) else {
+            return;
+        };
+        if info.status != SolveStatus::Converged {
+            return;
+        }
+        let rest = vec![0.0; q.len()];
+        let (Ok(fast), Ok(reference)) = (
+            reference_finger_wrenches(&self.model, q, &rest, &rest),
+            reference_finger_wrenches(&self.model, &q_star, &rest, &rest),
+        ) else {
+            return;
+        };
+        let s = &mut self.stats;
+        s.reference_samples += 1;
+        for (_, off) in self.model.layout().moving_bodies() {
+            let d = (0..3)
+                .map(|k| (q[off + k] - q_star[off + k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            s.reference_q_error_m = s.reference_q_error_m.max(d);
+        }
+        for (a, b) in fast.iter().zip(&reference) {
+            s.reference_force_error_n = s
+                .reference_force_error_n
+                .max((a.force_n - b.force_n).norm());
+        }
+    }
+
     fn reproject(&mut self, snapshot_q: &[f64], recover: bool) {
         self.stats.reprojections += 1;
         self.stats.recoveries += u64::from(recover);
@@ -139,26 +200,7 @@ impl SlowLoop {
             snapshot_q.to_vec()
         };
         let q_ref = q.clone();
-        // Keep every finger where it is (and a rigid grasp's body as it is
-        // turned): re-projection repairs the joints, it does not move the user.
-        let targets: Vec<FingerTarget> = self
-            .model
-            .fingers()
-            .iter()
-            .enumerate()
-            .map(|(i, f)| FingerTarget {
-                position_m: self
-                    .model
-                    .finger_point(&q, FingerId(i as u32))
-                    .unwrap_or_default(),
-                orientation: self
-                    .model
-                    .body_rotation(&q, f.body)
-                    .map(|r| UnitQuaternion::from_matrix(&r))
-                    .unwrap_or_else(UnitQuaternion::identity),
-            })
-            .collect();
-        let info = match self.placement.solve(&self.model, &mut q, &q_ref, &targets) {
+        let info = match self.placement.solve(&self.joints_only, &mut q, &q_ref, &[]) {
             Ok(info) => info,
             Err(_) => return,
         };
@@ -192,5 +234,132 @@ impl SlowLoop {
     /// What it saw and did.
     pub fn stats(&self) -> SlowStats {
         self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::resolve;
+    use crate::session::{Plan, SessionOptions, build};
+    use haptloop_rt::clock::{MockClock, Nanos};
+    use haptloop_rt::schedule::{Tick, TickBody};
+
+    fn tick(fast: &mut super::super::FastLoop<MockClock>, k: u64) {
+        let t = Nanos((k + 1) * 1_000_000);
+        fast.tick(&Tick {
+            index: k,
+            deadline: t,
+            start: t,
+        });
+    }
+
+    fn joint_violation(model: &Model, q: &[f64]) -> f64 {
+        let mut ev = model.evaluation();
+        ev.evaluate_values(model, q, &[]).unwrap();
+        ev.values().iter().fold(0.0, |a, v| a.max(v.abs()))
+    }
+
+    fn four_bar() -> (crate::scenes::Scene, Plan) {
+        let scene = resolve("four-bar").unwrap();
+        let options = SessionOptions {
+            seconds: 1.0,
+            deterministic: true,
+            ..SessionOptions::default()
+        };
+        let plan = Plan::new(&scene, &options).unwrap();
+        (scene, plan)
+    }
+
+    /// The fast loop's q is pushed 0.1 mm off its joints and published: the
+    /// slow loop places the nearest assembled configuration and sends a shift;
+    /// right after the hand-over (before any tick could repair it on its own)
+    /// the fast loop's q is assembled again, close to where it was.
+    #[test]
+    fn a_violating_configuration_is_reprojected_and_shifted_in() {
+        let (scene, plan) = four_bar();
+        let mut b = build(&scene, &plan, MockClock::new(Nanos(0))).unwrap();
+        for k in 0..10 {
+            tick(&mut b.fast, k);
+        }
+        let assembled = b.fast.program().q().to_vec();
+        let mut push = vec![0.0; assembled.len()];
+        push[0] = 1e-4; // the crank's x: pulls the crank off its pivot
+        b.fast.program.program.shift_q(&push).unwrap();
+        let q = b.fast.program().q().to_vec();
+        let v = joint_violation(&scene.compiled.joints_only, &q);
+        assert!(v > 5e-5, "the push broke the joints: {v:e}");
+        b.fast.snapshot.publish_with(|s| {
+            s.q.clear();
+            s.q.extend_from_slice(&q);
+            s.max_violation_m = v;
+            s.solved = true;
+        });
+        b.slow.step();
+        let st = b.slow.stats();
+        assert_eq!(
+            (st.reprojections, st.recoveries, st.programs_sent),
+            (1, 0, 1)
+        );
+        assert_eq!(st.last_placement.unwrap().status, SolveStatus::Converged);
+        let swapped = b
+            .fast
+            .programs
+            .try_swap(&mut b.fast.program, |old, new| new.take_over(old));
+        assert_eq!(swapped, 1);
+        let after = b.fast.program().q();
+        assert!(
+            joint_violation(&scene.compiled.joints_only, after) < 1e-12,
+            "not assembled after the shift"
+        );
+        let moved = after
+            .iter()
+            .zip(&assembled)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            moved < 1e-4,
+            "the nearest assembled configuration is near the old one: moved {moved:e}"
+        );
+    }
+
+    /// A broken snapshot (violation beyond a tenth of the mechanism's size,
+    /// solve failed): the slow loop re-places the last good configuration and
+    /// sends a reset; the fast loop runs assembled again after the hand-over.
+    #[test]
+    fn a_broken_snapshot_is_recovered_from_the_last_good_configuration() {
+        let (scene, plan) = four_bar();
+        let mut b = build(&scene, &plan, MockClock::new(Nanos(0))).unwrap();
+        for k in 0..10 {
+            tick(&mut b.fast, k);
+        }
+        b.slow.step(); // records the last good configuration
+        assert_eq!(b.slow.stats().reprojections, 0);
+        let garbage = vec![1e3; b.fast.program().q().len()];
+        b.fast.snapshot.publish_with(|s| {
+            s.q.clear();
+            s.q.extend_from_slice(&garbage);
+            s.max_violation_m = 1e3;
+            s.solved = false;
+        });
+        b.slow.step();
+        let st = b.slow.stats();
+        assert_eq!(
+            (st.reprojections, st.recoveries, st.programs_sent),
+            (1, 1, 1)
+        );
+        tick(&mut b.fast, 10);
+        assert_eq!(
+            b.fast.stats().programs_swapped,
+            1,
+            "swapped in at the tick boundary"
+        );
+        let q = b.fast.program().q();
+        assert!(
+            q.iter().all(|x| x.abs() < 1.0),
+            "the reset replaced the broken q"
+        );
+        assert!(joint_violation(&scene.compiled.joints_only, q) < 1e-9);
+        assert!(b.fast.program().last_report().max_violation_m < 1e-9);
     }
 }
