@@ -38,7 +38,8 @@
 //!   cached by [`PlacementCache`]), then allocation-free damped Newton
 //!   iterations with slack inequalities ([`Placement::solve`] → [`SolveInfo`]).
 //! - [`Program`] ([`al`], [`force`]): the fast loop's solver. Built once per
-//!   model from [`SolverSettings`]; [`Program::tick`] runs the update toward
+//!   model from [`SolverSettings`], masking rows that are linearly dependent
+//!   at q0 ([`Redundancy`]); [`Program::tick`] runs the update toward
 //!   the finger targets (a Gauss–Newton projection with the force solve's
 //!   factor, or Nelson & Cohen's Eq. 1–3: [`UpdateRule`]), then the finger
 //!   loads of Eq. 7–8 plus a virtual coupling ([`FingerOutput`], force on the
@@ -90,10 +91,10 @@ pub mod program;
 pub mod rotation;
 pub mod scene;
 
-pub use al::{ForceSolver, InvalidSetting, SolverSettings, UpdateRule};
+pub use al::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};
-pub use force::{FingerWrench, ReferenceError, reference_finger_wrenches};
+pub use force::{FingerWrench, Redundancy, ReferenceError, reference_finger_wrenches};
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
 pub use model::{

@@ -25,6 +25,10 @@
 //!   evaluating C_q and multiplying (BENCHMARKS.md).
 //! - **Inequalities** (joint limits, contact witnesses, C ≥ 0) use the
 //!   projected multiplier ν ≥ 0; an inactive row contributes nothing.
+//! - **Redundant rows** (linearly dependent on the others at q0, e.g. the
+//!   repeated out-of-plane rows of a planar loop of spatial revolutes) are
+//!   found once by `Program::new` (`force::redundancy`) and masked in both
+//!   rules: gain 0, multiplier 0, still evaluated and reported.
 //! - **Fingers are penalty rows** (a weighted finger-distance objective term,
 //!   Nelson & Cohen §4), not multiplier rows. A finger the mechanism cannot
 //!   follow (a 1-DOF four-bar and a 3-D target) would wind an AL multiplier up
@@ -45,4 +49,4 @@ pub(crate) mod scaling;
 mod settings;
 pub(crate) mod update;
 
-pub use settings::{ForceSolver, InvalidSetting, SolverSettings, UpdateRule};
+pub use settings::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};

@@ -30,6 +30,12 @@
 //! Inequalities follow the force solve's active set (a released row is free
 //! from the next tick on). The y are the step's multipliers: stored as λ
 //! (equalities) and ν = max(0, −y) (inequalities).
+//!
+//! **Redundant rows** (found by `Program::new`, see `force::redundancy`)
+//! take no part: the factor holds them as decoupled unit rows with a zero
+//! right-hand side, so their y is exactly 0. Without that, A_JJ is singular
+//! and off the manifold the right-hand side has parts in C_q's left null
+//! space that the round-off pivots turn into enormous y.
 
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
@@ -138,7 +144,7 @@ impl Projected {
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
                 Role::Equality => y,
-                Role::Finger => 0.0,
+                Role::Finger | Role::Redundant => 0.0,
                 Role::Inequality => (-y).max(0.0),
             };
         }

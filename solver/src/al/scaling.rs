@@ -10,6 +10,7 @@
 //! | [`RowUnit::Angle`] (rad) | L | K L² | k₂ L² |
 //! | [`RowUnit::Dimensionless`] (eᵀe − 1) | L | K L² | k₂ L² |
 //! | finger rows (any unit) | as above | × `finger_weight` | 0 (no multiplier) |
+//! | redundant rows ([`Scaling::mask`]) | as above | 0 | 0 |
 //!
 //! and column c of q has metric weight W_c = 1 (r, design variables: metres) or
 //! L² (Euler parameters: a change δe turns a point at lever L by about 2 L δe).
@@ -38,6 +39,10 @@ pub(crate) enum Role {
     Finger,
     /// C ≥ 0 with a projected multiplier ν ≥ 0.
     Inequality,
+    /// A row found linearly dependent on the kept rows at `Program::new`
+    /// (`force::redundancy`): evaluated and its violation reported, but it
+    /// takes part in no update and no force solve (gain 0, multiplier 0).
+    Redundant,
 }
 
 /// Per-row gains and per-column metric of one model under one settings.
@@ -102,6 +107,17 @@ impl Scaling {
             integral,
             inv_metric,
             finger_limit_m: s.finger_pull_limit_m,
+        }
+    }
+
+    /// Masks `rows` (model row indices): their role becomes
+    /// [`Role::Redundant`] and their gains 0, so they drop out of the gradient
+    /// update, the projected step and the force solve alike.
+    pub fn mask(&mut self, rows: &[usize]) {
+        for &i in rows {
+            self.role[i] = Role::Redundant;
+            self.penalty[i] = 0.0;
+            self.integral[i] = 0.0;
         }
     }
 

@@ -32,6 +32,28 @@ pub enum ForceSolver {
     },
 }
 
+/// Whether and how [`Program::new`](crate::Program::new) looks for redundant
+/// (linearly dependent) equality rows, which it then leaves out of the
+/// projected step and the Eq. 7 force solve (see the `redundancy` module of
+/// [`force`](crate::force)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RedundancyCheck {
+    /// A cheap test first: inverse iteration with the sparse factor of the
+    /// scaled C_q M⁻¹ C_qᵀ at q0 estimates its smallest eigenvalue; only if
+    /// that is below 1e-8 × the largest diagonal entry does the dense ordered
+    /// QR run. Inequality rows are always tested against the kept equality
+    /// rows (one sparse solve each).
+    Auto,
+    /// Always the dense ordered QR (to measure it, or for a scene whose
+    /// Gram matrix is ill-conditioned without being singular).
+    Dense,
+    /// No detection: every row takes part, as before the check existed. A
+    /// scene with structurally redundant rows (a planar loop of spatial
+    /// revolutes) then factors a singular matrix and can diverge; kept for
+    /// comparisons.
+    Off,
+}
+
 /// Everything a [`Program`](crate::Program) needs to know besides the model.
 ///
 /// Gains are dimensionless because the update runs in *scaled* coordinates in
@@ -127,15 +149,25 @@ pub struct SolverSettings {
     pub force_solver: ForceSolver,
     /// Relative Tikhonov regularisation μ of the Eq. 7 multiplier solve:
     /// μ·(mean diagonal) is added to the joint block of the scaled
-    /// C_q M⁻¹ C_qᵀ. Default 0: exactly redundant joint rows (a planar linkage
-    /// built from spatial joints) are already handled by the factorisation's
-    /// dynamic regularisation (a pivot below 1e-14 × the largest diagonal is
-    /// replaced by 1e-10 × it), which leaves the finger load exact because a
-    /// redundant combination of joint rows is orthogonal to every finger row.
-    /// A Tikhonov term instead softens every joint and leaks load into the
-    /// finger: μ = 1e-12 already put a spurious 1e-9 of the load there on the
-    /// four-bar. Raise it only for nearly (not exactly) redundant scenes.
+    /// C_q M⁻¹ C_qᵀ (the projected step shares it). Default 0: exactly
+    /// redundant rows (a planar linkage built from spatial joints) are masked
+    /// by `Program::new` ([`redundancy`](Self::redundancy)), and the
+    /// factorisation's dynamic regularisation (a pivot below 1e-14 × the
+    /// largest diagonal replaced by 1e-10 × it) only keeps the factor alive
+    /// through a round-off pivot. A Tikhonov term does not make a singular
+    /// block well-posed, it trades the blow-up for bias: unmasked, the
+    /// Peaucellier linkage still came apart with μ = 1e-14 (6 m) and 1e-10
+    /// (1 m), and μ = 1e-12 already put a spurious 1e-9 of the load into the
+    /// four-bar's finger. Raise it only for nearly (not exactly) redundant
+    /// scenes.
     pub force_regularization: f64,
+    /// Detection of redundant rows at `Program::new` (see
+    /// [`RedundancyCheck`]). Default `Auto`: the Peaucellier linkage's 9
+    /// dependent rows (of 57) are found and masked, after which it recovers
+    /// from off-manifold states that made every projected tick fail; on the
+    /// full-rank built-in mechanisms the check costs one extra factorisation
+    /// and eight sparse solves (BENCHMARKS.md).
+    pub redundancy: RedundancyCheck,
 }
 
 impl Default for SolverSettings {
@@ -155,6 +187,7 @@ impl Default for SolverSettings {
             velocity_filter: Duration::ZERO,
             force_solver: ForceSolver::Cholesky,
             force_regularization: 0.0,
+            redundancy: RedundancyCheck::Auto,
         }
     }
 }

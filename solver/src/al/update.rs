@@ -8,6 +8,7 @@
 //! equality:    λ_i ← λ_i + k₂_i C_i                 w_i = λ_i + K_i C_i
 //! finger:      (no multiplier)                      w_i = K_i C_i · min(1, d / |ℓ C|_group)
 //! inequality:  ν_i ← max(0, ν_i − k₂_i C_i)         w_i = −max(0, ν_i − K_i C_i)
+//! redundant:   λ_i ← 0                              w_i = 0
 //! then         q ← q − h [ (q − q₀) + W⁻¹ C_qᵀ w ]
 //! ```
 //!
@@ -24,7 +25,7 @@
 //! linearised (projected) step cannot overshoot by more than d.
 
 use super::scaling::{Role, Scaling};
-use crate::{Model, RowUnit};
+use crate::{Model, RowUnit, Sense};
 
 /// w_i of row `i` at value `c`, updating its multiplier.
 #[inline(always)]
@@ -38,6 +39,10 @@ pub(crate) fn row_weight(s: &Scaling, i: usize, c: f64, lambda: &mut f64) -> f64
         Role::Inequality => {
             *lambda = (*lambda - s.integral[i] * c).max(0.0);
             -(*lambda - s.penalty[i] * c).max(0.0)
+        }
+        Role::Redundant => {
+            *lambda = 0.0;
+            0.0
         }
     }
 }
@@ -76,7 +81,9 @@ pub(crate) fn step(s: &Scaling, h: f64, q: &mut [f64], q_ref: &[f64], g: &[f64])
 
 /// Constraint violation of one evaluated C, finger rows excluded (their
 /// residual is the tracking error, reported per finger). Equalities count
-/// |C_i|, inequalities max(0, −C_i).
+/// |C_i|, inequalities max(0, −C_i); redundant (masked) rows count by their
+/// sense like the others: masking changes how a row is solved, not whether
+/// its violation is reported.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct Violation {
     /// Largest, over length rows, metres.
@@ -100,10 +107,10 @@ impl Violation {
         let mut v = Self::default();
         let (mut sum, mut count) = (0.0, 0usize);
         for (i, (&ci, row)) in c.iter().zip(model.rows()).enumerate() {
-            let e = match s.role[i] {
-                Role::Finger => continue,
-                Role::Equality => ci.abs(),
-                Role::Inequality => (-ci).max(0.0),
+            let e = match (s.role[i], row.sense) {
+                (Role::Finger, _) => continue,
+                (Role::Equality, _) | (Role::Redundant, Sense::Equality) => ci.abs(),
+                (Role::Inequality, _) | (Role::Redundant, Sense::Inequality) => (-ci).max(0.0),
             };
             match row.unit {
                 RowUnit::Length => {

@@ -7,11 +7,12 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use super::gram::{Gram, Slot};
 use super::inertia::BodyMass;
 use super::motion::Motion;
+use super::redundancy::{self, Redundancy};
 use super::reference::INEQUALITY_ACTIVE_BAND;
 use super::solve::{FactorError, MultiplierSolve};
 use super::wrench::on_finger;
-use crate::al::ForceSolver;
 use crate::al::scaling::{Role, Scaling};
+use crate::al::{ForceSolver, RedundancyCheck};
 use crate::program::FingerOutput;
 use crate::rotation::BodyFrame;
 use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
@@ -95,6 +96,27 @@ impl Feedback {
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
         })
+    }
+
+    /// Finds the rows of `model` to mask (see `redundancy`) at q0, where `ev`
+    /// is evaluated. Leaves the factor of a test matrix behind: refactor
+    /// (`compute`) before stepping. Allocates.
+    pub fn find_redundant(
+        &mut self,
+        model: &Model,
+        ev: &Evaluation,
+        s: &Scaling,
+        mode: RedundancyCheck,
+    ) -> Redundancy {
+        redundancy::detect(
+            model,
+            ev,
+            s,
+            mode,
+            &mut self.gram,
+            &mut self.solve,
+            &self.masses,
+        )
     }
 
     /// The projected update's solve (see `MultiplierSolve::project`) with the
@@ -208,12 +230,15 @@ impl Feedback {
     }
 
     /// Row scales: ℓ_i for equality and finger rows and for inequality rows
-    /// with ν > 0 or C < −band; 0 for the other inequality rows.
+    /// with ν > 0 or C < −band; 0 for the other inequality rows and for
+    /// redundant (masked) rows, which the assembly then decouples (unit
+    /// diagonal, zero coupling, zero right-hand side: multiplier exactly 0).
     fn activate(&mut self, s: &Scaling, c: &[f64], lambda: &[f64]) {
         for (i, sc) in self.scale.iter_mut().enumerate() {
             let active = match s.role[i] {
                 Role::Inequality => lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND,
                 Role::Equality | Role::Finger => true,
+                Role::Redundant => false,
             };
             *sc = if active { s.ell[i] } else { 0.0 };
         }

@@ -20,7 +20,8 @@
 //!    cannot carry, the component of b along the mechanism's free motions.
 //!    Minimum norm over *all* rows would instead split a statically
 //!    indeterminate load between rigid joints and the finger in proportions
-//!    that depend on the rows' units.
+//!    that depend on the rows' units. Rows masked as redundant (below) are
+//!    decoupled unit rows with a zero right-hand side: multiplier exactly 0.
 //! 4. **Wrench** (`wrench`): Eq. 8, W = (|e|²/4) Ω W_c (¼ G W_c for unit e),
 //!    the finger's world force and its torque about the attachment point.
 //! 5. **Virtual coupling**: F_c = k (p − t) + b d(p − t)/dt between the
@@ -29,19 +30,28 @@
 //!    directions it cannot move (a 1-DOF linkage, a joint at its limit) the
 //!    error grows and F_c is the wall the user feels.
 //!
+//! Once per program (`redundancy`, on the slow thread): rows linearly
+//! dependent on the others at q0 ([`Redundancy`]) are found by a cheap
+//! conditioning test and, when it fails, a dense ordered QR; they are masked
+//! from every solve so that C_q M⁻¹ C_qᵀ stays positive definite.
+//!
 //! [`reference_finger_wrenches`] solves the same physics densely by the
-//! null-space method (tests, and the slow thread's force-error measurement).
+//! null-space method (tests, and the slow thread's force-error measurement):
+//! an SVD null space of the joint rows and a minimum-norm (pseudo-inverse)
+//! finger load, so it needs no masking and checks the masked fast path.
 
 mod cg;
 pub(crate) mod feedback;
 mod gram;
 mod inertia;
 mod motion;
+mod redundancy;
 mod reference;
 mod small;
 mod solve;
 mod wrench;
 
+pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
     FingerWrench, INEQUALITY_ACTIVE_BAND, ReferenceError, reference_finger_wrenches,
 };

@@ -128,29 +128,8 @@ impl MultiplierSolve {
         if let Some(cg) = &mut self.cg {
             cg.solve(gram, &mut self.rhs);
         } else {
-            let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
-            let max_diag = gram
-                .diag
-                .iter()
-                .map(|&d| gram.values[d])
-                .fold(0.0, f64::max);
-            let reg = LltRegularization {
-                dynamic_regularization_delta: 1e-10 * max_diag,
-                dynamic_regularization_epsilon: 1e-14 * max_diag,
-            };
-            let llt = self
-                .symbolic
-                .factorize_numeric_llt::<f64>(
-                    &mut self.l_values,
-                    a,
-                    Side::Lower,
-                    reg,
-                    Par::Seq,
-                    MemStack::new(&mut self.mem),
-                    Default::default(),
-                )
-                .map_err(|_| FactorError)?;
-            llt.solve_in_place_with_conj(
+            self.factor(gram)?;
+            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
                 Conj::No,
                 MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
                 Par::Seq,
@@ -189,6 +168,56 @@ impl MultiplierSolve {
 }
 
 impl MultiplierSolve {
+    /// Numeric LLᵀ of `gram`'s (assembled, regularised) A_JJ into the
+    /// factor's buffers, with faer's dynamic regularisation: a pivot below
+    /// 1e-14 × the largest diagonal entry is replaced by 1e-10 × it. That
+    /// keeps the factorisation alive through a round-off pivot; it does not
+    /// make a singular A_JJ well-posed (masking redundant rows does, see
+    /// `redundancy`).
+    ///
+    /// # Real-time
+    /// No allocation; one numeric sparse Cholesky with the fixed symbolic
+    /// factor.
+    pub fn factor(&mut self, gram: &Gram) -> Result<(), FactorError> {
+        let nnz = gram.nnz();
+        let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
+        let max_diag = gram
+            .diag
+            .iter()
+            .map(|&d| gram.values[d])
+            .fold(0.0, f64::max);
+        let reg = LltRegularization {
+            dynamic_regularization_delta: 1e-10 * max_diag,
+            dynamic_regularization_epsilon: 1e-14 * max_diag,
+        };
+        self.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.l_values,
+                a,
+                Side::Lower,
+                reg,
+                Par::Seq,
+                MemStack::new(&mut self.mem),
+                Default::default(),
+            )
+            .map(|_| ())
+            .map_err(|_| FactorError)
+    }
+
+    /// x ← A_JJ⁻¹ x (n_J entries, J order) with the last [`factor`](Self::factor).
+    ///
+    /// # Real-time
+    /// No allocation; one pair of sparse triangular solves.
+    pub fn solve_joint(&mut self, x: &mut [f64]) {
+        let n = x.len();
+        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(x, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+    }
+
     /// Solves the regularised normal equations of the projected update with
     /// the factor and Schur data of the last [`solve`](Self::solve):
     ///

@@ -2,8 +2,9 @@
 //! handed to the fast thread, ticked with zero allocation.
 //!
 //! ```text
-//!  Arc<Model> + SolverSettings ──► Program::new (allocates: Evaluation, gains, σ_max,
-//!                                  │             Gram pattern, symbolic Cholesky, scratch)
+//!  Arc<Model> + SolverSettings ──► Program::new (allocates: Evaluation, gains, Gram pattern,
+//!                                  │             symbolic Cholesky, scratch; finds and masks
+//!                                  │             redundant rows; σ_max)
 //!                                  ├─ assemble(targets, cap, tol)   before the clock starts
 //!                                  ├─ tick(targets, dt) ──► TickReport + finger_outputs()
 //!                                  │     iterations × [projected step with last tick's factor
@@ -14,19 +15,26 @@
 //!                                  └─ adopt_state(&old)              at a hand-over
 //! ```
 //!
+//! **Redundant rows.** A model may have more equality rows than independent
+//! ones (a planar loop of spatial revolutes repeats its out-of-plane rows:
+//! 9 of the Peaucellier linkage's 57). `Program::new` finds them at q0
+//! (`force::redundancy`, [`Program::redundancy`]) and masks them: still
+//! evaluated and reported in every violation, but left out of both update
+//! rules and the Eq. 7 solve, whose matrix then stays positive definite.
+//!
 //! # Real-time
 //! `tick`, `adopt_state` and `set_q` never allocate, lock or make syscalls
-//! (a counting-allocator test proves it on all three built-in mechanisms) and
-//! are deterministic: sequential faer, no hashing, no clock. A tick costs
-//! `iterations` update steps (gradient: one fused pass over the constraints;
-//! projected: a value-only evaluation, C_q·v, C_qᵀ·v and one pair of sparse
-//! triangular solves), one evaluation of C and C_q, one assembly of
-//! C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky (symbolic factor fixed at
-//! construction; a second, and with the projected rule a third, only when a
-//! limit must be released) with 1 + m_f solves, and an m_f × m_f eigensolve
-//! (m_f = 3 per point finger, 6 per rigid one). All are bounded by the
-//! model's size; nothing iterates to a tolerance. Measured: four-bar 8 µs,
-//! Stewart 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
+//! (a counting-allocator test proves it on all three built-in mechanisms)
+//! and are deterministic: sequential faer, no hashing, no clock. A tick costs `iterations` update steps (gradient: one fused
+//! pass over the constraints; projected: a value-only evaluation, C_q·v,
+//! C_qᵀ·v and one pair of sparse triangular solves), one evaluation of C and
+//! C_q, one assembly of C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky (symbolic
+//! factor fixed at construction; a second, and with the projected rule a
+//! third, only when a limit must be released) with 1 + m_f solves, an
+//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one). All are
+//! bounded by the model's
+//! size; nothing iterates to a tolerance. Measured: four-bar 8 µs, Stewart
+//! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
 mod report;
 mod state;
@@ -41,6 +49,7 @@ use crate::al::SolverSettings;
 use crate::al::fused::Fused;
 use crate::al::projected::Projected;
 use crate::al::scaling::{Scaling, check_stable};
+use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
 use crate::{Evaluation, FingerTarget, Model};
 
@@ -53,6 +62,7 @@ pub struct Program {
     scaling: Scaling,
     sigma_max: f64,
     h: f64,
+    redundancy: Redundancy,
     ev: Evaluation,
     q: Vec<f64>,
     /// q₀ of the least-astonishment objective (the previous tick's q).
@@ -73,19 +83,23 @@ pub struct Program {
 
 impl Program {
     /// Builds the program of `model` at its initial configuration q0 (at rest,
-    /// multipliers zero). Measures σ_max at q0 to set h and rejects settings
-    /// that would diverge. Allocates; call it off the real-time thread.
+    /// multipliers zero). Finds and masks redundant rows at q0
+    /// (`settings.redundancy`), measures σ_max at q0 to set h, rejects
+    /// settings that would diverge. Allocates; call it off the real-time
+    /// thread.
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
         settings.validate()?;
         let mut ev = model.evaluation();
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
-        let scaling = Scaling::new(&model, &settings);
+        let mut scaling = Scaling::new(&model, &settings);
+        let mut feedback = Feedback::new(&model, &ev, &settings)
+            .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
+        let redundancy = feedback.find_redundant(&model, &ev, &scaling, settings.redundancy);
+        scaling.mask(&redundancy.rows);
         let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
         let h = settings.step / (1.0 + settings.gain * sigma_max);
         check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
             .map_err(|(a, beta)| ProgramError::Unstable { a, beta })?;
-        let feedback = Feedback::new(&model, &ev, &settings)
-            .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
         let (n, m) = (model.n_coords(), model.n_rows());
         let projected = Projected::new(
             &model,
@@ -109,6 +123,7 @@ impl Program {
             ev,
             h,
             sigma_max,
+            redundancy,
             scaling,
             settings,
             model,
@@ -168,6 +183,13 @@ impl Program {
     /// σ_max of the scaled Gram matrix D C_q W⁻¹ C_qᵀ D at q0 (dimensionless).
     pub fn sigma_max(&self) -> f64 {
         self.sigma_max
+    }
+
+    /// What the redundancy check at construction found: the masked rows
+    /// (linearly dependent on the others at q0; evaluated and reported, but
+    /// left out of every update and force solve) and how they were found.
+    pub fn redundancy(&self) -> &Redundancy {
+        &self.redundancy
     }
 
     /// The length scale L in use, metres.

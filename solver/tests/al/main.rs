@@ -9,6 +9,8 @@ mod common;
 mod convergence;
 mod force;
 mod limits;
+mod planar;
 mod program;
+mod redundant;
 mod rules;
 mod unreachable;

@@ -1,0 +1,388 @@
+//! Redundant constraint rows: found once per program at q0 (off the fast
+//! thread) and left out of every solve, the way multibody codes remove
+//! redundant constraints (Adams: "redundant constraint removal").
+//!
+//! **Why.** A planar loop built from spatial revolutes has more joint rows
+//! than it can have independent ones: each revolute also pins the out-of-plane
+//! height and the two out-of-plane tilts, and around a closed loop those pins
+//! repeat each other. The Peaucellier linkage (7 links, 10 revolutes) has 57
+//! equality rows on 49 coordinates and rank 48: 9 rows, the three out-of-plane
+//! rows of each of the three loop-closing joints, are dependent everywhere.
+//! Then A = D C_q M̃⁻¹ C_qᵀ D is singular and its Cholesky runs on round-off
+//! pivots. At an assembled q the right-hand sides stay in A's range and
+//! nothing shows; away from the manifold (C is nonlinear) they pick up
+//! components in C_q's left null space, which come back as enormous
+//! multipliers y, and C_qᵀ y turns round-off into a step of hundreds of metres
+//! in one tick (measured: BENCHMARKS.md). Tikhonov regularisation only trades
+//! the blow-up for bias. Leaving the dependent rows out makes A positive
+//! definite without changing anything the remaining rows determine: near q0
+//! the kept rows imply the masked ones, and the finger's Schur complement
+//! only sees the span of the rows, which is the same.
+//!
+//! **How.** Each row is a vector b_i = ℓ_i C_i M̃^{-1/2} in the kinetic-energy
+//! metric (the one A is built in; design-variable columns, frozen in Eq. 7,
+//! are left out). Equality rows (joints, quaternion norms; not fingers) are
+//! taken **in model order**: a row is kept iff its distance from the span of
+//! the rows kept before it is more than [`REDUNDANCY_TOLERANCE`] × its own
+//! length (Householder QR without pivoting that skips such columns). Model
+//! order, rather than column pivoting by size, keeps whole joints: on a
+//! planar loop it masks the out-of-plane rows of the joints that close
+//! cycles, so the kept rows are those of a spanning tree, which pin the
+//! out-of-plane motion at every planar configuration, not only at q0.
+//!
+//! The dense QR costs O(n m r) (n body coordinates, m equality rows, r the
+//! rank): 57 rows × 49 coordinates on the Peaucellier linkage cost 0.1 ms,
+//! the sphere toy's 828 × 924 cost 240 ms, 60 times its whole
+//! `Program::new` (BENCHMARKS.md). So
+//! [`RedundancyCheck::Auto`] first estimates the smallest eigenvalue of A
+//! (equality rows) by inverse iteration with its sparse factor, a few sparse
+//! solves: a singular A shows as λ_min ≤ 1e-10 × max diag (the factor's
+//! dynamic regularisation) or a round-off pivot below that (measured: 4e-12
+//! on the Peaucellier linkage, 1.5e-11 on a planar four-bar), while the
+//! full-rank built-in mechanisms give 5.8e-5 (four-bar), 7.0e-5 (Stewart)
+//! and 5.6e-4 (sphere toy). Only below [`PRETEST_RATIO`] does the dense QR
+//! run.
+//!
+//! **Inequality rows** (limits, contacts) are tested one by one against the
+//! kept equality rows (one sparse solve each: the residual of the projection
+//! on their span, computed as a vector, not by cancelling squares): a
+//! dependent one (a contact the joints already enforce) is masked for good.
+//! Inequality rows dependent on *other* inequality rows (a slider's lower and
+//! upper limit) are never active together, so they are kept.
+//!
+//! **Tolerance.** [`REDUNDANCY_TOLERANCE`] = 1e-8 relative: structurally
+//! dependent rows come out at ≤ 2e-15 at an assembled q0 (round-off; a q0
+//! violated by δ over a lever L would show about δ/L), while no independent
+//! row of the built-in mechanisms or the planar test linkages comes closer
+//! than 0.096 to the span of the rows before it (measured). A row within
+//! 1e-8 of the others' span is numerically redundant at q0 anyway.
+//!
+//! **What it does not cover.** The dependent set is fixed at q0. At a singular
+//! pose (a linkage at toggle, two active limits that say the same thing) the
+//! kept rows can lose rank as the mechanism moves; the Cholesky's dynamic
+//! regularisation then only keeps the factor alive. A new
+//! program (a new active set, `Model::with_inequalities`) runs the check again.
+
+use std::cmp::Ordering;
+
+use nalgebra::{Matrix4, Vector3, Vector4};
+
+use super::gram::Gram;
+use super::inertia::BodyMass;
+use super::solve::MultiplierSolve;
+use crate::al::RedundancyCheck;
+use crate::al::scaling::{Role, Scaling};
+use crate::rotation::BodyFrame;
+use crate::{Evaluation, Jacobian, Model};
+
+/// A row whose distance from the span of the kept rows, in the
+/// kinetic-energy metric, is at most this × its own length is redundant.
+pub const REDUNDANCY_TOLERANCE: f64 = 1e-8;
+
+/// The pretest's threshold on λ_min(A) / max diag(A) (A over the equality
+/// rows at q0) below which the dense QR runs: an eigenvalue ratio of 1e-8 is
+/// a singular-value ratio of 1e-4, far above a singular A's (≤ 1e-10 after
+/// the factor's regularisation) and below the built-in mechanisms' (≥ 5.8e-5).
+pub const PRETEST_RATIO: f64 = 1e-8;
+
+/// Inverse iterations of the pretest. Each multiplies the weight of an
+/// eigenvalue ≤ 1e-10 relative by ≥ 1e6 over any eigenvalue ≥ 1e-4.
+const INVERSE_ITERATIONS: usize = 8;
+
+/// What the redundancy check of [`Program::new`](crate::Program::new) found
+/// ([`Program::redundancy`](crate::Program::redundancy)).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Redundancy {
+    /// Masked rows (model row indices, ascending): evaluated and reported,
+    /// left out of every update and force solve (multiplier 0).
+    pub rows: Vec<usize>,
+    /// Equality rows tested (joints and quaternion norms; finger rows are
+    /// penalties and never tested).
+    pub equality_rows: usize,
+    /// Inequality rows tested against the kept equality rows.
+    pub inequality_rows: usize,
+    /// λ_min(A) / max diag(A) of the scaled C_q M̃⁻¹ C_qᵀ over the equality
+    /// rows at q0, by inverse iteration (`None`: check off).
+    pub conditioning: Option<f64>,
+    /// Whether the dense ordered QR ran.
+    pub dense: bool,
+}
+
+/// Runs the check of `mode` for `model` at q0 (`ev` evaluated there) with the
+/// force solve's pattern and factor. Leaves `gram` and `solve` holding
+/// matrices of the check; the caller refactors. Allocates.
+pub(crate) fn detect(
+    model: &Model,
+    ev: &Evaluation,
+    s: &Scaling,
+    mode: RedundancyCheck,
+    gram: &mut Gram,
+    solve: &mut MultiplierSolve,
+    masses: &[BodyMass],
+) -> Redundancy {
+    let equality: Vec<usize> = (0..model.n_rows())
+        .filter(|&i| s.role[i] == Role::Equality)
+        .collect();
+    let inequality: Vec<usize> = (0..model.n_rows())
+        .filter(|&i| s.role[i] == Role::Inequality)
+        .collect();
+    let mut out = Redundancy {
+        equality_rows: equality.len(),
+        inequality_rows: inequality.len(),
+        ..Redundancy::default()
+    };
+    if mode == RedundancyCheck::Off {
+        return out;
+    }
+    let mut f = Factored::new(model, ev, gram, solve, masses);
+    // Equality and finger rows in, inequality rows out.
+    let mut scale: Vec<f64> = (0..model.n_rows())
+        .map(|i| match s.role[i] {
+            Role::Inequality | Role::Redundant => 0.0,
+            Role::Equality | Role::Finger => s.ell[i],
+        })
+        .collect();
+    let ratio = if f.factor(&scale) {
+        f.min_eigen_ratio(&scale)
+    } else {
+        0.0
+    };
+    out.conditioning = Some(ratio);
+    if mode == RedundancyCheck::Dense
+        || ratio.partial_cmp(&PRETEST_RATIO) != Some(Ordering::Greater)
+    {
+        out.dense = true;
+        out.rows = dependent_in_order(model, ev, masses, &s.ell, &equality);
+        for &i in &out.rows {
+            scale[i] = 0.0;
+        }
+        f.factor(&scale);
+    }
+    for &i in &inequality {
+        if f.relative_distance(i, s.ell[i], &scale) <= REDUNDANCY_TOLERANCE {
+            out.rows.push(i);
+        }
+    }
+    out.rows.sort_unstable();
+    out
+}
+
+/// The Gram matrix and its factor at q0 for one set of row scales, and the
+/// scratch of the sparse tests.
+struct Factored<'a> {
+    q: &'a [f64],
+    jac: &'a Jacobian,
+    gram: &'a mut Gram,
+    solve: &'a mut MultiplierSolve,
+    masses: &'a [BodyMass],
+    /// n: right-hand side of the assembly (zero), M̃⁻¹ g, C_qᵀ u.
+    zero: Vec<f64>,
+    w: Vec<f64>,
+    g: Vec<f64>,
+    /// m: a row combination, C_q w.
+    u: Vec<f64>,
+    cw: Vec<f64>,
+    /// n_J.
+    x: Vec<f64>,
+}
+
+impl<'a> Factored<'a> {
+    fn new(
+        model: &'a Model,
+        ev: &'a Evaluation,
+        gram: &'a mut Gram,
+        solve: &'a mut MultiplierSolve,
+        masses: &'a [BodyMass],
+    ) -> Self {
+        let (n, m, n_j) = (model.n_coords(), model.n_rows(), gram.n_j);
+        Self {
+            q: model.q0(),
+            jac: ev.jacobian(),
+            gram,
+            solve,
+            masses,
+            zero: vec![0.0; n],
+            w: vec![0.0; n],
+            g: vec![0.0; n],
+            u: vec![0.0; m],
+            cw: vec![0.0; m],
+            x: vec![0.0; n_j],
+        }
+    }
+
+    /// Assembles A with `scale` (0 drops a row: unit diagonal) and factors
+    /// it; false if the factorisation failed.
+    fn factor(&mut self, scale: &[f64]) -> bool {
+        let g = &mut *self.gram;
+        g.assemble(
+            self.q,
+            self.jac,
+            scale,
+            self.masses,
+            &self.zero,
+            &mut self.w,
+        );
+        for j in 0..g.n_j {
+            if scale[g.j_rows[j]] == 0.0 {
+                g.values[g.diag[j]] = 1.0;
+            }
+        }
+        self.solve.factor(g).is_ok()
+    }
+
+    /// λ_min / max diag over the rows with a non-zero scale, by inverse
+    /// iteration from a fixed pseudo-random start.
+    fn min_eigen_ratio(&mut self, scale: &[f64]) -> f64 {
+        let g = &*self.gram;
+        let active: Vec<bool> = g.j_rows.iter().map(|&r| scale[r] != 0.0).collect();
+        let max_diag = (0..g.n_j)
+            .filter(|&j| active[j])
+            .map(|j| g.values[g.diag[j]])
+            .fold(0.0, f64::max);
+        if max_diag <= 0.0 {
+            return 1.0;
+        }
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        for (x, &a) in self.x.iter_mut().zip(&active) {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            *x = if a {
+                0.5 + (seed >> 11) as f64 / (1u64 << 53) as f64
+            } else {
+                0.0
+            };
+        }
+        let mut lambda = f64::INFINITY;
+        for _ in 0..INVERSE_ITERATIONS {
+            let before = norm(&self.x);
+            if before == 0.0 || !before.is_finite() {
+                return 0.0;
+            }
+            self.solve.solve_joint(&mut self.x);
+            for (x, &a) in self.x.iter_mut().zip(&active) {
+                if !a {
+                    *x = 0.0;
+                }
+            }
+            let after = norm(&self.x);
+            if !(after.is_finite() && after > 0.0) {
+                return 0.0;
+            }
+            lambda = before / after;
+            for x in &mut self.x {
+                *x /= after;
+            }
+        }
+        lambda / max_diag
+    }
+
+    /// Distance of row `row` (scaled by `ell`) from the span of the rows with
+    /// a non-zero `scale`, relative to its length, in the kinetic-energy
+    /// metric: r = b − Bᵀ (B Bᵀ)⁻¹ B b formed as a vector, so a dependent row
+    /// gives round-off, not the square root of a cancellation.
+    fn relative_distance(&mut self, row: usize, ell: f64, scale: &[f64]) -> f64 {
+        let (jac, g) = (self.jac, &*self.gram);
+        self.u.fill(0.0);
+        self.u[row] = ell;
+        let _ = jac.mul_t_vec(&self.u, &mut self.g);
+        g.apply_inverse_mass(self.masses, &self.g, &mut self.w);
+        let own = dot(&self.g, &self.w);
+        if own.partial_cmp(&0.0) != Some(Ordering::Greater) {
+            return 0.0;
+        }
+        let _ = jac.mul_vec(&self.w, &mut self.cw);
+        for (x, &r) in self.x.iter_mut().zip(&g.j_rows) {
+            *x = scale[r] * self.cw[r];
+        }
+        self.solve.solve_joint(&mut self.x);
+        for (x, &r) in self.x.iter().zip(&g.j_rows) {
+            self.u[r] -= scale[r] * x;
+        }
+        let _ = jac.mul_t_vec(&self.u, &mut self.g);
+        g.apply_inverse_mass(self.masses, &self.g, &mut self.w);
+        (dot(&self.g, &self.w).max(0.0) / own).sqrt()
+    }
+}
+
+/// The rows of `rows` (model order) that are dependent on the rows before
+/// them: Householder QR of B's columns b_i = ℓ_i M̃^{-1/2} C_iᵀ without
+/// pivoting, skipping (and reporting) a column whose part outside the kept
+/// span is at most [`REDUNDANCY_TOLERANCE`] × its length. Dense: O(n m r).
+fn dependent_in_order(
+    model: &Model,
+    ev: &Evaluation,
+    masses: &[BodyMass],
+    ell: &[f64],
+    rows: &[usize],
+) -> Vec<usize> {
+    let q = model.q0();
+    let jac = ev.jacobian();
+    let nb = model.layout().body_coords();
+    // M̃^{-1/2} per body: 1/√m on r, Lᵀ with L Lᵀ = M̃_e⁻¹ on e.
+    let halves: Vec<(usize, f64, Matrix4<f64>)> = masses
+        .iter()
+        .filter_map(|m| {
+            let o = m.offset;
+            let e = Vector4::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
+            let frame = BodyFrame::new(Vector3::new(q[o], q[o + 1], q[o + 2]), e.into())?;
+            let l = m.inv_rotational_mass(&frame, &e).cholesky()?.l();
+            Some((o, 1.0 / m.mass.sqrt(), l.transpose()))
+        })
+        .collect();
+    let mut col = vec![0.0; nb];
+    let mut raw = vec![0.0; model.n_coords()];
+    // Reflectors: v_j lives in reflectors[j * nb + j..(j + 1) * nb].
+    let mut reflectors: Vec<f64> = Vec::new();
+    let mut betas: Vec<f64> = Vec::new();
+    let mut dependent = Vec::new();
+    for &i in rows {
+        raw.fill(0.0);
+        let span = jac.row_ptr()[i]..jac.row_ptr()[i + 1];
+        for p in span {
+            raw[jac.col_idx()[p]] = ell[i] * jac.values()[p];
+        }
+        col.fill(0.0);
+        for (o, inv_sqrt_m, lt) in &halves {
+            for c in 0..3 {
+                col[o + c] = raw[o + c] * inv_sqrt_m;
+            }
+            let ce = lt * Vector4::new(raw[o + 3], raw[o + 4], raw[o + 5], raw[o + 6]);
+            col[o + 3..o + 7].copy_from_slice(ce.as_slice());
+        }
+        let own = norm(&col);
+        let kept = betas.len();
+        for (j, &beta) in betas.iter().enumerate() {
+            let v = &reflectors[j * nb + j..(j + 1) * nb];
+            let t = beta * dot(v, &col[j..]);
+            for (c, vk) in col[j..].iter_mut().zip(v) {
+                *c -= t * vk;
+            }
+        }
+        let tail = norm(&col[kept..]);
+        let independent =
+            tail.partial_cmp(&(REDUNDANCY_TOLERANCE * own)) == Some(Ordering::Greater);
+        if !independent || kept == nb {
+            dependent.push(i);
+            continue;
+        }
+        let alpha = if col[kept] >= 0.0 { -tail } else { tail };
+        let mut v = vec![0.0; nb];
+        v[kept..].copy_from_slice(&col[kept..]);
+        v[kept] -= alpha;
+        let vv = dot(&v[kept..], &v[kept..]);
+        reflectors.extend_from_slice(&v);
+        betas.push(2.0 / vv);
+    }
+    dependent
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[inline]
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
