@@ -7,7 +7,8 @@
 //!                                  │             redundant rows; σ_max)
 //!                                  ├─ assemble(targets, cap, tol)   before the clock starts
 //!                                  ├─ tick(targets, dt) ──► TickReport + finger_outputs()
-//!                                  │     iterations × [projected step with last tick's factor
+//!                                  │     iterations × [projected step with last tick's factor,
+//!                                  │                   stopped if the chord iteration diverges
 //!                                  │                   | or Eq. 1–3 gradient step]
 //!                                  │     evaluate C, C_q at final q → violations
 //!                                  │     q history → b → factor C_q M⁻¹ C_qᵀ → λ_F → Eq. 8
@@ -69,6 +70,9 @@ pub struct Program {
     q_ref: Vec<f64>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
+    /// q and λ before the current projected step (undone if it diverges).
+    iterate_q: Vec<f64>,
+    iterate_lambda: Vec<f64>,
     g: Vec<f64>,
     fused: Fused,
     projected: Projected,
@@ -112,6 +116,8 @@ impl Program {
             q_ref: model.q0().to_vec(),
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
+            iterate_q: vec![0.0; n],
+            iterate_lambda: vec![0.0; m],
             g: vec![0.0; n],
             fused: Fused::new(&model),
             projected,

@@ -7,11 +7,25 @@ use super::{AssemblyReport, FingerOutput, Program, TickOutcome, TickReport};
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
+/// A projected step more than this × the previous step of the same tick
+/// means the chord iteration diverges (a converging one contracts: ratios
+/// 0.1–0.7 measured); it is undone and the tick's iterations stop.
+const CHORD_GROWTH: f64 = 2.0;
+
+/// Steps below this (scaled metres) are never judged: round-off at
+/// convergence fluctuates freely.
+const CHORD_FLOOR_M: f64 = 1e-9;
+
 impl Program {
     /// One fast tick: `settings.iterations` update steps (projected or Eq. 1–3,
     /// per `settings.update`) toward `targets` (one per finger, model order),
     /// then the finger outputs (Eq. 7–8 plus coupling) with velocities from q
     /// one `dt` ago; the force solve's factor is kept for the next tick.
+    ///
+    /// With the projected rule, a step more than twice the size of the tick's
+    /// previous one (a diverging chord iteration, near a singular pose) is
+    /// undone and the tick continues with the steps before it; the report's
+    /// `iterations` counts the steps kept.
     ///
     /// On any failure the status says why, q and the multipliers are restored
     /// to their values before the call, the motion history restarts at rest,
@@ -46,7 +60,7 @@ impl Program {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         match self.iterations(targets, iterations) {
-            Ok(()) => TickOutcome::Ok,
+            Ok(_) => TickOutcome::Ok,
             Err((status, _)) => {
                 self.q.copy_from_slice(&self.q_ref);
                 self.lambda.copy_from_slice(&self.saved_lambda);
@@ -56,7 +70,10 @@ impl Program {
     }
 
     /// The iterations of a tick from q with q₀ = `q_ref` (already set).
-    fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<(), (TickOutcome, u32)> {
+    /// Returns the number of steps applied: the projected rule stops early
+    /// (undoing the offending step) when its chord iteration diverges.
+    fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
+        let mut previous = f64::INFINITY;
         for k in 0..n {
             let done = match self.settings.update {
                 UpdateRule::Gradient => self
@@ -71,28 +88,43 @@ impl Program {
                         &mut self.lambda,
                         &mut self.g,
                     )
+                    .map(|()| 0.0)
                     .map_err(TickOutcome::Eval),
-                UpdateRule::Projected => self.projected.step(
-                    &self.model,
-                    &self.scaling,
-                    &mut self.ev,
-                    &mut self.feedback,
-                    &mut self.q,
-                    &self.q_ref,
-                    targets,
-                    self.settings.step,
-                    &mut self.lambda,
-                ),
+                UpdateRule::Projected => {
+                    self.iterate_q.copy_from_slice(&self.q);
+                    self.iterate_lambda.copy_from_slice(&self.lambda);
+                    self.projected.step(
+                        &self.model,
+                        &self.scaling,
+                        &mut self.ev,
+                        &mut self.feedback,
+                        &mut self.q,
+                        &self.q_ref,
+                        targets,
+                        self.settings.step,
+                        &mut self.lambda,
+                    )
+                }
             };
-            if let Err(status) = done {
-                let status = match status {
-                    TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
-                    s => s,
-                };
-                return Err((status, k));
+            match done {
+                Ok(size) => {
+                    if size > CHORD_GROWTH * previous && size > CHORD_FLOOR_M {
+                        self.q.copy_from_slice(&self.iterate_q);
+                        self.lambda.copy_from_slice(&self.iterate_lambda);
+                        return Ok(k);
+                    }
+                    previous = size;
+                }
+                Err(status) => {
+                    let status = match status {
+                        TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
+                        s => s,
+                    };
+                    return Err((status, k));
+                }
             }
         }
-        Ok(())
+        Ok(n)
     }
 
     /// Re-evaluates C_q and refactors the Eq. 7 matrix at the current q and the
@@ -125,9 +157,10 @@ impl Program {
     fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
-        if let Err((status, k)) = self.iterations(targets, n) {
-            return self.failed(status, k);
-        }
+        let n = match self.iterations(targets, n) {
+            Ok(applied) => applied,
+            Err((status, k)) => return self.failed(status, k),
+        };
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
@@ -275,17 +308,19 @@ impl Program {
                     TickOutcome::Ok => {}
                     status => return Err(status),
                 }
-                self.projected.step(
-                    &self.model,
-                    &self.scaling,
-                    &mut self.ev,
-                    &mut self.feedback,
-                    &mut self.q,
-                    &self.q_ref,
-                    targets,
-                    1.0,
-                    &mut self.lambda,
-                )
+                self.projected
+                    .step(
+                        &self.model,
+                        &self.scaling,
+                        &mut self.ev,
+                        &mut self.feedback,
+                        &mut self.q,
+                        &self.q_ref,
+                        targets,
+                        1.0,
+                        &mut self.lambda,
+                    )
+                    .map(|_| ())
             }
         }
     }

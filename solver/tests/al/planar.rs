@@ -88,6 +88,15 @@ pub const R: f64 = 0.05;
 pub const A: f64 = 0.10;
 pub const B: f64 = 0.04;
 pub const CRANK_RAD: f64 = std::f64::consts::FRAC_PI_3;
+/// x of the straight line Q follows.
+pub const LINE_X: f64 = (A * A - B * B) / (2.0 * R);
+/// y of the dead point on Q's line: where the crank circle crosses the line,
+/// P = Q and the rhombus is flat; the linkage can fold there (Q then follows
+/// the crank circle).
+pub fn dead_point_y() -> f64 {
+    (R * R - (LINE_X - R) * (LINE_X - R)).sqrt()
+}
+
 /// The Peaucellier–Lipkin linkage of `scenes/peaucellier.toml`, assembled,
 /// its finger on Q.
 pub fn peaucellier(gravity: [f64; 3]) -> Model {
