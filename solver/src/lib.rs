@@ -43,7 +43,8 @@
 //!   the finger targets (a Gauss–Newton projection with the force solve's
 //!   factor, or Nelson & Cohen's Eq. 1–3: [`UpdateRule`]), then the finger
 //!   loads of Eq. 7–8 plus a virtual coupling ([`FingerOutput`], force on the
-//!   finger, world frame), with zero allocation; [`reference_finger_wrenches`]
+//!   finger, world frame), with zero allocation, and refuses a finite but
+//!   absurd result ([`TickOutcome::Diverged`]); [`reference_finger_wrenches`]
 //!   is the dense reference.
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
@@ -106,5 +107,6 @@ pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };
 pub use program::{
-    AssemblyReport, FingerOutput, Program, ProgramError, TickOutcome, TickReport,
+    AssemblyReport, Divergence, DivergenceLimits, FingerOutput, Program, ProgramError, TickOutcome,
+    TickReport,
 };

@@ -60,8 +60,10 @@
 //! **What it does not cover.** The dependent set is fixed at q0. At a singular
 //! pose (a linkage at toggle, two active limits that say the same thing) the
 //! kept rows can lose rank as the mechanism moves; the Cholesky's dynamic
-//! regularisation then keeps the factor alive and the projected rule stops a
-//! chord iteration that diverges (`Program::tick`). A new
+//! regularisation then keeps the factor alive, the projected rule stops a
+//! chord iteration that diverges (`Program::tick`), and the tick's
+//! divergence guard (`TickOutcome::Diverged`) refuses any absurd step,
+//! multiplier or violation that remains, so the session can re-project. A new
 //! program (a new active set, `Model::with_inequalities`) runs the check again.
 
 use std::cmp::Ordering;

@@ -4,13 +4,14 @@
 //! ```text
 //!  Arc<Model> + SolverSettings ──► Program::new (allocates: Evaluation, gains, Gram pattern,
 //!                                  │             symbolic Cholesky, scratch; finds and masks
-//!                                  │             redundant rows; σ_max)
+//!                                  │             redundant rows; σ_max; divergence limits)
 //!                                  ├─ assemble(targets, cap, tol)   before the clock starts
 //!                                  ├─ tick(targets, dt) ──► TickReport + finger_outputs()
 //!                                  │     iterations × [projected step with last tick's factor,
 //!                                  │                   stopped if the chord iteration diverges
 //!                                  │                   | or Eq. 1–3 gradient step]
-//!                                  │     evaluate C, C_q at final q → violations
+//!                                  │     guard: step and multipliers within limits
+//!                                  │     evaluate C, C_q at final q → violations (guard)
 //!                                  │     q history → b → factor C_q M⁻¹ C_qᵀ → λ_F → Eq. 8
 //!                                  │     + coupling (the factor serves the next tick)
 //!                                  └─ adopt_state(&old)              at a hand-over
@@ -23,17 +24,31 @@
 //! evaluated and reported in every violation, but left out of both update
 //! rules and the Eq. 7 solve, whose matrix then stays positive definite.
 //!
+//! **Divergence guard.** Everything a tick computes is finite or it fails
+//! as [`TickOutcome::NonFinite`]; but finite can still be absurd (a singular
+//! pose that turns round-off into a 300 m step). A tick whose iterations
+//! move a coordinate, or leave a multiplier, beyond
+//! [`Program::divergence_limits`], or whose final violation exceeds the
+//! model's length scale, is refused as [`TickOutcome::Diverged`] like any
+//! other failure: q and λ restored, outputs zero. Measured on the test
+//! suite and the Peaucellier runs: steps up to 1.7 % of their limit,
+//! multipliers 0.3 %; violations 0.01 % on the built-in mechanisms, 1.3 %
+//! through the Peaucellier linkage's dead point, and 21 % (1 cm) with Eq. 3
+//! on that linkage, which it cannot hold so close to its dead point
+//! (`tests/al/redundant.rs`).
+//!
 //! # Real-time
 //! `tick`, `adopt_state` and `set_q` never allocate, lock or make syscalls
-//! (a counting-allocator test proves it on all three built-in mechanisms)
-//! and are deterministic: sequential faer, no hashing, no clock. A tick costs `iterations` update steps (gradient: one fused
+//! (a counting-allocator test proves it on all three built-in mechanisms and
+//! on a masked linkage) and are deterministic: sequential faer, no hashing,
+//! no clock. A tick costs `iterations` update steps (gradient: one fused
 //! pass over the constraints; projected: a value-only evaluation, C_q·v,
 //! C_qᵀ·v and one pair of sparse triangular solves), one evaluation of C and
 //! C_q, one assembly of C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky (symbolic
 //! factor fixed at construction; a second, and with the projected rule a
 //! third, only when a limit must be released) with 1 + m_f solves, an
-//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one). All are
-//! bounded by the model's
+//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one), and the
+//! guards' O(coordinates + rows) passes. All are bounded by the model's
 //! size; nothing iterates to a tolerance. Measured: four-bar 8 µs, Stewart
 //! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
@@ -41,7 +56,10 @@ mod report;
 mod state;
 mod tick;
 
-pub use report::{AssemblyReport, FingerOutput, ProgramError, TickOutcome, TickReport};
+pub use report::{
+    AssemblyReport, Divergence, DivergenceLimits, FingerOutput, ProgramError, TickOutcome,
+    TickReport,
+};
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -52,7 +70,7 @@ use crate::al::projected::Projected;
 use crate::al::scaling::{Scaling, check_stable};
 use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
-use crate::{Evaluation, FingerTarget, Model};
+use crate::{Evaluation, FingerTarget, Model, UpdateRule};
 
 /// The fast loop's solver state for one model. `Send`: build it on the slow
 /// thread, move it to the fast one. See the [module docs](self).
@@ -64,6 +82,7 @@ pub struct Program {
     sigma_max: f64,
     h: f64,
     redundancy: Redundancy,
+    limits: DivergenceLimits,
     ev: Evaluation,
     q: Vec<f64>,
     /// q₀ of the least-astonishment objective (the previous tick's q).
@@ -89,8 +108,8 @@ impl Program {
     /// Builds the program of `model` at its initial configuration q0 (at rest,
     /// multipliers zero). Finds and masks redundant rows at q0
     /// (`settings.redundancy`), measures σ_max at q0 to set h, rejects
-    /// settings that would diverge. Allocates; call it off the real-time
-    /// thread.
+    /// settings that would diverge and fixes the divergence limits.
+    /// Allocates; call it off the real-time thread.
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
         settings.validate()?;
         let mut ev = model.evaluation();
@@ -105,6 +124,7 @@ impl Program {
         check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
             .map_err(|(a, beta)| ProgramError::Unstable { a, beta })?;
         let (n, m) = (model.n_coords(), model.n_rows());
+        let limits = divergence_limits(&scaling, &settings, feedback.mean_mass_kg());
         let projected = Projected::new(
             &model,
             settings.gain,
@@ -130,6 +150,7 @@ impl Program {
             h,
             sigma_max,
             redundancy,
+            limits,
             scaling,
             settings,
             model,
@@ -198,6 +219,12 @@ impl Program {
         &self.redundancy
     }
 
+    /// The sizes beyond which a tick refuses its result as diverged
+    /// ([`TickOutcome::Diverged`]).
+    pub fn divergence_limits(&self) -> &DivergenceLimits {
+        &self.limits
+    }
+
     /// The length scale L in use, metres.
     pub fn length_scale_m(&self) -> f64 {
         self.scaling.length_m
@@ -223,6 +250,26 @@ impl Program {
             self.settings.velocity_filter.as_secs_f64(),
         );
         Duration::from_secs_f64(0.5 * dt_s + tau)
+    }
+}
+
+/// The limits documented on [`DivergenceLimits`].
+fn divergence_limits(
+    s: &Scaling,
+    settings: &SolverSettings,
+    mean_mass_kg: f64,
+) -> DivergenceLimits {
+    let l = s.length_m;
+    let pull = settings.finger_pull_limit_m;
+    let d = if pull.is_finite() { pull } else { l };
+    let mass = match settings.update {
+        UpdateRule::Projected => mean_mass_kg,
+        UpdateRule::Gradient => 1.0,
+    };
+    DivergenceLimits {
+        step_m: 10.0 * (l + f64::from(settings.iterations) * d),
+        multiplier: 1e6 * settings.gain * mass * (l + d),
+        violation_m: l,
     }
 }
 

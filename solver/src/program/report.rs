@@ -90,6 +90,53 @@ pub enum TickOutcome {
     ForceSolve,
     /// `dt` was zero: no velocities can be formed.
     ZeroDt,
+    /// Every number stayed finite but one was absurd (beyond
+    /// [`Program::divergence_limits`](super::Program::divergence_limits)):
+    /// the tick's result was not applied. The session should cut force and
+    /// re-project (Newton-KKT) from its last good configuration.
+    Diverged(Divergence),
+}
+
+/// Which quantity of a tick was absurd ([`TickOutcome::Diverged`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Divergence {
+    /// The iterations moved a coordinate farther than
+    /// [`DivergenceLimits::step_m`].
+    Step,
+    /// A multiplier exceeded [`DivergenceLimits::multiplier`].
+    Multiplier,
+    /// A mechanism row's violation at the tick's end exceeded
+    /// [`DivergenceLimits::violation_m`].
+    Violation,
+}
+
+/// The sizes beyond which a tick's result is refused as diverged, fixed by
+/// [`Program::new`](super::Program::new) from the model's length scale L
+/// (its largest lever arm, or `SolverSettings::length_scale_m`), the finger
+/// pull limit d (L when the limit is off), the iterations per tick n and the
+/// gain K. Everything is in
+/// the update's scaled units: coordinates and rows in metres, angle and
+/// Euler-parameter entries times L.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DivergenceLimits {
+    /// Largest change of any scaled coordinate over one tick's iterations,
+    /// metres: 10 (L + n d). A tick moves a finger at most n d (one
+    /// pull limit per step) and turns a body at most about its own lever L;
+    /// ten times that in 1 ms is hundreds of m/s, which no hand produces.
+    pub step_m: f64,
+    /// Largest |λ_i| / ℓ_i after a tick's iterations (metres-equivalent
+    /// multiplier): 10⁶ K (L + d), times the mean body mass m̄ with
+    /// the projected rule (its multipliers are K m̄ times a distance). Joint
+    /// multipliers balance the fingers' pull, at most K (d + L) per finger
+    /// row times the mechanism's lever ratios; measured: 3e3 × that close
+    /// to the Peaucellier linkage's dead point, 4e8 × in the divergence this
+    /// guard exists for.
+    pub multiplier: f64,
+    /// Largest violation of a mechanism row (joints, norms, limits, masked
+    /// rows included; angle and norm rows times L) at the end of a tick,
+    /// metres: L, a joint apart by the mechanism's own lever arm. A session
+    /// that needs a tighter definition of "broken" applies its own on top.
+    pub violation_m: f64,
 }
 
 /// Diagnostics of one tick. Violations are of the mechanism's constraints

@@ -1,9 +1,10 @@
 //! The fast tick and the warm-up assembly.
 
+use std::cmp::Ordering;
 use std::time::Duration;
 
 use super::report::max_tracking;
-use super::{AssemblyReport, FingerOutput, Program, TickOutcome, TickReport};
+use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
@@ -15,6 +16,21 @@ const CHORD_GROWTH: f64 = 2.0;
 /// Steps below this (scaled metres) are never judged: round-off at
 /// convergence fluctuates freely.
 const CHORD_FLOOR_M: f64 = 1e-9;
+
+/// `x ≤ limit`, false for NaN.
+#[inline]
+fn within(x: f64, limit: f64) -> bool {
+    matches!(
+        x.partial_cmp(&limit),
+        Some(Ordering::Less | Ordering::Equal)
+    )
+}
+
+/// max that keeps a NaN (`f64::max` drops it).
+#[inline]
+fn nan_max(a: f64, b: f64) -> f64 {
+    if b.is_nan() || b > a { b } else { a }
+}
 
 impl Program {
     /// One fast tick: `settings.iterations` update steps (projected or Eq. 1–3,
@@ -29,7 +45,9 @@ impl Program {
     ///
     /// On any failure the status says why, q and the multipliers are restored
     /// to their values before the call, the motion history restarts at rest,
-    /// and every finger output is zero: nothing non-finite ever leaves.
+    /// and every finger output is zero: nothing non-finite ever leaves, and
+    /// nothing absurd either ([`TickOutcome::Diverged`]: a step, multiplier
+    /// or violation beyond [`Program::divergence_limits`]).
     ///
     /// # Real-time
     /// No allocation, locks or syscalls; bounded time (see the
@@ -52,21 +70,53 @@ impl Program {
     /// timing one iteration. The projected rule steps with the factor of the
     /// last tick (or `set_q`, `assemble`): a few calls per tick are fine; to
     /// converge from far away use [`assemble`](Self::assemble), which
-    /// refactors. On failure q and the multipliers are restored.
+    /// refactors. The step and multiplier guards of `tick` apply. On failure
+    /// q and the multipliers are restored.
     ///
     /// # Real-time
     /// No allocation; `iterations` update steps.
     pub fn iterate(&mut self, targets: &[FingerTarget], iterations: u32) -> TickOutcome {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
-        match self.iterations(targets, iterations) {
-            Ok(_) => TickOutcome::Ok,
-            Err((status, _)) => {
-                self.q.copy_from_slice(&self.q_ref);
-                self.lambda.copy_from_slice(&self.saved_lambda);
-                status
-            }
+        let status = match self.iterations(targets, iterations) {
+            Ok(_) => match self.diverged_state() {
+                None => return TickOutcome::Ok,
+                Some(d) => TickOutcome::Diverged(d),
+            },
+            Err((status, _)) => status,
+        };
+        self.q.copy_from_slice(&self.q_ref);
+        self.lambda.copy_from_slice(&self.saved_lambda);
+        status
+    }
+
+    /// The divergence guard on a tick's iterations: the largest scaled
+    /// coordinate change since `q_ref` and the largest |λ_i| / ℓ_i against
+    /// [`DivergenceLimits`](super::DivergenceLimits). NaN counts as absurd.
+    ///
+    /// # Real-time
+    /// No allocation; O(coordinates + rows).
+    fn diverged_state(&self) -> Option<Divergence> {
+        let step_sq = self
+            .q
+            .iter()
+            .zip(&self.q_ref)
+            .zip(&self.scaling.inv_metric)
+            .map(|((a, b), &w)| (a - b) * (a - b) / w)
+            .fold(0.0, nan_max);
+        if !within(step_sq, self.limits.step_m * self.limits.step_m) {
+            return Some(Divergence::Step);
         }
+        let lambda = self
+            .lambda
+            .iter()
+            .zip(&self.scaling.ell)
+            .map(|(l, e)| l.abs() / e)
+            .fold(0.0, nan_max);
+        if !within(lambda, self.limits.multiplier) {
+            return Some(Divergence::Multiplier);
+        }
+        None
     }
 
     /// The iterations of a tick from q with q₀ = `q_ref` (already set).
@@ -161,10 +211,16 @@ impl Program {
             Ok(applied) => applied,
             Err((status, k)) => return self.failed(status, k),
         };
+        if let Some(d) = self.diverged_state() {
+            return self.failed(TickOutcome::Diverged(d), n);
+        }
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
         let v = Violation::of(&self.model, &self.scaling, self.ev.values());
+        if !within(v.max_scaled_m, self.limits.violation_m) {
+            return self.failed(TickOutcome::Diverged(Divergence::Violation), n);
+        }
         let solved = self.feedback.compute(
             &self.model,
             &self.scaling,

@@ -1,13 +1,14 @@
 //! Structurally redundant rows and the divergence guards: planar linkages of
 //! spatial revolutes (`planar`), whose closed loops repeat out-of-plane rows.
-//! `Program::new` masks the dependent rows.
+//! `Program::new` masks the dependent rows; a tick refuses absurd results.
 
 use std::sync::Arc;
 use std::time::Duration;
 
+use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::mechanisms::{four_bar, sphere_toy, stewart};
 use haptloop_solver::{
-    FingerTarget, Model, PlaneOwner, PointPlaneSpec, Program, RedundancyCheck, RowUnit,
+    Divergence, FingerTarget, Model, PlaneOwner, PointPlaneSpec, Program, RedundancyCheck, RowUnit,
     SolverSettings, TickOutcome, UpdateRule, reference_finger_wrenches,
 };
 use nalgebra::{DMatrix, Vector3};
@@ -346,6 +347,109 @@ fn the_dead_point_is_crossed_without_divergence() {
     assert!(worst < 1e-3, "{worst}");
     assert!(violated <= 20, "{violated} ticks above 1 µm");
     assert!(max_force < 300.0, "{max_force} N");
+}
+
+/// A crafted absurd step: a free body whose finger has no pull limit, its
+/// target a kilometre away. The tick refuses it: status `Diverged(Step)`,
+/// zero outputs, q and multipliers unchanged; an ordinary target works again.
+#[test]
+fn an_absurd_step_is_refused() {
+    let model = free_body([0.0; 3], false);
+    let targets = model.initial_targets();
+    let mut p = program(
+        model,
+        SolverSettings {
+            finger_pull_limit_m: f64::INFINITY,
+            ..SolverSettings::default()
+        },
+    );
+    hold(&mut p, &targets, 10);
+    let (q, lambda) = (p.q().to_vec(), p.lambda().to_vec());
+    let far = [FingerTarget::at(
+        targets[0].position_m + Vector3::new(1e3, 0.0, 0.0),
+    )];
+    let r = p.tick(&far, DT);
+    assert_eq!(r.status, TickOutcome::Diverged(Divergence::Step));
+    assert_eq!(p.q(), &q[..]);
+    assert_eq!(p.lambda(), &lambda[..]);
+    assert!(p.finger_outputs().iter().all(|o| *o == Default::default()));
+    assert_eq!(p.iterate(&far, 1), TickOutcome::Diverged(Divergence::Step));
+    assert_eq!(p.q(), &q[..]);
+    hold(&mut p, &targets, 5);
+}
+
+/// A crafted absurd violation: the planar four-bar's coupler 20 cm off its
+/// pins (twice L), and a gradient rule at 1 % of its stable step that cannot
+/// close that in a tick. The tick is refused as `Diverged(Violation)` with q
+/// kept as it was given.
+#[test]
+fn an_absurd_violation_is_refused() {
+    let model = planar_four_bar([0.0, 0.0, -9.81]);
+    let targets = model.initial_targets();
+    let slow = SolverSettings {
+        step: 0.01,
+        ..settings(UpdateRule::Gradient)
+    };
+    let mut p = program(model.clone(), slow);
+    let mut q = model.q0().to_vec();
+    let coupler = model
+        .layout()
+        .body_offset(model.body_id("coupler").unwrap())
+        .unwrap();
+    q[coupler + 2] += 0.2;
+    p.set_q(&q).unwrap();
+    let limit = p.divergence_limits().violation_m;
+    assert!(limit < 0.2 && limit > 0.01, "{limit}");
+    let r = p.tick(&targets, DT);
+    assert_eq!(r.status, TickOutcome::Diverged(Divergence::Violation));
+    assert_eq!(p.q(), &q[..]);
+    assert!(p.finger_outputs().iter().all(|o| *o == Default::default()));
+    p.set_q(model.q0()).unwrap();
+    hold(&mut p, &targets, 5);
+}
+
+/// The masked linkage's ticks allocate nothing: through the dead point (the
+/// projected step stopping early), the gradient rule, a refused tick.
+#[test]
+fn masked_ticks_allocate_nothing() {
+    assert!(is_installed());
+    let model = Arc::new(peaucellier([0.0, 0.0, -9.81]));
+    let p0 = model.initial_targets()[0].position_m;
+    let w = 2.0 * std::f64::consts::PI * 0.25;
+    let circle: Vec<[FingerTarget; 1]> = (2500..2700)
+        .map(|k| {
+            let t = k as f64 * DT.as_secs_f64();
+            [FingerTarget::at(
+                p0 + Vector3::new((w * t).cos() - 1.0, (w * t).sin(), 0.0) * 0.015,
+            )]
+        })
+        .collect();
+    let mut p = Program::new(model.clone(), SolverSettings::default()).unwrap();
+    let mut g = Program::new(model.clone(), settings(UpdateRule::Gradient)).unwrap();
+    assert_eq!(p.redundancy().rows.len(), 9);
+    // Drive to just before the dead point outside the counted section.
+    for k in 0..2500 {
+        let t = k as f64 * DT.as_secs_f64();
+        let target = p0 + Vector3::new((w * t).cos() - 1.0, (w * t).sin(), 0.0) * 0.015;
+        p.tick(&[FingerTarget::at(target)], DT);
+    }
+    let mut broken = model.q0().to_vec();
+    broken[2] += 1.0;
+    let (statuses, stats) = count(|| {
+        let mut ok = 0;
+        for t in &circle {
+            ok += usize::from(p.tick(t, DT).status == TickOutcome::Ok);
+            ok += usize::from(g.tick(t, DT).status == TickOutcome::Ok);
+        }
+        g.set_q(&broken).unwrap();
+        (ok, g.tick(&circle[0], DT).status)
+    });
+    assert_eq!(stats.total(), 0, "allocations: {stats:?}");
+    assert_eq!(statuses.0, 2 * circle.len());
+    assert!(
+        matches!(statuses.1, TickOutcome::Diverged(_)),
+        "{statuses:?}"
+    );
 }
 
 /// Not a test: prints what the redundancy check adds to `Program::new` per
