@@ -137,7 +137,7 @@ impl SlowLoop {
         if snap.solved && finite && v <= self.threshold_m {
             self.last_good.clear();
             self.last_good.extend_from_slice(&snap.q);
-            if self.reference_every > 0 && self.stats.steps % self.reference_every == 0 {
+            if self.reference_every > 0 && self.stats.steps.is_multiple_of(self.reference_every) {
                 let q = snap.q.clone();
                 self.measure_against_reference(&q);
             }
