@@ -42,9 +42,10 @@
 //! the kept rows lose rank, the linearisation holds only over tiny steps,
 //! and the chord iteration diverges: each step 50–9000× the one before
 //! (measured: 8 mm, 0.4 m, 3 km, 6000 km within one tick). A converging chord iteration
-//! contracts (ratios 0.1–0.7), so `Program::tick` undoes a step more than
-//! twice as large as the tick's previous one and ends the tick's iterations
-//! there; the next tick starts from a fresh factor. Through the dead point
+//! contracts (ratios 0.1–0.7), so `Program::tick` refuses a step more than
+//! twice as large as the tick's previous one (the step is sized before it
+//! is applied) and ends the tick's iterations there; the next tick starts
+//! from a fresh factor. Through the dead point
 //! that costs a few ticks of up to 0.7 mm violation, and the linkage folds
 //! into its other branch instead of flying apart.
 
@@ -96,7 +97,9 @@ impl Projected {
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
     /// `q` toward `targets`, with q₀ = `q_ref`, the Jacobian stored in `ev` and
     /// the factor held by `fb` (both at the tick's start). Returns the step's
-    /// size: its largest scaled coordinate change (r in metres, e times L).
+    /// size, its largest scaled coordinate change (r in metres, e times L),
+    /// or `None`, leaving q and `lambda` untouched, when that size exceeds
+    /// `max_size_m` (a diverging chord iteration, see the module docs).
     ///
     /// # Real-time
     /// No allocation; a value-only evaluation, C_q·v and C_qᵀ·v, one pair of
@@ -112,8 +115,9 @@ impl Projected {
         q_ref: &[f64],
         targets: &[FingerTarget],
         step: f64,
+        max_size_m: f64,
         lambda: &mut [f64],
-    ) -> Result<f64, TickOutcome> {
+    ) -> Result<Option<f64>, TickOutcome> {
         ev.evaluate_values(model, q, targets)
             .map_err(TickOutcome::Eval)?;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
@@ -150,11 +154,18 @@ impl Projected {
         jac.mul_t_vec(&self.y, &mut self.g)
             .map_err(|_| TickOutcome::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
-        let mut size = 0.0f64;
-        for (((qc, d), mg), w) in q.iter_mut().zip(&self.d).zip(&self.mg).zip(&s.inv_metric) {
-            let dq = step * (d + mg);
-            *qc -= dq;
-            size = size.max(dq.abs() / w.sqrt());
+        let size = self
+            .d
+            .iter()
+            .zip(&self.mg)
+            .zip(&s.sqrt_metric)
+            .map(|((d, mg), w)| (step * (d + mg)).abs() * w)
+            .fold(0.0, f64::max);
+        if size > max_size_m {
+            return Ok(None);
+        }
+        for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
+            *qc -= step * (d + mg);
         }
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
@@ -163,6 +174,6 @@ impl Projected {
                 Role::Inequality => (-y).max(0.0),
             };
         }
-        Ok(size)
+        Ok(Some(size))
     }
 }

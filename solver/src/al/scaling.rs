@@ -59,6 +59,11 @@ pub(crate) struct Scaling {
     pub integral: Vec<f64>,
     /// 1 / W_c per column.
     pub inv_metric: Vec<f64>,
+    /// √W_c per column (1, or L on Euler parameters): a coordinate change
+    /// times this is in metres.
+    pub sqrt_metric: Vec<f64>,
+    /// 1 / ℓ_i per row.
+    pub inv_ell: Vec<f64>,
     /// d: the scaled finger error beyond which the pull stops growing, metres.
     pub finger_limit_m: f64,
 }
@@ -96,16 +101,20 @@ impl Scaling {
             });
         }
         let mut inv_metric = vec![1.0; model.n_coords()];
+        let mut sqrt_metric = vec![1.0; model.n_coords()];
         for (_, o) in model.layout().moving_bodies() {
             inv_metric[o + 3..o + 7].fill(1.0 / (l * l));
+            sqrt_metric[o + 3..o + 7].fill(l);
         }
         Self {
             length_m: l,
             role,
+            inv_ell: ell.iter().map(|e| 1.0 / e).collect(),
             ell,
             penalty,
             integral,
             inv_metric,
+            sqrt_metric,
             finger_limit_m: s.finger_pull_limit_m,
         }
     }

@@ -89,9 +89,6 @@ pub struct Program {
     q_ref: Vec<f64>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
-    /// q and λ before the current projected step (undone if it diverges).
-    iterate_q: Vec<f64>,
-    iterate_lambda: Vec<f64>,
     g: Vec<f64>,
     fused: Fused,
     projected: Projected,
@@ -136,8 +133,6 @@ impl Program {
             q_ref: model.q0().to_vec(),
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
-            iterate_q: vec![0.0; n],
-            iterate_lambda: vec![0.0; m],
             g: vec![0.0; n],
             fused: Fused::new(&model),
             projected,

@@ -10,7 +10,7 @@ use crate::{FingerTarget, UpdateRule};
 
 /// A projected step more than this × the previous step of the same tick
 /// means the chord iteration diverges (a converging one contracts: ratios
-/// 0.1–0.7 measured); it is undone and the tick's iterations stop.
+/// 0.1–0.7 measured); it is refused and the tick's iterations stop.
 const CHORD_GROWTH: f64 = 2.0;
 
 /// Steps below this (scaled metres) are never judged: round-off at
@@ -26,10 +26,55 @@ fn within(x: f64, limit: f64) -> bool {
     )
 }
 
-/// max that keeps a NaN (`f64::max` drops it).
-#[inline]
-fn nan_max(a: f64, b: f64) -> f64 {
-    if b.is_nan() || b > a { b } else { a }
+/// maxᵢ |xᵢ − rᵢ| wᵢ, or NaN if a term is NaN or infinite: four
+/// independent lanes of `max` and of Σ v·0 (NaN iff some v is not finite,
+/// as `fused::all_finite`), so the loop vectorises.
+fn max_scaled_change(x: &[f64], r: &[f64], w: &[f64]) -> f64 {
+    let (mut top, mut bad) = ([0.0f64; 4], [0.0f64; 4]);
+    let (xc, rc, wc) = (x.chunks_exact(4), r.chunks_exact(4), w.chunks_exact(4));
+    let (xt, rt, wt) = (xc.remainder(), rc.remainder(), wc.remainder());
+    for ((a, b), c) in xc.zip(rc).zip(wc) {
+        for k in 0..4 {
+            let v = (a[k] - b[k]).abs() * c[k];
+            top[k] = if v > top[k] { v } else { top[k] };
+            bad[k] += v * 0.0;
+        }
+    }
+    for (k, ((a, b), c)) in xt.iter().zip(rt).zip(wt).enumerate() {
+        let v = (a - b).abs() * c;
+        top[k] = if v > top[k] { v } else { top[k] };
+        bad[k] += v * 0.0;
+    }
+    finish(top, bad)
+}
+
+/// maxᵢ |xᵢ| wᵢ, or NaN (as [`max_scaled_change`]).
+fn max_scaled(x: &[f64], w: &[f64]) -> f64 {
+    let (mut top, mut bad) = ([0.0f64; 4], [0.0f64; 4]);
+    let (xc, wc) = (x.chunks_exact(4), w.chunks_exact(4));
+    let (xt, wt) = (xc.remainder(), wc.remainder());
+    for (a, c) in xc.zip(wc) {
+        for k in 0..4 {
+            let v = a[k].abs() * c[k];
+            top[k] = if v > top[k] { v } else { top[k] };
+            bad[k] += v * 0.0;
+        }
+    }
+    for (k, (a, c)) in xt.iter().zip(wt).enumerate() {
+        let v = a.abs() * c;
+        top[k] = if v > top[k] { v } else { top[k] };
+        bad[k] += v * 0.0;
+    }
+    finish(top, bad)
+}
+
+#[inline(always)]
+fn finish(top: [f64; 4], bad: [f64; 4]) -> f64 {
+    if (bad[0] + bad[1] + bad[2] + bad[3]).is_nan() {
+        f64::NAN
+    } else {
+        top[0].max(top[1]).max(top[2].max(top[3]))
+    }
 }
 
 impl Program {
@@ -40,7 +85,7 @@ impl Program {
     ///
     /// With the projected rule, a step more than twice the size of the tick's
     /// previous one (a diverging chord iteration, near a singular pose) is
-    /// undone and the tick continues with the steps before it; the report's
+    /// refused and the tick continues with the steps before it; the report's
     /// `iterations` counts the steps kept.
     ///
     /// On any failure the status says why, q and the multipliers are restored
@@ -97,22 +142,11 @@ impl Program {
     /// # Real-time
     /// No allocation; O(coordinates + rows).
     fn diverged_state(&self) -> Option<Divergence> {
-        let step_sq = self
-            .q
-            .iter()
-            .zip(&self.q_ref)
-            .zip(&self.scaling.inv_metric)
-            .map(|((a, b), &w)| (a - b) * (a - b) / w)
-            .fold(0.0, nan_max);
-        if !within(step_sq, self.limits.step_m * self.limits.step_m) {
+        let step = max_scaled_change(&self.q, &self.q_ref, &self.scaling.sqrt_metric);
+        if !within(step, self.limits.step_m) {
             return Some(Divergence::Step);
         }
-        let lambda = self
-            .lambda
-            .iter()
-            .zip(&self.scaling.ell)
-            .map(|(l, e)| l.abs() / e)
-            .fold(0.0, nan_max);
+        let lambda = max_scaled(&self.lambda, &self.scaling.inv_ell);
         if !within(lambda, self.limits.multiplier) {
             return Some(Divergence::Multiplier);
         }
@@ -121,9 +155,9 @@ impl Program {
 
     /// The iterations of a tick from q with q₀ = `q_ref` (already set).
     /// Returns the number of steps applied: the projected rule stops early
-    /// (undoing the offending step) when its chord iteration diverges.
+    /// (refusing the offending step) when its chord iteration diverges.
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
-        let mut previous = f64::INFINITY;
+        let mut allowed = f64::INFINITY;
         for k in 0..n {
             let done = match self.settings.update {
                 UpdateRule::Gradient => self
@@ -138,33 +172,24 @@ impl Program {
                         &mut self.lambda,
                         &mut self.g,
                     )
-                    .map(|()| 0.0)
+                    .map(|()| Some(0.0))
                     .map_err(TickOutcome::Eval),
-                UpdateRule::Projected => {
-                    self.iterate_q.copy_from_slice(&self.q);
-                    self.iterate_lambda.copy_from_slice(&self.lambda);
-                    self.projected.step(
-                        &self.model,
-                        &self.scaling,
-                        &mut self.ev,
-                        &mut self.feedback,
-                        &mut self.q,
-                        &self.q_ref,
-                        targets,
-                        self.settings.step,
-                        &mut self.lambda,
-                    )
-                }
+                UpdateRule::Projected => self.projected.step(
+                    &self.model,
+                    &self.scaling,
+                    &mut self.ev,
+                    &mut self.feedback,
+                    &mut self.q,
+                    &self.q_ref,
+                    targets,
+                    self.settings.step,
+                    allowed,
+                    &mut self.lambda,
+                ),
             };
             match done {
-                Ok(size) => {
-                    if size > CHORD_GROWTH * previous && size > CHORD_FLOOR_M {
-                        self.q.copy_from_slice(&self.iterate_q);
-                        self.lambda.copy_from_slice(&self.iterate_lambda);
-                        return Ok(k);
-                    }
-                    previous = size;
-                }
+                Ok(Some(size)) => allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M),
+                Ok(None) => return Ok(k),
                 Err(status) => {
                     let status = match status {
                         TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
@@ -374,6 +399,7 @@ impl Program {
                         &self.q_ref,
                         targets,
                         1.0,
+                        f64::INFINITY,
                         &mut self.lambda,
                     )
                     .map(|_| ())
