@@ -82,9 +82,9 @@
 pub mod al;
 pub mod constraint;
 mod evaluate;
+pub mod force;
 mod ids;
 mod jacobian;
-pub mod force;
 pub mod mechanisms;
 mod model;
 pub mod placement;
