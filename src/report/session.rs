@@ -83,8 +83,10 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.misses.skipped
     );
     let verdict = match s.violation.tolerance {
-        Some(t) if s.violation.max <= t => format!(" (scene tolerance {t:.0e} m: kept)"),
-        Some(t) => format!(" (scene tolerance {t:.0e} m: EXCEEDED)"),
+        Some(t) if s.violation.max <= t => {
+            format!(" (scene tolerance {t:.0e} m on translational rows: kept)")
+        }
+        Some(t) => format!(" (scene tolerance {t:.0e} m on translational rows: EXCEEDED)"),
         None => String::new(),
     };
     let _ = writeln!(
