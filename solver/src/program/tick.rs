@@ -160,20 +160,7 @@ impl Program {
         let mut allowed = f64::INFINITY;
         for k in 0..n {
             let done = match self.settings.update {
-                UpdateRule::Gradient => self
-                    .fused
-                    .iterate(
-                        &self.model,
-                        &self.scaling,
-                        self.h,
-                        &mut self.q,
-                        &self.q_ref,
-                        targets,
-                        &mut self.lambda,
-                        &mut self.g,
-                    )
-                    .map(|()| Some(0.0))
-                    .map_err(TickOutcome::Eval),
+                UpdateRule::Gradient => self.gradient_step(targets).map(|()| Some(0.0)),
                 UpdateRule::Projected => self.projected.step(
                     &self.model,
                     &self.scaling,
@@ -366,24 +353,28 @@ impl Program {
         r
     }
 
+    /// One step of Nelson & Cohen Eq. 1–3 (the fused gradient pass) from q.
+    fn gradient_step(&mut self, targets: &[FingerTarget]) -> Result<(), TickOutcome> {
+        self.fused
+            .iterate(
+                &self.model,
+                &self.scaling,
+                self.h,
+                &mut self.q,
+                &self.q_ref,
+                targets,
+                &mut self.lambda,
+                &mut self.g,
+            )
+            .map_err(TickOutcome::Eval)
+    }
+
     /// One assembly iteration from q (= `q_ref`): a gradient step, or a full
     /// Gauss–Newton step with the factor refreshed at q (an assembly may start
     /// far from the last factorisation).
     fn assembly_step(&mut self, targets: &[FingerTarget]) -> Result<(), TickOutcome> {
         match self.settings.update {
-            UpdateRule::Gradient => self
-                .fused
-                .iterate(
-                    &self.model,
-                    &self.scaling,
-                    self.h,
-                    &mut self.q,
-                    &self.q_ref,
-                    targets,
-                    &mut self.lambda,
-                    &mut self.g,
-                )
-                .map_err(TickOutcome::Eval),
+            UpdateRule::Gradient => self.gradient_step(targets),
             UpdateRule::Projected => {
                 match self.refresh() {
                     TickOutcome::Ok => {}
