@@ -152,30 +152,7 @@ impl Evaluation {
         if model.id != self.model_id {
             return Err(EvalError::ModelMismatch);
         }
-        let (expected, got) = (model.n_coords(), q.len());
-        if expected != got {
-            return Err(EvalError::CoordinateCount { expected, got });
-        }
-        let (expected, got) = (model.fingers.len(), targets.len());
-        if expected != got {
-            return Err(EvalError::TargetCount { expected, got });
-        }
-        if !all_finite(q) {
-            let index = q.iter().position(|v| !v.is_finite()).unwrap_or(0);
-            return Err(EvalError::NonFiniteCoordinate { index });
-        }
-        for (k, t) in targets.iter().enumerate() {
-            let finite = t
-                .position_m
-                .iter()
-                .chain(t.orientation.coords.iter())
-                .all(|v| v.is_finite());
-            if !finite {
-                return Err(EvalError::NonFiniteTarget {
-                    finger: FingerId(k as u32),
-                });
-            }
-        }
+        check_inputs(model, q, targets)?;
         // Frames are scratch: a failure here leaves C and C_q untouched.
         for (body, o) in model.layout.moving_bodies() {
             let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
@@ -214,10 +191,45 @@ impl Evaluation {
     }
 }
 
+/// The checks every evaluation of `model` at `q` toward `targets` makes
+/// first: coordinate and target counts, finite coordinates and targets.
+#[inline]
+pub(crate) fn check_inputs(
+    model: &Model,
+    q: &[f64],
+    targets: &[FingerTarget],
+) -> Result<(), EvalError> {
+    let (expected, got) = (model.n_coords(), q.len());
+    if expected != got {
+        return Err(EvalError::CoordinateCount { expected, got });
+    }
+    let (expected, got) = (model.fingers.len(), targets.len());
+    if expected != got {
+        return Err(EvalError::TargetCount { expected, got });
+    }
+    if !all_finite(q) {
+        let index = q.iter().position(|v| !v.is_finite()).unwrap_or(0);
+        return Err(EvalError::NonFiniteCoordinate { index });
+    }
+    for (k, t) in targets.iter().enumerate() {
+        let finite = t
+            .position_m
+            .iter()
+            .chain(t.orientation.coords.iter())
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(EvalError::NonFiniteTarget {
+                finger: FingerId(k as u32),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// True when every entry is finite: a branch-free sum of `v · 0` (NaN iff some
 /// v is NaN or infinite) that vectorises, unlike an early-exit search.
 #[inline]
-fn all_finite(v: &[f64]) -> bool {
+pub(crate) fn all_finite(v: &[f64]) -> bool {
     let mut lanes = [0.0f64; 4];
     let mut chunks = v.chunks_exact(4);
     for c in &mut chunks {

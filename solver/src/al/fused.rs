@@ -22,9 +22,10 @@ use nalgebra::Vector3;
 use super::scaling::Scaling;
 use super::update::{clamp_finger_pull, row_weight};
 use crate::constraint::block::{Ctx, Groups, RowGrad, Sink, Slot};
+use crate::evaluate::{all_finite, check_inputs};
 use crate::model::initial_frame;
 use crate::rotation::BodyFrame;
-use crate::{BodyId, ConstraintKind, EvalError, FingerId, FingerTarget, Model};
+use crate::{BodyId, ConstraintKind, EvalError, FingerTarget, Model};
 
 /// Most rows of one constraint (rigid finger, weld, revolute: ≤ 6).
 const MAX_ROWS: usize = 6;
@@ -227,30 +228,7 @@ impl Fused {
         q: &[f64],
         targets: &[FingerTarget],
     ) -> Result<(), EvalError> {
-        let (expected, got) = (model.n_coords(), q.len());
-        if expected != got {
-            return Err(EvalError::CoordinateCount { expected, got });
-        }
-        let (expected, got) = (model.fingers.len(), targets.len());
-        if expected != got {
-            return Err(EvalError::TargetCount { expected, got });
-        }
-        if !all_finite(q) {
-            let index = q.iter().position(|v| !v.is_finite()).unwrap_or(0);
-            return Err(EvalError::NonFiniteCoordinate { index });
-        }
-        for (k, t) in targets.iter().enumerate() {
-            if !t
-                .position_m
-                .iter()
-                .chain(t.orientation.coords.iter())
-                .all(|v| v.is_finite())
-            {
-                return Err(EvalError::NonFiniteTarget {
-                    finger: FingerId(k as u32),
-                });
-            }
-        }
+        check_inputs(model, q, targets)?;
         for &(b, o) in &self.moving {
             let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
             let e = [q[o + 3], q[o + 4], q[o + 5], q[o + 6]];
@@ -260,19 +238,4 @@ impl Fused {
         }
         Ok(())
     }
-}
-
-/// True when every entry is finite (branch-free, vectorisable: Σ v·0 is NaN
-/// iff some v is NaN or infinite).
-#[inline]
-fn all_finite(v: &[f64]) -> bool {
-    let mut lanes = [0.0f64; 4];
-    let mut chunks = v.chunks_exact(4);
-    for c in &mut chunks {
-        for k in 0..4 {
-            lanes[k] += c[k] * 0.0;
-        }
-    }
-    let tail: f64 = chunks.remainder().iter().map(|x| x * 0.0).sum();
-    lanes.iter().sum::<f64>() + tail == 0.0
 }
