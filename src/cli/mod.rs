@@ -3,6 +3,7 @@
 
 mod check;
 mod probe;
+mod rt_args;
 mod run;
 mod scenes;
 

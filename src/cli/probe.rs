@@ -1,11 +1,11 @@
 //! `haptloop probe`.
 
+use super::rt_args::RtArgs;
 use crate::report;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use haptloop_rt::probe::{ProbeConfig, run_probe};
 use haptloop_rt::schedule::StopFlag;
-use haptloop_rt::thread::CoreChoice;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -19,19 +19,9 @@ pub struct ProbeArgs {
     /// Seconds for the scheduler; the reference loop runs as long again.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
-    /// Spin window before each deadline, µs (0: sleep straight to the deadline).
-    /// 50–100 µs removes most wake-up jitter at that much CPU per period.
-    #[arg(long, default_value_t = 0)]
-    pub spin_us: u64,
-    /// Core to pin to (default: the last core this process may use).
-    #[arg(long)]
-    pub core: Option<usize>,
-    /// SCHED_FIFO priority 1–99; 0 stays SCHED_OTHER.
-    #[arg(long, default_value_t = 80)]
-    pub priority: u8,
-    /// Do not request mlockall.
-    #[arg(long)]
-    pub no_mlock: bool,
+    /// Real-time thread requests (both loops).
+    #[command(flatten)]
+    pub rt: RtArgs,
     /// Synthetic compute per tick, µs (calibrated arithmetic, not a sleep).
     #[arg(long, default_value_t = 10)]
     pub load_us: u64,
@@ -49,10 +39,7 @@ impl Default for ProbeArgs {
         ProbeArgs {
             rate: 1000,
             seconds: 5.0,
-            spin_us: 0,
-            core: None,
-            priority: 80,
-            no_mlock: false,
+            rt: RtArgs::default(),
             load_us: 10,
             json: None,
             hgrm: None,
@@ -68,16 +55,14 @@ impl ProbeArgs {
                 self.seconds
             );
         }
-        if self.priority > 99 {
-            bail!("--priority must be 0–99, got {}", self.priority);
-        }
+        let thread = self.rt.thread();
         Ok(ProbeConfig {
             rate_hz: self.rate,
             duration: Duration::from_secs_f64(self.seconds),
-            spin: Duration::from_micros(self.spin_us),
-            core: self.core.map_or(CoreChoice::Last, CoreChoice::Id),
-            fifo_priority: (self.priority > 0).then_some(self.priority),
-            lock_memory: !self.no_mlock,
+            spin: self.rt.spin(),
+            core: thread.core,
+            fifo_priority: thread.fifo_priority,
+            lock_memory: thread.lock_memory,
             load: Duration::from_micros(self.load_us),
             ..ProbeConfig::default()
         })

@@ -1,12 +1,12 @@
 //! `haptloop run`: a scene on simulated devices, with a report.
 
+use super::rt_args::RtArgs;
 use crate::report::{plots, session as text, summary::Summary};
 use crate::scenes::{DEFAULT_SCENE, resolve};
 use crate::session::{self, Plan, SessionOptions};
 use anyhow::{Context, Result};
 use clap::Args;
 use haptloop_rt::schedule::StopFlag;
-use haptloop_rt::thread::CoreChoice;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -59,18 +59,9 @@ pub struct RunArgs {
     /// Replay every device from DIR (`<device>.trace`) instead of simulating.
     #[arg(long, value_name = "DIR")]
     pub replay: Option<PathBuf>,
-    /// Spin window before each deadline, µs (see `haptloop probe --help`).
-    #[arg(long, default_value_t = 0)]
-    pub spin_us: u64,
-    /// Core for the fast thread (default: the last core).
-    #[arg(long)]
-    pub core: Option<usize>,
-    /// SCHED_FIFO priority 1–99 for the fast thread; 0 stays SCHED_OTHER.
-    #[arg(long, default_value_t = 80)]
-    pub priority: u8,
-    /// Do not request mlockall.
-    #[arg(long)]
-    pub no_mlock: bool,
+    /// Real-time thread requests.
+    #[command(flatten)]
+    pub rt: RtArgs,
     /// No live status line.
     #[arg(long)]
     pub quiet: bool,
@@ -91,10 +82,7 @@ impl Default for RunArgs {
             no_files: false,
             record: None,
             replay: None,
-            spin_us: 0,
-            core: None,
-            priority: 80,
-            no_mlock: false,
+            rt: RtArgs::default(),
             quiet: false,
         }
     }
@@ -133,9 +121,6 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     };
-    if args.priority > 99 {
-        anyhow::bail!("--priority must be 0–99, got {}", args.priority);
-    }
     let out_dir = match (&args.out, args.no_files) {
         (_, true) => None,
         (Some(d), false) => Some(d.clone()),
@@ -163,10 +148,8 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         out_dir: out_dir.clone(),
         record: args.record.clone(),
         replay: args.replay.clone(),
-        spin: Duration::from_micros(args.spin_us),
-        core: args.core.map_or(CoreChoice::Last, CoreChoice::Id),
-        fifo_priority: (args.priority > 0).then_some(args.priority),
-        lock_memory: !args.no_mlock,
+        spin: args.rt.spin(),
+        thread: args.rt.thread(),
     };
     let plan = Plan::new(&scene, &options)?;
     eprintln!(

@@ -4,7 +4,7 @@
 use crate::scenes::Scene;
 use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
-use haptloop_rt::thread::{CoreChoice, ThreadConfig};
+use haptloop_rt::thread::ThreadConfig;
 use haptloop_solver::SolverSettings;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -47,12 +47,8 @@ pub struct SessionOptions {
     pub replay: Option<PathBuf>,
     /// Spin window before each deadline.
     pub spin: Duration,
-    /// Core for the fast thread.
-    pub core: CoreChoice,
-    /// `SCHED_FIFO` priority, or `None`.
-    pub fifo_priority: Option<u8>,
-    /// Request `mlockall`.
-    pub lock_memory: bool,
+    /// The fast thread's core, priority and memory-locking requests.
+    pub thread: ThreadConfig,
 }
 
 impl Default for SessionOptions {
@@ -69,9 +65,7 @@ impl Default for SessionOptions {
             record: None,
             replay: None,
             spin: Duration::ZERO,
-            core: CoreChoice::Last,
-            fifo_priority: Some(80),
-            lock_memory: true,
+            thread: ThreadConfig::default(),
         }
     }
 }
@@ -101,14 +95,10 @@ pub struct Plan {
     pub record: Option<PathBuf>,
     /// Device-trace replay directory.
     pub replay: Option<PathBuf>,
-    /// Scheduler and thread settings.
+    /// Spin window before each deadline.
     pub spin: Duration,
-    /// Core for the fast thread.
-    pub core: CoreChoice,
-    /// `SCHED_FIFO` priority.
-    pub fifo_priority: Option<u8>,
-    /// `mlockall`.
-    pub lock_memory: bool,
+    /// The fast thread's core, priority and memory-locking requests.
+    pub thread: ThreadConfig,
 }
 
 impl Plan {
@@ -167,9 +157,7 @@ impl Plan {
             record: options.record.clone(),
             replay: options.replay.clone(),
             spin: options.spin,
-            core: options.core,
-            fifo_priority: options.fifo_priority,
-            lock_memory: options.lock_memory,
+            thread: options.thread.clone(),
         })
     }
 
@@ -193,12 +181,7 @@ impl Plan {
         ScheduleConfig {
             rate_hz: self.rate_hz,
             spin: self.spin,
-            thread: ThreadConfig {
-                core: self.core,
-                fifo_priority: self.fifo_priority,
-                lock_memory: self.lock_memory,
-                ..ThreadConfig::default()
-            },
+            thread: self.thread.clone(),
             ..ScheduleConfig::default()
         }
     }

@@ -8,6 +8,7 @@ use haptloop_devices::PhantomModel;
 use haptloop_rt::alloc::count;
 use haptloop_rt::clock::{MockClock, Nanos};
 use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag};
+use haptloop_rt::thread::ThreadConfig;
 use std::path::Path;
 
 fn deterministic(seconds: f64) -> SessionOptions {
@@ -198,8 +199,11 @@ fn a_stop_request_ends_a_real_session_cleanly() {
     let scene = resolve("four-bar").unwrap();
     let options = SessionOptions {
         seconds: 30.0,
-        fifo_priority: None,
-        lock_memory: false,
+        thread: ThreadConfig {
+            fifo_priority: None,
+            lock_memory: false,
+            ..ThreadConfig::default()
+        },
         ..SessionOptions::default()
     };
     let plan = Plan::new(&scene, &options).unwrap();
@@ -300,4 +304,23 @@ fn the_cli_check_reports_a_bad_scene_with_its_location_and_exit_status_1() {
         .unwrap();
     assert!(ok.status.success());
     assert!(String::from_utf8_lossy(&ok.stdout).contains("rigid grasp, 6 rows"));
+}
+
+/// The real-time flags are one set shared by `run` and `probe`: an
+/// out-of-range priority is a usage error (exit status 2) naming the flag,
+/// for both, before anything runs.
+#[test]
+fn an_out_of_range_priority_is_a_usage_error_for_run_and_probe() {
+    for cmd in ["run", "probe"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+            .args([cmd, "--priority", "150"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{cmd}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("--priority") && err.contains("150"),
+            "{cmd}: {err}"
+        );
+    }
 }
