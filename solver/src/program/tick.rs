@@ -161,18 +161,7 @@ impl Program {
         for k in 0..n {
             let done = match self.settings.update {
                 UpdateRule::Gradient => self.gradient_step(targets).map(|()| Some(0.0)),
-                UpdateRule::Projected => self.projected.step(
-                    &self.model,
-                    &self.scaling,
-                    &mut self.ev,
-                    &mut self.feedback,
-                    &mut self.q,
-                    &self.q_ref,
-                    targets,
-                    self.settings.step,
-                    allowed,
-                    &mut self.lambda,
-                ),
+                UpdateRule::Projected => self.projected_step(targets, self.settings.step, allowed),
             };
             match done {
                 Ok(Some(size)) => allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M),
@@ -369,6 +358,28 @@ impl Program {
             .map_err(TickOutcome::Eval)
     }
 
+    /// One projected (Gauss–Newton) step of length `step` from q with the
+    /// current factor, refused above `allowed` (see `Projected::step`).
+    fn projected_step(
+        &mut self,
+        targets: &[FingerTarget],
+        step: f64,
+        allowed: f64,
+    ) -> Result<Option<f64>, TickOutcome> {
+        self.projected.step(
+            &self.model,
+            &self.scaling,
+            &mut self.ev,
+            &mut self.feedback,
+            &mut self.q,
+            &self.q_ref,
+            targets,
+            step,
+            allowed,
+            &mut self.lambda,
+        )
+    }
+
     /// One assembly iteration from q (= `q_ref`): a gradient step, or a full
     /// Gauss–Newton step with the factor refreshed at q (an assembly may start
     /// far from the last factorisation).
@@ -380,20 +391,7 @@ impl Program {
                     TickOutcome::Ok => {}
                     status => return Err(status),
                 }
-                self.projected
-                    .step(
-                        &self.model,
-                        &self.scaling,
-                        &mut self.ev,
-                        &mut self.feedback,
-                        &mut self.q,
-                        &self.q_ref,
-                        targets,
-                        1.0,
-                        f64::INFINITY,
-                        &mut self.lambda,
-                    )
-                    .map(|_| ())
+                self.projected_step(targets, 1.0, f64::INFINITY).map(|_| ())
             }
         }
     }
