@@ -61,6 +61,14 @@ pub enum TraceError {
 }
 
 impl TraceError {
+    /// Reads a whole trace file; an error names the file.
+    pub(crate) fn read(path: &std::path::Path) -> Result<String, Self> {
+        std::fs::read_to_string(path).map_err(|source| Self::Io {
+            path: path.to_owned(),
+            source,
+        })
+    }
+
     pub(crate) fn parse(source_name: &str, line: usize, message: impl Into<String>) -> Self {
         Self::Parse {
             source_name: source_name.to_owned(),

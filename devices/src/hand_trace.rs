@@ -136,11 +136,7 @@ impl HandTrace {
 
     /// Reads and parses a CSV file.
     pub fn load(path: &Path) -> Result<Self, TraceError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TraceError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::parse(&text, &path.display().to_string())
+        Self::parse(&TraceError::read(path)?, &path.display().to_string())
     }
 
     /// Number of samples.
