@@ -238,6 +238,13 @@ pub trait Device {
         let _ = timeout;
         false
     }
+
+    /// Joint torques the motors apply right now, N·m (zero when they are
+    /// off), or `None` when the device cannot report them. Read at the motor,
+    /// after every software layer: what shutdown tests check.
+    fn applied_torque_nm(&self) -> Option<Vector3<f64>> {
+        None
+    }
 }
 
 impl<D: Device + ?Sized> Device for Box<D> {
@@ -259,5 +266,8 @@ impl<D: Device + ?Sized> Device for Box<D> {
     }
     fn set_hardware_watchdog(&mut self, timeout: Option<Duration>) -> bool {
         (**self).set_hardware_watchdog(timeout)
+    }
+    fn applied_torque_nm(&self) -> Option<Vector3<f64>> {
+        (**self).applied_torque_nm()
     }
 }

@@ -2,13 +2,15 @@
 //! configuration objects of the library crates.
 
 mod check;
+mod output;
 mod probe;
 mod rt_args;
 mod run;
 mod scenes;
+mod values;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use haptloop_rt::schedule::StopFlag;
 use std::process::ExitCode;
 
@@ -55,6 +57,16 @@ enum Command {
 /// Parses the command line and runs the chosen command.
 pub fn run() -> Result<ExitCode> {
     let cli = Cli::parse();
+    let rt = match &cli.command {
+        Some(Command::Run(a)) => Some(&a.rt),
+        Some(Command::Probe(a)) => Some(&a.rt),
+        _ => None,
+    };
+    if let Some(Err(msg)) = rt.map(rt_args::RtArgs::check) {
+        Cli::command()
+            .error(clap::error::ErrorKind::InvalidValue, msg)
+            .exit();
+    }
     let stop = install_ctrl_c()?;
     match cli.command {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
@@ -66,8 +78,9 @@ pub fn run() -> Result<ExitCode> {
     }
 }
 
-/// First Ctrl-C: ask the fast loop to stop at its next tick boundary (reports
-/// are still written). Second Ctrl-C: exit at once with status 130.
+/// First Ctrl-C, SIGTERM or SIGHUP: ask the fast loop to stop at its next tick
+/// boundary (motors off, reports and files still written). A second one: exit
+/// at once with status 130.
 fn install_ctrl_c() -> Result<StopFlag> {
     let stop = StopFlag::new();
     let flag = stop.clone();
@@ -75,7 +88,7 @@ fn install_ctrl_c() -> Result<StopFlag> {
         if flag.is_requested() {
             std::process::exit(130);
         }
-        eprintln!("\nhaptloop: stopping at the next tick boundary (Ctrl-C again to abort)");
+        eprintln!("\nhaptloop: stopping at the next tick boundary (signal again to abort)");
         flag.request();
     })?;
     Ok(stop)

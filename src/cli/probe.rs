@@ -1,11 +1,13 @@
 //! `haptloop probe`.
 
+use super::output::{check_writable, write_atomic};
 use super::rt_args::RtArgs;
+use super::values;
 use crate::report;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use haptloop_rt::probe::{ProbeConfig, run_probe};
-use haptloop_rt::schedule::StopFlag;
+use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, StopFlag};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -14,10 +16,11 @@ use std::time::Duration;
 #[derive(Debug, Args)]
 pub struct ProbeArgs {
     /// Loop rate in Hz (100–20000).
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(i64::from(MIN_RATE_HZ)..=i64::from(MAX_RATE_HZ)))]
     pub rate: u32,
-    /// Seconds for the scheduler; the reference loop runs as long again.
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds for the scheduler, (0, 86400]; the reference loop runs as long
+    /// again.
+    #[arg(long, default_value_t = 5.0, value_parser = values::seconds)]
     pub seconds: f64,
     /// Real-time thread requests (both loops).
     #[command(flatten)]
@@ -72,12 +75,20 @@ impl ProbeArgs {
 /// Runs the probe and prints (and optionally writes) its report.
 pub fn run(args: &ProbeArgs, stop: &StopFlag) -> Result<ExitCode> {
     let config = args.to_config()?;
+    // Fail now, not after the whole probe, if the outputs cannot be written.
+    if let Some(path) = &args.json {
+        check_writable(path)?;
+    }
+    if let Some(dir) = &args.hgrm {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        check_writable(&dir.join("lateness.hgrm"))?;
+    }
     eprintln!("{}", report::probe::banner(&config));
     let outcome = run_probe(&config, stop).context("probe failed")?;
     println!("{}", report::probe::render(&outcome.report));
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)?;
-        std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+        write_atomic(path, (text + "\n").as_bytes())?;
         eprintln!("wrote {}", path.display());
     }
     if let Some(dir) = &args.hgrm {
@@ -90,8 +101,7 @@ pub fn run(args: &ProbeArgs, stop: &StopFlag) -> Result<ExitCode> {
         ];
         for (name, hist) in files {
             let path = dir.join(name);
-            std::fs::write(&path, hist.percentile_distribution(1000.0))
-                .with_context(|| format!("writing {}", path.display()))?;
+            write_atomic(&path, hist.percentile_distribution(1000.0).as_bytes())?;
         }
         eprintln!("wrote 4 percentile distributions (µs) to {}", dir.display());
     }

@@ -5,7 +5,10 @@ use haptloop_rt::thread::{CoreChoice, ThreadConfig};
 use std::time::Duration;
 
 /// How the fast thread asks the OS for real-time service. What the OS
-/// grants is read back and reported; a refusal never stops a run.
+/// grants is read back and reported; a refused priority or memory lock never
+/// stops a run. An explicit `--core` this process cannot use is a usage error
+/// caught before anything runs (the run would otherwise be on a core the user
+/// did not ask for).
 #[derive(Debug, Clone, Args)]
 pub struct RtArgs {
     /// Spin window before each deadline, µs (0: sleep straight to the
@@ -40,6 +43,24 @@ impl RtArgs {
     /// The spin window.
     pub fn spin(&self) -> Duration {
         Duration::from_micros(self.spin_us)
+    }
+
+    /// Checks what can be checked before a run: an explicit core must be one
+    /// this process may use.
+    pub fn check(&self) -> Result<(), String> {
+        match self.core {
+            Some(c) => {
+                let available = haptloop_rt::thread::available_cores();
+                if available.contains(&c) {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "--core {c}: not available to this process (available: {available:?})"
+                    ))
+                }
+            }
+            None => Ok(()),
+        }
     }
 
     /// The thread requests these flags make (the rest at their defaults).

@@ -1,12 +1,14 @@
 //! `haptloop run`: a scene on simulated devices, with a report.
 
+use super::output::{RunDir, produce_atomic, write_atomic};
 use super::rt_args::RtArgs;
+use super::values;
 use crate::report::{plots, session as text, summary::Summary};
 use crate::scenes::{DEFAULT_SCENE, resolve};
 use crate::session::{self, Plan, SessionOptions};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use haptloop_rt::schedule::StopFlag;
+use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, StopFlag};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -19,24 +21,25 @@ pub struct RunArgs {
     /// A built-in scene (see `haptloop scenes`) or a scene file (TOML).
     #[arg(default_value = DEFAULT_SCENE)]
     pub scene: String,
-    /// Session length in seconds.
-    #[arg(long, default_value_t = 10.0)]
+    /// Session length in seconds, (0, 86400].
+    #[arg(long, default_value_t = 10.0, value_parser = values::seconds)]
     pub seconds: f64,
     /// Fast-loop rate in Hz (100–20000); default: the scene's, else 1000.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(i64::from(MIN_RATE_HZ)..=i64::from(MAX_RATE_HZ)))]
     pub rate: Option<u32>,
-    /// Augmented-Lagrangian iterations per tick: more is more accurate and
-    /// costs more per tick. Default: the scene's, else the solver's.
-    #[arg(long)]
-    pub iterations: Option<u32>,
-    /// Constraint gain K of the fast update. Default: the scene's, else the
+    /// Augmented-Lagrangian iterations per tick (1–10000): more is more
+    /// accurate and costs more per tick. Default: the scene's, else the
     /// solver's.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub iterations: Option<u32>,
+    /// Constraint gain K of the fast update (finite, > 0). Default: the
+    /// scene's, else the solver's.
+    #[arg(long, value_parser = values::positive)]
     pub gain: Option<f64>,
     /// Time constant of the low-pass filter on the velocities behind the
     /// Eq. 7 inertial force, ms (0 turns it off). Default: the scene's, else
     /// 10 ms: encoder quantisation makes unfiltered accelerations buzz.
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = values::filter_ms)]
     pub velocity_filter_ms: Option<f64>,
     /// Run on a mock clock as fast as possible: bit-identical results across
     /// runs (every summary.json field but wall_clock_s), no real-time figures.
@@ -121,28 +124,26 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     };
-    let out_dir = match (&args.out, args.no_files) {
+    // Claimed before anything runs: a non-empty --out is refused, and the
+    // lock keeps a second run out while this one writes.
+    let run_dir = match (&args.out, args.no_files) {
         (_, true) => None,
-        (Some(d), false) => Some(d.clone()),
-        (None, false) => {
-            Some(Path::new("runs").join(format!("{}-{}", scene.compiled.name, utc_stamp())))
-        }
+        (Some(d), false) => Some(RunDir::claim(d)?),
+        (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
+            "{}-{}",
+            scene.compiled.name,
+            utc_stamp()
+        )))?),
     };
-    if let Some(d) = &out_dir {
-        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
-    }
+    let out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
     let options = SessionOptions {
         seconds: args.seconds,
         rate_hz: args.rate,
         iterations: args.iterations,
         gain: args.gain,
-        velocity_filter: match args.velocity_filter_ms {
-            Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => {
-                Some(Duration::from_secs_f64(ms / 1000.0))
-            }
-            Some(ms) => anyhow::bail!("--velocity-filter-ms must be 0–1000, got {ms}"),
-            None => None,
-        },
+        velocity_filter: args
+            .velocity_filter_ms
+            .map(|ms| Duration::from_secs_f64(ms / 1000.0)),
         deterministic: args.deterministic,
         assemble: !args.no_assembly,
         out_dir: out_dir.clone(),
@@ -186,17 +187,15 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         .zip(outcome.finger_devices.iter().cloned())
         .collect();
     println!("{}", text::render(&summary, &fingers));
-    if let Some(dir) = &out_dir {
-        write_files(dir, &outcome, &summary)?;
+    if let Some(dir) = run_dir {
+        write_files(dir.path(), &outcome, &summary)?;
+        dir.release()?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
 fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Result<()> {
-    let write = |name: &str, text: String| {
-        let p = dir.join(name);
-        std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))
-    };
+    let write = |name: &str, text: String| write_atomic(&dir.join(name), text.as_bytes());
     write(
         "summary.json",
         serde_json::to_string_pretty(summary)? + "\n",
@@ -213,9 +212,9 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         "read-to-write.hgrm",
         o.stats.read_to_write.percentile_distribution(1000.0),
     )?;
-    plots::latency(&dir.join("latency.svg"), o)?;
-    plots::force(&dir.join("force.svg"), o)?;
-    plots::violation(&dir.join("violation.svg"), o)?;
+    produce_atomic(&dir.join("latency.svg"), |p| plots::latency(p, o))?;
+    produce_atomic(&dir.join("force.svg"), |p| plots::force(p, o))?;
+    produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
     println!(
         "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg",
         dir.display()

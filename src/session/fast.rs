@@ -249,10 +249,11 @@ impl<C: Clock> TickBody for FastLoop<C> {
     }
 
     fn on_stop(&mut self) {
-        // Leave the hardware safe: zero force on every device.
+        // Leave the hardware safe: zero force on every device on this very
+        // write (decreasing force is never rate limited), then motors off.
         let now = self.periods(self.last_index.map_or(0, |i| i + 1));
         for dev in &mut self.rig.devices {
-            dev.write_scene(Vector3::zeros(), now);
+            dev.device.stop(now);
         }
     }
 }

@@ -76,7 +76,11 @@ pub struct SessionOutcome {
     pub trace_dropped: u64,
     /// Safety events per device: (device name, event text, count).
     pub device_events: Vec<(String, String, u64)>,
-    /// True if the run was stopped early (Ctrl-C).
+    /// Per device, the joint torques its motors applied after the loop
+    /// stopped (N·m; `None` if the device cannot report them): zero on every
+    /// exit, read at the motor.
+    pub torque_at_exit_nm: Vec<(String, Option<[f64; 3]>)>,
+    /// True if the run was stopped early (Ctrl-C, SIGTERM, SIGHUP).
     pub stopped_early: bool,
     /// Wall-clock seconds the run took (the only field that differs between
     /// two deterministic runs).
@@ -261,7 +265,18 @@ fn finish<C: Clock>(
                 .collect::<Vec<_>>()
         })
         .collect();
+    let torque_at_exit_nm = fast
+        .rig()
+        .devices
+        .iter()
+        .map(|d| {
+            let t = haptloop_devices::Device::applied_torque_nm(d.device.device())
+                .map(|t| [t.x, t.y, t.z]);
+            (d.name.clone(), t)
+        })
+        .collect();
     Ok(SessionOutcome {
+        torque_at_exit_nm,
         stopped_early: stop.is_requested(),
         trace_dropped: trace,
         plan,

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Most points kept per plotted series; beyond it every k-th sample is kept.
 const MAX_POINTS: usize = 20_000;
@@ -40,7 +40,8 @@ impl Series {
 
 /// Drains trace samples into a CSV file and plot series.
 pub struct Recorder {
-    csv: Option<BufWriter<File>>,
+    /// The CSV being written (under `trace.csv.partial`) and its final path.
+    csv: Option<(BufWriter<File>, PathBuf, PathBuf)>,
     /// |force| per finger.
     pub force: Vec<Series>,
     /// Largest length-row violation per tick (from finger 0's rows).
@@ -58,14 +59,18 @@ impl Recorder {
         let csv = match dir {
             Some(d) => {
                 let path = d.join("trace.csv");
+                // Written under a temporary name and renamed when complete: a
+                // crash never leaves a `trace.csv` with a cut-off last row.
+                let partial = d.join("trace.csv.partial");
                 let mut w = BufWriter::new(
-                    File::create(&path).with_context(|| format!("creating {}", path.display()))?,
+                    File::create(&partial)
+                        .with_context(|| format!("creating {}", partial.display()))?,
                 );
                 writeln!(
                     w,
                     "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m"
                 )?;
-                Some(w)
+                Some((w, partial, path))
             }
             None => None,
         };
@@ -82,7 +87,7 @@ impl Recorder {
     pub fn drain(&mut self, queue: &ArrayQueue<TraceSample>, names: &[String]) -> Result<()> {
         while let Some(s) = queue.pop() {
             let i = usize::from(s.finger);
-            if let Some(w) = &mut self.csv {
+            if let Some((w, _, _)) = &mut self.csv {
                 let [tx, ty, tz] = s.target_m;
                 let [px, py, pz] = s.position_m;
                 let [fx, fy, fz] = s.force_n;
@@ -103,10 +108,14 @@ impl Recorder {
         Ok(())
     }
 
-    /// Flushes the CSV file.
+    /// Flushes the CSV file and gives it its final name (`trace.csv`).
     pub fn finish(&mut self) -> Result<()> {
-        if let Some(w) = &mut self.csv {
-            w.flush()?;
+        if let Some((mut w, partial, path)) = self.csv.take() {
+            w.flush()
+                .with_context(|| format!("writing {}", partial.display()))?;
+            drop(w);
+            std::fs::rename(&partial, &path)
+                .with_context(|| format!("writing {}", path.display()))?;
         }
         Ok(())
     }

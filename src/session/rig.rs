@@ -65,6 +65,18 @@ impl Device for SessionDevice {
             SessionDevice::Replay(d) => d.motors_off(now),
         }
     }
+    fn set_hardware_watchdog(&mut self, timeout: Option<Duration>) -> bool {
+        match self {
+            SessionDevice::Sim(d) => d.set_hardware_watchdog(timeout),
+            SessionDevice::Replay(d) => d.set_hardware_watchdog(timeout),
+        }
+    }
+    fn applied_torque_nm(&self) -> Option<Vector3<f64>> {
+        match self {
+            SessionDevice::Sim(d) => d.applied_torque_nm(),
+            SessionDevice::Replay(d) => d.applied_torque_nm(),
+        }
+    }
 }
 
 /// All devices of a session and how fingers map onto them.

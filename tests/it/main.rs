@@ -8,3 +8,4 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod docs;
 mod scenes;
 mod session;
+mod trust;

@@ -207,6 +207,11 @@ impl SimPhantom {
         self.motor_work_j
     }
 
+    /// True while the motors are energised.
+    pub fn motors_on(&self) -> bool {
+        self.motors_on
+    }
+
     /// Normalised motor temperature (1 = steady state at the continuous rating).
     pub fn thermal_load(&self) -> f64 {
         self.thermal.load()
@@ -449,5 +454,13 @@ impl Device for SimPhantom {
     fn set_hardware_watchdog(&mut self, timeout: Option<Duration>) -> bool {
         self.hw_watchdog = timeout;
         true
+    }
+
+    fn applied_torque_nm(&self) -> Option<Vector3<f64>> {
+        Some(if self.motors_on {
+            self.torque_nm
+        } else {
+            Vector3::zeros()
+        })
     }
 }

@@ -14,11 +14,14 @@ pub struct SafetyConfig {
     /// Largest change of the force vector per second, N/s (default 2000 N/s =
     /// 2 N per 1 kHz tick: a full Premium peak in ~4 ms, slow enough to stop a
     /// one-tick spike from reaching the hand at full size, fast enough not to
-    /// soften a stiff wall at human contact speeds). Applied per tick as
-    /// `rate × (now − last write)`.
+    /// soften a stiff wall at human contact speeds). Applied per write as
+    /// `rate × loop_period`, whatever the time since the last write, and only
+    /// to growing or turning force: decreasing force is never limited.
     pub max_force_rate_n_per_s: f64,
     /// Start-up ramp: force scales linearly from 0 to 1 over this time after
-    /// the first write and after every re-engagement (default 1 s; CHAI3D's
+    /// the first write, a cleared fault, a stop or a velocity cut; after a
+    /// stall the ramp is shorter, in proportion to the stall (see
+    /// [`crate::safety::RECOVERY_RAMP_PER_GAP`]) (default 1 s; CHAI3D's
     /// force rise uses 2 s, but the session registers the device so the initial
     /// force error is zero, and 1 s is long enough that a surprise force grows
     /// at under 9 N/s on a Premium).

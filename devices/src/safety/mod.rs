@@ -7,9 +7,27 @@
 //!
 //! Write path, in order: NaN/∞ guard (zero force, fault counted) → latched
 //! fault (zero) → velocity limit (zero, then re-ramp) → peak clamp (direction
-//! kept) → start-up ramp → rate limit → device (thermal cut, torque
-//! saturation). Every stage that acts is counted ([`SafetyCounters`]) and the
-//! primary one is kept as the [`CutRecord`] of why force was last cut.
+//! kept) → ramp → rate limit → device (thermal cut, torque saturation). Every
+//! stage that acts is counted ([`SafetyCounters`]) and the primary one is kept
+//! as the [`CutRecord`] of why force was last cut.
+//!
+//! # Decreasing force is never limited
+//! The rate limit bounds how fast force can *grow or turn*, never how fast it
+//! falls: a command is first split into the part that shrinks the last output
+//! toward zero (its projection onto the segment from 0 to the last output),
+//! which passes at once, and the rest, which may change by at most
+//! `max_force_rate_n_per_s × loop_period` per write. So a zero command, a force
+//! cut and a stop ([`SafeDevice::stop`]) reach zero force on the same write,
+//! and a write after a gap (a host stall) is bounded by one period's step, not
+//! by the length of the gap.
+//!
+//! # Recovery after a stall
+//! When writes stop for longer than the watchdog timeout the motors go off. On
+//! re-engagement force ramps back over a time proportionate to the gap:
+//! [`RECOVERY_RAMP_PER_GAP`] × the gap, at most [`SafetyConfig::ramp`] (so a
+//! 3 ms stall ramps back in 30 ms, a stall of 100 ms or more over the full
+//! start-up ramp). Start-up, a cleared fault and a velocity cut always use the
+//! full ramp.
 //!
 //! # Real-time
 //! `read` and `write` allocate nothing, take no locks and make no syscalls;
@@ -31,6 +49,12 @@ use nalgebra::Vector3;
 use crate::device::{Device, DeviceFault, DeviceReading, MotorReport, ReadingFlags};
 use crate::error::DeviceError;
 use crate::fault::FaultKind;
+
+/// Re-engagement ramp per unit of stall: after writes stopped for a gap `g`,
+/// force ramps back over `RECOVERY_RAMP_PER_GAP × g` (capped at the start-up
+/// ramp). Ten times the gap: the hand has been unsupported for `g`, so force
+/// returns an order of magnitude more slowly than it vanished.
+pub const RECOVERY_RAMP_PER_GAP: u32 = 10;
 
 /// Health of a wrapped device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -68,6 +92,8 @@ pub struct SafeDevice<D> {
     last_output: Vector3<f64>,
     last_write: Option<Duration>,
     ramp_start: Option<Duration>,
+    /// Length of the ramp that `ramp_start` begins.
+    ramp_len: Duration,
     watchdog_fired: bool,
     pending: CutSet,
     counters: SafetyCounters,
@@ -96,6 +122,7 @@ impl<D: Device> SafeDevice<D> {
             last_output: Vector3::zeros(),
             last_write: None,
             ramp_start: None,
+            ramp_len: config.ramp,
             watchdog_fired: false,
             pending: CutSet::default(),
             counters: SafetyCounters::default(),
@@ -156,7 +183,25 @@ impl<D: Device> SafeDevice<D> {
         self.bad_run = 0;
         self.last_good = None;
         self.velocity.clear();
+        self.restart_ramp(self.config.ramp);
+    }
+
+    /// Stops the device: zero force on this write (no rate limit delays it)
+    /// and the motors switched off. The next [`write`](Self::write) re-engages
+    /// with the full start-up ramp.
+    ///
+    /// # Real-time
+    /// No allocation, no locks; the device's write and motors-off.
+    pub fn stop(&mut self, now: Duration) -> WriteOutcome {
+        let out = self.write(Vector3::zeros(), now);
+        self.device.motors_off(now);
+        self.restart_ramp(self.config.ramp);
+        out
+    }
+
+    fn restart_ramp(&mut self, len: Duration) {
         self.ramp_start = None;
+        self.ramp_len = len;
     }
 
     /// Reads the device at `now`; always returns a reading: the fresh one, or
@@ -251,7 +296,7 @@ impl<D: Device> SafeDevice<D> {
             Vector3::zeros()
         } else if self.velocity.speed() > self.config.max_speed_m_per_s {
             cuts.insert(CutReason::Velocity);
-            self.ramp_start = None;
+            self.restart_ramp(self.config.ramp);
             Vector3::zeros()
         } else {
             self.limit(force_n_device, now, &mut cuts)
@@ -300,7 +345,7 @@ impl<D: Device> SafeDevice<D> {
             cuts.insert(CutReason::Clamp);
         }
         let start = *self.ramp_start.get_or_insert(now);
-        let ramp_s = self.config.ramp.as_secs_f64();
+        let ramp_s = self.ramp_len.as_secs_f64();
         let s = if ramp_s > 0.0 {
             ((now - start.min(now)).as_secs_f64() / ramp_s).min(1.0)
         } else {
@@ -310,14 +355,14 @@ impl<D: Device> SafeDevice<D> {
             f *= s;
             cuts.insert(CutReason::Ramp);
         }
-        let dt = self
-            .last_write
-            .map_or(self.config.loop_period, |w| now.saturating_sub(w));
-        let max_step = self.config.max_force_rate_n_per_s * dt.as_secs_f64();
-        let delta = f - self.last_output;
-        let step = delta.norm();
+        // One period's step, whatever the gap since the last write: a write
+        // after a stall must not jump by the stall's worth of rate.
+        let max_step = self.config.max_force_rate_n_per_s * self.config.loop_period.as_secs_f64();
+        let shrunk = shrink_toward_zero(&self.last_output, &f);
+        let rest = f - shrunk;
+        let step = rest.norm();
         if step > max_step {
-            f = self.last_output + delta * (max_step / step);
+            f = shrunk + rest * (max_step / step);
             cuts.insert(CutReason::RateLimit);
         }
         f
@@ -335,6 +380,10 @@ impl<D: Device> SafeDevice<D> {
 
     fn fire_watchdog(&mut self, now: Duration) {
         self.watchdog_fired = true;
+        let gap = self
+            .last_write
+            .map_or(Duration::ZERO, |w| now.saturating_sub(w));
+        self.restart_ramp(self.config.ramp.min(gap * RECOVERY_RAMP_PER_GAP));
         self.last_cut = Some(CutRecord {
             reason: CutReason::Watchdog,
             at: now,
@@ -342,7 +391,6 @@ impl<D: Device> SafeDevice<D> {
             applied_n: 0.0,
         });
         self.last_output = Vector3::zeros();
-        self.ramp_start = None;
         self.pending.insert(CutReason::Watchdog);
     }
 
@@ -397,7 +445,18 @@ impl<D: Device> SafeDevice<D> {
             });
             self.device.motors_off(now);
             self.last_output = Vector3::zeros();
-            self.ramp_start = None;
+            self.restart_ramp(self.config.ramp);
         }
     }
+}
+
+/// The part of `command` that only shrinks `last` toward zero: the point of the
+/// segment from 0 to `last` nearest to `command`. Moving there never increases
+/// force, so the rate limit lets it through at once.
+fn shrink_toward_zero(last: &Vector3<f64>, command: &Vector3<f64>) -> Vector3<f64> {
+    let l2 = last.norm_squared();
+    if l2 == 0.0 {
+        return Vector3::zeros();
+    }
+    last * (command.dot(last) / l2).clamp(0.0, 1.0)
 }

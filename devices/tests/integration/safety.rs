@@ -149,3 +149,95 @@ fn velocity_limit_cuts_force_while_the_tip_moves_too_fast() {
     let out = dev.write(Vector3::new(0.0, 0.3, 0.0), tick(401));
     assert!((out.force_n_device.y - 0.3).abs() < 1e-12);
 }
+
+/// Applied joint torque at the motor, N·m (never through the safety layer's
+/// own bookkeeping).
+fn at_motor(dev: &haptloop_devices::SafeDevice<haptloop_devices::SimPhantom>) -> Vector3<f64> {
+    haptloop_devices::Device::applied_torque_nm(dev.device()).expect("the sim reports torque")
+}
+
+#[test]
+fn zero_command_and_stop_reach_zero_force_on_the_same_write() {
+    let cfg = SafetyConfig {
+        ramp: Duration::ZERO,
+        ..SafetyConfig::default()
+    }; // 2 N per write up, nothing down
+    let mut dev = safe_sim("phantom-premium-1.5", Hand::still(), cfg);
+    for k in 1..=10u64 {
+        dev.read(tick(k));
+        dev.write(Vector3::new(0.0, 6.0, 0.0), tick(k));
+    }
+    assert!(at_motor(&dev).norm() > 0.1);
+    // A cut (zero command) is not rate limited: 6 N → 0 N in one write.
+    dev.read(tick(11));
+    let out = dev.write(Vector3::zeros(), tick(11));
+    assert_eq!(out.force_n_device, Vector3::zeros());
+    assert!(!out.cuts.contains(CutReason::RateLimit));
+    assert_eq!(at_motor(&dev), Vector3::zeros());
+    // Shrinking along the same direction passes at once too.
+    for k in 12..=20u64 {
+        dev.read(tick(k));
+        dev.write(Vector3::new(0.0, 6.0, 0.0), tick(k));
+    }
+    dev.read(tick(21));
+    let out = dev.write(Vector3::new(0.0, 1.0, 0.0), tick(21));
+    assert!((out.force_n_device - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+    // Reversal is a fall to zero (free) and a limited rise: -2 N, not -6 N.
+    dev.read(tick(22));
+    let out = dev.write(Vector3::new(0.0, -6.0, 0.0), tick(22));
+    assert!((out.force_n_device - Vector3::new(0.0, -2.0, 0.0)).norm() < 1e-12);
+    // Stop: zero force and motors off on the same call, read at the motor.
+    dev.read(tick(23));
+    let out = dev.stop(tick(23));
+    assert_eq!(out.force_n_device, Vector3::zeros());
+    assert_eq!(at_motor(&dev), Vector3::zeros());
+    assert!(!dev.device().motors_on());
+}
+
+#[test]
+fn a_write_after_a_gap_steps_by_one_period_at_most() {
+    let cfg = SafetyConfig {
+        ramp: Duration::ZERO,
+        ..SafetyConfig::default()
+    };
+    let mut dev = safe_sim("phantom-premium-1.5", Hand::still(), cfg);
+    dev.read(tick(1));
+    dev.write(Vector3::zeros(), tick(1));
+    // A 7 ms stall (below the 10 ms watchdog): the old rule allowed 14 N.
+    dev.read(tick(8));
+    let out = dev.write(Vector3::new(8.0, 0.0, 0.0), tick(8));
+    assert!(
+        (out.force_n_device.norm() - 2.0).abs() < 1e-12,
+        "{}",
+        out.force_n_device
+    );
+    assert!(out.cuts.contains(CutReason::RateLimit));
+}
+
+#[test]
+fn recovery_after_a_stall_ramps_in_proportion_to_the_gap() {
+    let cfg = SafetyConfig::default(); // 1 s start-up ramp, 10 ms watchdog
+    let mut dev = safe_sim("phantom-omni", Hand::still(), cfg);
+    let f = Vector3::new(0.0, 0.0, 1.0);
+    for k in 1..=1100u64 {
+        dev.read(tick(k));
+        dev.write(f, tick(k));
+    }
+    // Writes stop for 20 ms: the watchdog fires at 1111 ms.
+    for k in 1101..=1120u64 {
+        dev.read(tick(k));
+    }
+    assert_eq!(dev.last_cut().unwrap().reason, CutReason::Watchdog);
+    // Ramp back over 10 × the 11 ms gap = 110 ms, not the 1 s start-up ramp.
+    let mut outs = Vec::new();
+    for k in 1121..=1300u64 {
+        dev.read(tick(k));
+        outs.push(dev.write(f, tick(k)).force_n_device.z);
+    }
+    let gap_ramp = 0.110;
+    for (i, z) in outs.iter().enumerate() {
+        let expected = (i as f64 * 0.001 / gap_ramp).min(1.0);
+        assert!((z - expected).abs() < 1e-9, "write {i}: {z} vs {expected}");
+    }
+    assert_eq!(outs[150], 1.0);
+}

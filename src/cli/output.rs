@@ -1,0 +1,138 @@
+//! Output files: a run directory that one run owns, and files that appear
+//! whole or not at all (written to a temporary name, then renamed), so a crash
+//! or a second run never leaves a half-written or interleaved file.
+
+use anyhow::{Context, Result, bail};
+use std::fs::{self, File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Name of the lock file a run keeps in its output directory while it runs.
+pub const LOCK_NAME: &str = ".haptloop-run.lock";
+
+/// An output directory claimed by this run: it was empty (or new) and holds
+/// this run's lock file until [`RunDir::release`].
+#[derive(Debug)]
+pub struct RunDir {
+    dir: PathBuf,
+}
+
+impl RunDir {
+    /// Claims `dir`: creates it if needed, refuses it if it holds anything
+    /// (another run's files, or a run still writing there), then takes the
+    /// lock with an exclusive create, so two runs started together cannot both
+    /// claim it.
+    pub fn claim(dir: &Path) -> Result<RunDir> {
+        fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let mut entries =
+            fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
+        if let Some(entry) = entries.next() {
+            let name = entry?.file_name();
+            bail!(
+                "--out {}: the directory is not empty (it holds `{}`); a run writes only into a new or empty directory so that two runs never mix their files",
+                dir.display(),
+                name.to_string_lossy()
+            );
+        }
+        OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(dir.join(LOCK_NAME))
+            .with_context(|| format!("--out {}: another run claimed it first", dir.display()))?;
+        Ok(RunDir {
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    /// Picks `base`, or `base-2`, `base-3`, … if taken, and claims it.
+    pub fn claim_fresh(base: &Path) -> Result<RunDir> {
+        for k in 1..1000 {
+            let dir = if k == 1 {
+                base.to_path_buf()
+            } else {
+                PathBuf::from(format!("{}-{k}", base.display()))
+            };
+            if !dir.exists() {
+                return RunDir::claim(&dir);
+            }
+        }
+        bail!("no free run directory next to {}", base.display())
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Removes the lock: the run is complete.
+    pub fn release(self) -> Result<()> {
+        let lock = self.dir.join(LOCK_NAME);
+        fs::remove_file(&lock).with_context(|| format!("removing {}", lock.display()))
+    }
+}
+
+/// The temporary name `path` is written under before it is renamed.
+pub fn partial_name(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, flushed
+/// to disk, then renamed over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = partial_name(path);
+    let mut f = File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
+    f.write_all(bytes)
+        .and_then(|()| f.sync_all())
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Produces `path` atomically with `make`, which writes the file it is given
+/// (a temporary name beside `path`).
+pub fn produce_atomic(path: &Path, make: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = partial_name(path);
+    make(&tmp)?;
+    fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Fails now, before any long work, if a file cannot be created at `path`.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let tmp = partial_name(path);
+    File::create(&tmp).with_context(|| format!("cannot write {}", path.display()))?;
+    fs::remove_file(&tmp).with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_claimed_directory_refuses_a_second_run_until_released() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        let first = RunDir::claim(&dir).unwrap();
+        let err = RunDir::claim(&dir).unwrap_err().to_string();
+        assert!(
+            err.contains("not empty") && err.contains(LOCK_NAME),
+            "{err}"
+        );
+        write_atomic(&dir.join("a.txt"), b"whole").unwrap();
+        assert_eq!(fs::read(dir.join("a.txt")).unwrap(), b"whole");
+        assert!(!partial_name(&dir.join("a.txt")).exists());
+        first.release().unwrap();
+        // Files of a finished run still make the directory non-empty.
+        assert!(RunDir::claim(&dir).is_err());
+        let fresh = RunDir::claim_fresh(&dir).unwrap();
+        assert_eq!(fresh.path(), tmp.path().join("run-2"));
+    }
+
+    #[test]
+    fn unwritable_paths_fail_before_work() {
+        let tmp = tempfile::tempdir().unwrap();
+        assert!(check_writable(&tmp.path().join("ok.json")).is_ok());
+        assert!(check_writable(&tmp.path().join("no/such/dir/x.json")).is_err());
+        assert!(!tmp.path().join("ok.json.partial").exists());
+    }
+}

@@ -1,0 +1,205 @@
+//! What the user and the hardware must be able to trust: motors at zero after
+//! every kind of exit (read at the motor), signals handled like Ctrl-C, output
+//! directories that one run owns, files that are whole or absent.
+
+use haptloop::scenes::resolve;
+use haptloop::session::{self, Plan, SessionOptions};
+use haptloop_rt::schedule::StopFlag;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn deterministic(seconds: f64) -> SessionOptions {
+    SessionOptions {
+        seconds,
+        deterministic: true,
+        ..SessionOptions::default()
+    }
+}
+
+/// After a run ends, every device's motors apply exactly zero torque, read at
+/// the motor (the old stop wrote zero through the rate limiter, which let it
+/// fall by only 2 N on that write and left the last force on the motors).
+#[test]
+fn motors_apply_zero_torque_after_every_run() {
+    for name in ["four-bar", "grasp-2", "grasp-3"] {
+        let scene = resolve(name).unwrap();
+        let plan = Plan::new(&scene, &deterministic(0.8)).unwrap();
+        let o = session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap();
+        assert_eq!(
+            o.torque_at_exit_nm.len(),
+            scene.compiled.devices.len(),
+            "{name}"
+        );
+        let max_force = o
+            .stats
+            .fingers
+            .iter()
+            .map(|f| f.force_max)
+            .fold(0.0, f64::max);
+        assert!(max_force > 0.05, "{name}: the run rendered no force");
+        for (device, torque) in &o.torque_at_exit_nm {
+            assert_eq!(*torque, Some([0.0; 3]), "{name}: {device} left torque on");
+        }
+    }
+}
+
+fn haptloop() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_haptloop"))
+}
+
+/// Waits (bounded) until `path` exists and holds more than `bytes` bytes.
+fn wait_for(path: &Path, bytes: u64, limit: Duration) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if std::fs::metadata(path).is_ok_and(|m| m.len() > bytes) {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
+}
+
+/// SIGTERM and SIGHUP stop a real-time run like Ctrl-C: exit status 0, the
+/// report and every file written, `trace.csv` complete to its last row, no
+/// temporary or lock file left behind.
+#[test]
+fn sigterm_and_sighup_stop_a_run_cleanly() {
+    for signal in ["TERM", "HUP"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        let child = haptloop()
+            .args([
+                "run",
+                "four-bar",
+                "--seconds",
+                "60",
+                "--quiet",
+                "--priority",
+                "0",
+            ])
+            .args(["--no-mlock", "--out"])
+            .arg(&out)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The run is under way once its trace has rows.
+        let started = wait_for(
+            &out.join("trace.csv.partial"),
+            20_000,
+            Duration::from_secs(30),
+        );
+        let kill = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        let result = child.wait_with_output().unwrap();
+        assert!(started, "SIG{signal}: the run never started");
+        assert!(kill.success());
+        let stdout = String::from_utf8_lossy(&result.stdout);
+        assert!(
+            result.status.success(),
+            "SIG{signal}: exit {:?}\n{}",
+            result.status,
+            String::from_utf8_lossy(&result.stderr)
+        );
+        assert!(
+            stdout.contains("ticks:"),
+            "SIG{signal}: no report\n{stdout}"
+        );
+        for f in ["summary.json", "trace.csv", "force.svg", "lateness.hgrm"] {
+            assert!(out.join(f).is_file(), "SIG{signal}: {f} missing");
+        }
+        let mut names: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert!(
+            names
+                .iter()
+                .all(|n| !n.ends_with(".partial") && !n.ends_with(".lock")),
+            "SIG{signal}: left behind {names:?}"
+        );
+        let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+        assert!(trace.ends_with('\n'));
+        let header_fields = trace.lines().next().unwrap().split(',').count();
+        let rows = trace.lines().skip(1).count();
+        assert!(rows > 10, "SIG{signal}: {rows} rows");
+        for (i, line) in trace.lines().enumerate() {
+            assert_eq!(line.split(',').count(), header_fields, "row {i}: {line}");
+        }
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(summary["stopped_early"], true, "SIG{signal}");
+    }
+}
+
+/// A second run into a directory that holds files is refused before it runs,
+/// so two runs can never interleave rows into one `trace.csv`.
+#[test]
+fn a_non_empty_output_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("trace.csv"), "t_s\n").unwrap();
+    let r = haptloop()
+        .args(["run", "--deterministic", "--seconds", "0.1", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("not empty") && err.contains("trace.csv"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("trace.csv")).unwrap(),
+        "t_s\n"
+    );
+}
+
+/// Out-of-range numbers are usage errors (exit 2) naming the flag, caught
+/// before anything runs; so is a core this process cannot use.
+#[test]
+fn out_of_range_flags_are_usage_errors() {
+    let cases: [&[&str]; 7] = [
+        &["run", "--rate", "5"],
+        &["run", "--seconds", "0"],
+        &["run", "--seconds", "nan"],
+        &["run", "--iterations", "0"],
+        &["run", "--gain=-1"],
+        &["run", "--core", "4096"],
+        &["probe", "--rate", "30000"],
+    ];
+    for args in cases {
+        let r = haptloop().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(args[1].trim_start_matches("--").split('=').next().unwrap()),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// `probe --json` to a path that cannot be written fails at once, not after
+/// the probe has run.
+#[test]
+fn probe_fails_before_running_when_its_output_cannot_be_written() {
+    let r = haptloop()
+        .args([
+            "probe",
+            "--seconds",
+            "30",
+            "--json",
+            "/nonexistent-dir/x.json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("/nonexistent-dir/x.json"), "{err}");
+    assert!(!err.contains("haptloop probe:"), "the probe ran: {err}");
+}
