@@ -1,6 +1,7 @@
 //! Reports: the probe's and the session's text reports, `summary.json`, and
 //! the SVG plots.
 
+pub mod figure;
 pub mod plots;
 pub mod probe;
 pub mod session;

@@ -82,24 +82,34 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.misses.overrun,
         s.misses.skipped
     );
-    let verdict = match s.violation.tolerance {
-        Some(t) if s.violation.max <= t => {
-            format!(" (scene tolerance {t:.0e} m on translational rows: kept)")
-        }
-        Some(t) => format!(" (scene tolerance {t:.0e} m on translational rows: EXCEEDED)"),
-        None => String::new(),
-    };
-    let _ = writeln!(
-        out,
-        "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m{verdict}",
-        s.violation.max, s.violation.max_rad, s.violation.rms
-    );
-    let _ = writeln!(
-        out,
-        "finger tracking error: max {:.2} mm, RMS {:.2} mm",
-        s.tracking_m.max * 1e3,
-        s.tracking_m.rms * 1e3
-    );
+    let v = &s.violation;
+    if v.ticks_measured == 0 {
+        let _ = writeln!(out, "constraint violation: {}", v.verdict);
+    } else {
+        let tol = v.tolerance.map_or(String::new(), |t| {
+            format!("scene tolerance {t:.0e} m on translational rows: ")
+        });
+        let _ = writeln!(
+            out,
+            "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m ({tol}{})",
+            v.max, v.max_rad, v.rms, v.verdict
+        );
+    }
+    if s.tracking_m.max.is_nan() {
+        let why = if s.ticks == 0 {
+            "no tick ran"
+        } else {
+            "no tick succeeded"
+        };
+        let _ = writeln!(out, "finger tracking error: not measured ({why})");
+    } else {
+        let _ = writeln!(
+            out,
+            "finger tracking error: max {:.2} mm, RMS {:.2} mm",
+            s.tracking_m.max * 1e3,
+            s.tracking_m.rms * 1e3
+        );
+    }
     for (name, dev) in fingers {
         let Some(f) = s.force_n.get(name) else {
             continue;
@@ -118,20 +128,20 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     for e in &s.safety.device_events {
         let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
     }
-    if s.slow_loop.reference_samples > 0 {
-        let _ = writeln!(
-            out,
-            "against the Newton-converged reference ({} samples): configuration within {:.2e} m, \
-             static finger force within {:.2e} N",
-            s.slow_loop.reference_samples,
-            s.slow_loop.reference_q_error_m,
-            s.slow_loop.reference_force_error_n
-        );
-    } else {
-        let _ = writeln!(
-            out,
-            "no reference samples (the dense reference is skipped above 300 coordinates)"
-        );
+    match &s.slow_loop.reference_missing {
+        None => {
+            let _ = writeln!(
+                out,
+                "against the Newton-converged reference ({} samples): configuration within {:.2e} m, \
+                 static finger force within {:.2e} N",
+                s.slow_loop.reference_samples,
+                s.slow_loop.reference_q_error_m,
+                s.slow_loop.reference_force_error_n
+            );
+        }
+        Some(why) => {
+            let _ = writeln!(out, "no reference samples: {why}");
+        }
     }
     let _ = write!(
         out,

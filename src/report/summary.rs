@@ -15,32 +15,72 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MaxRms {
     /// Largest value.
+    #[serde(with = "super::figure")]
     pub max: f64,
     /// Root mean square.
+    #[serde(with = "super::figure")]
     pub rms: f64,
 }
 
 /// Constraint violation over the run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Violation {
     /// Largest length-row violation of any tick, m.
+    #[serde(with = "super::figure")]
     pub max: f64,
     /// RMS over ticks and length rows, m.
+    #[serde(with = "super::figure")]
     pub rms: f64,
     /// Largest angle-row violation of any tick, rad.
+    #[serde(with = "super::figure")]
     pub max_rad: f64,
     /// The scene's stated tolerance, m, if it states one.
     pub tolerance: Option<f64>,
+    /// Ticks the figures cover: those whose solve succeeded.
+    pub ticks_measured: u64,
+    /// Ticks whose solve failed (zero force written); not covered.
+    pub ticks_failed: u64,
+    /// What the figures show against the tolerance, in words: `kept`,
+    /// `EXCEEDED`, `kept over the N ticks that succeeded …`, or why nothing
+    /// was measured (the figures are then `"NaN"`).
+    pub verdict: String,
+}
+
+impl Violation {
+    fn verdict(max: f64, tolerance: Option<f64>, measured: u64, failed: u64) -> String {
+        if measured == 0 {
+            return if failed == 0 {
+                "not measured: no tick ran".into()
+            } else {
+                format!("not measured: all {failed} ticks failed")
+            };
+        }
+        let covered = if failed == 0 {
+            String::new()
+        } else {
+            format!(
+                " over the {measured} ticks that succeeded only ({failed} failed and are not covered)"
+            )
+        };
+        match tolerance {
+            Some(t) if max <= t => format!("kept{covered}"),
+            Some(_) => format!("EXCEEDED{covered}"),
+            None => format!("no tolerance stated{covered}"),
+        }
+    }
 }
 
 /// One finger's force, rendered by its device (scene frame).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct FingerForce {
     /// Mean |F|, N.
+    #[serde(with = "super::figure")]
     pub mean: f64,
     /// Largest |F|, N.
+    #[serde(with = "super::figure")]
     pub max: f64,
     /// Largest |F| the solver asked for before the safety layer, N.
+    #[serde(with = "super::figure")]
     pub commanded_max: f64,
 }
 
@@ -74,6 +114,7 @@ pub struct Assembly {
     /// Newton iterations used.
     pub iterations: u32,
     /// Constraint residual after assembly (2-norm over length rows), m.
+    #[serde(with = "super::figure")]
     pub residual_m: f64,
     /// Converged | MaxIterations | Stalled | LeastSquares.
     pub status: String,
@@ -82,7 +123,7 @@ pub struct Assembly {
 }
 
 /// What the slow loop did.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SlowLoop {
     /// Re-projections (violation over the threshold).
     pub reprojections: u64,
@@ -91,14 +132,19 @@ pub struct SlowLoop {
     /// Placements that did not converge.
     pub placements_not_converged: u64,
     /// Largest violation the slow loop saw in a snapshot, m.
+    #[serde(with = "super::figure")]
     pub max_seen_violation_m: f64,
     /// Snapshots compared with a Newton-converged reference (none for models
     /// over 300 coordinates, whose dense reference is too slow to sample).
     pub reference_samples: u64,
+    /// Why there are no reference samples, when there are none.
+    pub reference_missing: Option<String>,
     /// Largest body-position distance from the reference configuration, m.
+    #[serde(with = "super::figure")]
     pub reference_q_error_m: f64,
     /// Largest difference of a finger's static Eq. 7 force from the
     /// reference's, N.
+    #[serde(with = "super::figure")]
     pub reference_force_error_n: f64,
 }
 
@@ -160,11 +206,20 @@ impl Summary {
     pub fn of(o: &SessionOutcome) -> Summary {
         let s = &o.stats;
         let model_fingers = s.fingers.len();
-        let n: u64 = s.fingers.iter().map(|f| f.n).sum();
-        let tracking_rms = if n == 0 {
-            0.0
+        let n: u64 = s.fingers.iter().map(|f| f.tracking_n).sum();
+        let (tracking_max, tracking_rms) = if n == 0 {
+            (f64::NAN, f64::NAN)
         } else {
-            (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt()
+            (
+                s.fingers.iter().map(|f| f.tracking_max).fold(0.0, f64::max),
+                (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt(),
+            )
+        };
+        let measured = s.solved_ticks();
+        let (v_max, v_rad) = if measured == 0 {
+            (f64::NAN, f64::NAN)
+        } else {
+            (s.violation_max_m, s.violation_max_rad)
         };
         Summary {
             scene: o.plan.scene.clone(),
@@ -180,13 +235,21 @@ impl Summary {
             period_ns: o.report.period_ns.into(),
             read_to_write_ns: s.read_to_write.summary().into(),
             violation: Violation {
-                max: s.violation_max_m,
+                max: v_max,
                 rms: s.violation_rms_m(),
-                max_rad: s.violation_max_rad,
+                max_rad: v_rad,
                 tolerance: o.plan.violation_tolerance_m,
+                ticks_measured: measured,
+                ticks_failed: s.solver_failures,
+                verdict: Violation::verdict(
+                    v_max,
+                    o.plan.violation_tolerance_m,
+                    measured,
+                    s.solver_failures,
+                ),
             },
             tracking_m: MaxRms {
-                max: s.fingers.iter().map(|f| f.tracking_max).fold(0.0, f64::max),
+                max: tracking_max,
                 rms: tracking_rms,
             },
             force_n: (0..model_fingers)
@@ -229,6 +292,18 @@ impl Summary {
                 placements_not_converged: o.slow.placements_not_converged,
                 max_seen_violation_m: o.slow.max_seen_violation_m,
                 reference_samples: o.slow.reference_samples,
+                reference_missing: (o.slow.reference_samples == 0).then(|| {
+                    if o.slow.reference_skipped_large > 0 {
+                        format!(
+                            "the dense reference is skipped above {} coordinates",
+                            crate::session::REFERENCE_MAX_COORDS
+                        )
+                    } else if measured == 0 {
+                        "no tick succeeded".into()
+                    } else {
+                        "no healthy snapshot fell on a sampling step (every 100 ms)".into()
+                    }
+                }),
                 reference_q_error_m: o.slow.reference_q_error_m,
                 reference_force_error_n: o.slow.reference_force_error_n,
             },

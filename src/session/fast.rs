@@ -206,7 +206,14 @@ impl<C: Clock> TickBody for FastLoop<C> {
             }
             self.health[d] = health;
             let fs: &mut FingerStats = &mut self.stats.fingers[i];
-            fs.record(&command, &rendered, out.tracking_error_m);
+            // A failed solve's attachment point means nothing: its tracking
+            // error is not a measurement (the tick is counted as failed).
+            let tracking = if solved {
+                out.tracking_error_m
+            } else {
+                f64::NAN
+            };
+            fs.record(&command, &rendered, tracking);
             let _ = self.trace.push(TraceSample {
                 t_s,
                 finger: i as u16,

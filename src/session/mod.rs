@@ -22,7 +22,7 @@ pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
 pub use plan::{Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
 pub use rig::{Rig, SessionDevice};
-pub use slow::{Correction, Handover, SlowLoop, SlowStats};
+pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
 pub use stats::{FingerStats, RunStats};
 
 use crate::scenes::Scene;

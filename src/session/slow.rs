@@ -84,6 +84,9 @@ pub struct SlowStats {
     pub last_placement: Option<SolveInfo>,
     /// Snapshots compared with a Newton-converged reference.
     pub reference_samples: u64,
+    /// Reference samples skipped because the model has more than
+    /// [`REFERENCE_MAX_COORDS`] coordinates.
+    pub reference_skipped_large: u64,
     /// Largest distance of a fast-loop body position from the reference
     /// configuration, m.
     pub reference_q_error_m: f64,
@@ -159,6 +162,7 @@ impl SlowLoop {
     /// the two (dense reference solve).
     fn measure_against_reference(&mut self, q: &[f64]) {
         if self.model.n_coords() > REFERENCE_MAX_COORDS {
+            self.stats.reference_skipped_large += 1;
             return;
         }
         let mut q_star = q.to_vec();

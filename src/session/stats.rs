@@ -23,6 +23,8 @@ pub struct FingerStats {
     pub tracking_max: f64,
     /// Σ |attachment point − target|², m².
     pub tracking_sumsq: f64,
+    /// Ticks with a tracking measurement (failed solves have none).
+    pub tracking_n: u64,
 }
 
 impl FingerStats {
@@ -34,8 +36,11 @@ impl FingerStats {
         self.force_sum += f;
         self.force_max = self.force_max.max(f);
         self.commanded_max = self.commanded_max.max(commanded.norm());
-        self.tracking_max = self.tracking_max.max(tracking_m);
-        self.tracking_sumsq += tracking_m * tracking_m;
+        if tracking_m.is_finite() {
+            self.tracking_max = self.tracking_max.max(tracking_m);
+            self.tracking_sumsq += tracking_m * tracking_m;
+            self.tracking_n += 1;
+        }
     }
 
     /// Mean rendered force magnitude, N.
@@ -47,12 +52,12 @@ impl FingerStats {
         }
     }
 
-    /// RMS tracking error, m.
+    /// RMS tracking error over the ticks that measured it, m (NaN if none).
     pub fn tracking_rms(&self) -> f64 {
-        if self.n == 0 {
-            0.0
+        if self.tracking_n == 0 {
+            f64::NAN
         } else {
-            (self.tracking_sumsq / self.n as f64).sqrt()
+            (self.tracking_sumsq / self.tracking_n as f64).sqrt()
         }
     }
 }
@@ -121,11 +126,17 @@ impl RunStats {
         }
     }
 
-    /// RMS length-row violation over the run, m.
+    /// Ticks whose solve succeeded: the ones the violation figures cover.
+    pub fn solved_ticks(&self) -> u64 {
+        self.ticks - self.solver_failures
+    }
+
+    /// RMS length-row violation over the ticks that succeeded, m (NaN when
+    /// none did: nothing was measured).
     pub fn violation_rms_m(&self) -> f64 {
-        let n = self.ticks - self.solver_failures;
+        let n = self.solved_ticks();
         if n == 0 {
-            0.0
+            f64::NAN
         } else {
             (self.violation_sumsq / n as f64).sqrt()
         }

@@ -2,6 +2,7 @@
 //! every kind of exit (read at the motor), signals handled like Ctrl-C, output
 //! directories that one run owns, files that are whole or absent.
 
+use haptloop::report::summary::Summary;
 use haptloop::scenes::resolve;
 use haptloop::session::{self, Plan, SessionOptions};
 use haptloop_rt::schedule::StopFlag;
@@ -202,4 +203,93 @@ fn probe_fails_before_running_when_its_output_cannot_be_written() {
     assert_eq!(r.status.code(), Some(1), "{err}");
     assert!(err.contains("/nonexistent-dir/x.json"), "{err}");
     assert!(!err.contains("haptloop probe:"), "the probe ran: {err}");
+}
+
+fn summary_of(scene: &haptloop::scenes::Scene, options: &SessionOptions) -> Summary {
+    let plan = Plan::new(scene, options).unwrap();
+    Summary::of(&session::run(scene, plan, &StopFlag::new(), &mut |_| {}).unwrap())
+}
+
+/// A scene file derived from the default scene by one textual replacement.
+fn four_bar_with(dir: &Path, from: &str, to: &str) -> haptloop::scenes::Scene {
+    let text = haptloop::scenes::BUILTIN
+        .iter()
+        .find(|b| b.name == "four-bar")
+        .unwrap()
+        .text;
+    assert!(text.contains(from), "{from}");
+    let path = dir.join("variant.toml");
+    std::fs::write(&path, text.replace(from, to)).unwrap();
+    resolve(path.to_str().unwrap()).unwrap()
+}
+
+/// Runs where every tick fails, or none runs, never report a violation of 0
+/// "kept": they say nothing was measured and why, the figures are NaN, and
+/// summary.json writes them as "NaN" (not a silent null).
+#[test]
+fn reports_never_claim_a_tolerance_over_ticks_that_failed_or_never_ran() {
+    let dir = tempfile::tempdir().unwrap();
+    let default = resolve("four-bar").unwrap();
+    let unassemblable = four_bar_with(dir.path(), "-0.049749371855331]", "-0.5]");
+    let far = four_bar_with(
+        dir.path(),
+        "position = [0.02, 0.0, 0.015]",
+        "position = [1e308, 0.0, 0.015]",
+    );
+    let cases = [
+        (
+            "gain 1e20",
+            summary_of(
+                &default,
+                &SessionOptions {
+                    gain: Some(1e20),
+                    ..deterministic(0.3)
+                },
+            ),
+            "not measured: all 300 ticks failed",
+        ),
+        (
+            "no tick",
+            summary_of(&default, &deterministic(0.0001)),
+            "not measured: no tick ran",
+        ),
+        (
+            "unassemblable",
+            summary_of(&unassemblable, &deterministic(0.3)),
+            "not measured: all 300 ticks failed",
+        ),
+        (
+            "body at 1e308",
+            summary_of(&far, &deterministic(0.3)),
+            "not measured: all 300 ticks failed",
+        ),
+    ];
+    for (what, s, verdict) in &cases {
+        assert_eq!(s.violation.verdict, *verdict, "{what}");
+        assert_eq!(s.violation.ticks_measured, 0, "{what}");
+        assert_eq!(s.violation.ticks_failed, s.ticks, "{what}");
+        assert!(
+            s.violation.max.is_nan() && s.tracking_m.max.is_nan(),
+            "{what}"
+        );
+        let json = serde_json::to_value(s).unwrap();
+        assert_eq!(json["violation"]["max"], "NaN", "{what}");
+        assert_eq!(json["tracking_m"]["rms"], "NaN", "{what}");
+        assert!(
+            s.slow_loop.reference_missing.is_some(),
+            "{what}: claims reference samples"
+        );
+        let text = haptloop::report::session::render(s, &[]);
+        assert!(!text.contains("kept"), "{what}: {text}");
+        assert!(text.contains(verdict), "{what}: {text}");
+    }
+    assert_eq!(cases[2].1.assembly.as_ref().unwrap().status, "LeastSquares");
+    // A healthy run: measured over every tick, kept, a real figure.
+    let ok = summary_of(&default, &deterministic(0.3));
+    assert_eq!(
+        (ok.violation.ticks_measured, ok.violation.ticks_failed),
+        (300, 0)
+    );
+    assert_eq!(ok.violation.verdict, "kept");
+    assert!(ok.violation.max.is_finite() && ok.violation.max < 1e-6);
 }
