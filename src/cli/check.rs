@@ -1,25 +1,54 @@
 //! `haptloop check FILE`: validate a scene and print what it compiles to.
 
 use crate::scenes::{Scene, resolve};
+use crate::session::{self, Plan, SessionOptions};
 use anyhow::Result;
+use haptloop_rt::clock::{MockClock, Nanos};
 use haptloop_solver::scene::HandPath;
+use haptloop_solver::scene::SceneError;
 use haptloop_solver::{Grasp, RowUnit, Sense};
 use std::collections::BTreeMap;
 use std::process::ExitCode;
 
-/// Validates `arg` (a file or built-in name). Prints the compiled summary and
-/// exits 0, or prints the located error and exits 1.
+/// Validates `arg` (a file or built-in name) and builds everything `run`
+/// builds before its clock starts (fast-loop program with its gain check and
+/// symbolic factorisation, placement analysis, assembly, devices). Prints the
+/// compiled summary and exits 0, or prints the located error and exits 1.
 pub fn run(arg: &str) -> Result<ExitCode> {
-    match resolve(arg) {
-        Ok(scene) => {
-            print!("{}", summary(&scene));
-            Ok(ExitCode::SUCCESS)
-        }
+    let scene = match resolve(arg) {
+        Ok(scene) => scene,
         Err(e) => {
             eprintln!("{e}");
-            Ok(ExitCode::from(1))
+            return Ok(ExitCode::from(1));
         }
+    };
+    if let Err(e) = builds(&scene) {
+        eprintln!("{e}");
+        return Ok(ExitCode::from(1));
     }
+    print!("{}", summary(&scene));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Builds what `run` builds for `scene` at its own settings, and turns a
+/// failure into an error located at the scene's `[solver]` table (whose
+/// settings the program is built from), else at its name.
+pub fn builds(scene: &Scene) -> std::result::Result<(), SceneError> {
+    let options = SessionOptions {
+        seconds: 0.001,
+        deterministic: true,
+        ..SessionOptions::default()
+    };
+    let built = Plan::new(scene, &options)
+        .and_then(|plan| session::build(scene, &plan, MockClock::new(Nanos(0))).map(|_| ()));
+    built.map_err(|e| {
+        let l = &scene.loaded;
+        let span = match l.text.find("[solver]") {
+            Some(at) => at..at + 1,
+            None => l.spec.scene.name.span(),
+        };
+        l.error_at(span, format!("the scene loads but cannot run: {e:#}"))
+    })
 }
 
 /// The compiled scene, one aspect per line.

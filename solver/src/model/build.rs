@@ -225,6 +225,7 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         }
     };
     finite("position", &s.position_m)?;
+    super::compiler::in_range(&owner(), "position", &s.position_m)?;
     finite("orientation", &s.orientation_wxyz)?;
     let mass_kg = s.mass_kg.unwrap_or(DEFAULT_MASS_KG);
     finite("mass", &[mass_kg])?;
@@ -239,7 +240,11 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     finite("inertia", &inertia)?;
     let [a, b, c] = inertia;
     let slack = 1e-9 * (a + b + c);
+    // A moving body needs every principal moment > 0: a zero one leaves a
+    // rotation without inertia and M singular (the force solve's
+    // factorisation then fails).
     if inertia.iter().any(|&x| x < 0.0)
+        || (!s.fixed && inertia.iter().any(|&x| x <= 0.0))
         || a > b + c + slack
         || b > a + c + slack
         || c > a + b + slack

@@ -100,6 +100,26 @@ pub(super) fn finite(owner: &Owner, field: &'static str, v: &[f64]) -> Result<()
     }
 }
 
+/// Largest |coordinate| a model accepts for positions, anchors, lengths and
+/// finger points, m. A scene is a mechanism in a room, not the solar system:
+/// beyond this, squared distances lose every digit a joint needs (the
+/// 1e200-metre anchor that made the gain check divide ∞ by ∞).
+pub const MAX_COORDINATE_M: f64 = 1e4;
+
+/// Ok if every entry of `v` is within ±[`MAX_COORDINATE_M`] (NaN is caught
+/// by [`finite`] first).
+pub(super) fn in_range(owner: &Owner, field: &'static str, v: &[f64]) -> Result<(), BuildError> {
+    finite(owner, field, v)?;
+    match v.iter().find(|x| x.abs() > MAX_COORDINATE_M) {
+        None => Ok(()),
+        Some(&value) => Err(BuildError::OutOfRange {
+            owner: owner.clone(),
+            field,
+            value,
+        }),
+    }
+}
+
 pub(super) fn unit(
     owner: &Owner,
     field: &'static str,

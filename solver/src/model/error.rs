@@ -56,6 +56,16 @@ pub enum BuildError {
         /// Which field.
         field: &'static str,
     },
+    /// A position, anchor, length or point beyond ±[`MAX_COORDINATE_M`](super::compiler::MAX_COORDINATE_M).
+    #[error("{owner}: `{field}` holds {value:e} m; scenes are limited to ±10 km (|x| ≤ 1e4 m)")]
+    OutOfRange {
+        /// Where.
+        owner: Owner,
+        /// Which field.
+        field: &'static str,
+        /// The offending entry, m.
+        value: f64,
+    },
     /// An orientation quaternion is zero or overflows when squared.
     #[error("{owner}: `orientation` cannot be normalised (zero or overflowing)")]
     ZeroOrientation {
@@ -70,9 +80,10 @@ pub enum BuildError {
         /// The mass given.
         mass_kg: f64,
     },
-    /// Principal moments negative or violating the triangle inequality.
+    /// Principal moments not positive (a moving body) or violating the
+    /// triangle inequality.
     #[error(
-        "{owner}: inertia {inertia_kg_m2:?} kg·m² is not physical (moments must be ≥ 0 and each ≤ the sum of the other two)"
+        "{owner}: inertia {inertia_kg_m2:?} kg·m² is not physical (a moving body's moments must be > 0 and each ≤ the sum of the other two)"
     )]
     BadInertia {
         /// The body.
@@ -232,6 +243,7 @@ impl BuildError {
             EmptyName { owner }
             | DuplicateName { owner }
             | NonFinite { owner, .. }
+            | OutOfRange { owner, .. }
             | ZeroOrientation { owner }
             | NonPositiveMass { owner, .. }
             | BadInertia { owner, .. }

@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use nalgebra::Vector3;
 
-use super::compiler::{Compiler, DEGENERATE, finite, unit};
+use super::compiler::{Compiler, DEGENERATE, finite, in_range, unit};
 use super::error::{BuildError, Owner};
 use super::spec::{DesignParam, JointKind, JointSpec};
 use crate::constraint::axes::JointAxes;
@@ -101,13 +101,13 @@ fn check<'s>(k: usize, s: &'s JointSpec, cx: &Compiler) -> Result<Checked<'s>, B
     if bodies.iter().all(|b| cx.bodies[b.index()].fixed) {
         return Err(BuildError::BothFixed { owner });
     }
-    finite(&owner, "anchors", s.anchors_m.as_flattened())?;
+    in_range(&owner, "anchors", s.anchors_m.as_flattened())?;
     finite(
         &owner,
         "axes",
         s.axes.as_ref().map_or(&[][..], |a| a.as_flattened()),
     )?;
-    finite(&owner, "length", s.length_m.as_slice())?;
+    in_range(&owner, "length", s.length_m.as_slice())?;
     finite(
         &owner,
         "limits",

@@ -8,10 +8,10 @@
 use super::LoadedScene;
 use super::SceneError;
 use super::spec::{
-    BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, SolverSection, Vec3,
+    Arr, BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, SolverSection,
 };
 use crate::model::{BodySpec, BuildError, DesignParam, FingerSpec, JointKind, JointSpec, Owner};
-use crate::{FingerId, Model, ModelBuilder};
+use crate::{FingerId, Model, ModelBuilder, RowUnit, Sense};
 use std::ops::Range;
 use std::path::PathBuf;
 use toml::Spanned;
@@ -61,14 +61,14 @@ pub enum HandPath {
         /// Revolutions per second.
         hz: f64,
         /// In-plane direction.
-        u: Vec3,
+        u: [f64; 3],
         /// In-plane direction.
-        v: Vec3,
+        v: [f64; 3],
     },
     /// Move by `to_m` over `seconds`, then hold.
     Line {
         /// m.
-        to_m: Vec3,
+        to_m: [f64; 3],
         /// s.
         seconds: f64,
     },
@@ -104,7 +104,7 @@ pub struct DeviceDecl {
     /// Scene metres per device metre.
     pub scale: f64,
     /// Device frame in the scene, `[w, x, y, z]`, normalised.
-    pub orientation_wxyz: Quat,
+    pub orientation_wxyz: [f64; 4],
     /// The simulated hand (default: still).
     pub hand: HandDecl,
 }
@@ -183,18 +183,18 @@ fn body_spec(b: &BodySection) -> BodySpec {
         BodySpec::new(b.name.get_ref().clone())
     };
     if let Some(p) = &b.position {
-        spec = spec.at(*p.get_ref());
+        spec = spec.at(p.get_ref().get());
     }
     if let Some(q) = &b.orientation {
-        spec = spec.oriented(*q.get_ref());
+        spec = spec.oriented(q.get_ref().get());
     }
     spec.mass_kg = b.mass.as_ref().map(|m| *m.get_ref());
-    spec.inertia_kg_m2 = b.inertia.as_ref().map(|i| *i.get_ref());
+    spec.inertia_kg_m2 = b.inertia.as_ref().map(|i| i.get_ref().get());
     spec
 }
 
 fn joint_spec(j: &JointSection) -> JointSpec {
-    let [bi, bj] = j.bodies.get_ref();
+    let [bi, bj] = &j.bodies.get_ref().0;
     let mut spec = JointSpec::new(
         joint_kind(*j.kind.get_ref()),
         bi.get_ref().clone(),
@@ -202,11 +202,11 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     );
     spec.name = j.name.as_ref().map(|n| n.get_ref().clone());
     if let Some(a) = &j.anchors {
-        spec.anchors_m = *a.get_ref();
+        spec.anchors_m = a.get_ref().nested();
     }
-    spec.axes = j.axes.as_ref().map(|a| *a.get_ref());
+    spec.axes = j.axes.as_ref().map(|a| a.get_ref().nested());
     spec.length_m = j.length.as_ref().map(|l| *l.get_ref());
-    spec.limits = j.limits.as_ref().map(|l| *l.get_ref());
+    spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
     spec.free = j
         .free
         .iter()
@@ -221,7 +221,7 @@ fn joint_spec(j: &JointSection) -> JointSpec {
 
 fn normalised(q: Quat) -> Quat {
     let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-    [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+    Arr([q[0] / n, q[1] / n, q[2] / n, q[3] / n])
 }
 
 impl LoadedScene {
@@ -231,7 +231,7 @@ impl LoadedScene {
         let s = &self.spec;
         let mut builder = ModelBuilder::new();
         if let Some(g) = &s.scene.gravity {
-            builder.gravity(*g.get_ref());
+            builder.gravity(g.get_ref().get());
         }
         for b in &s.bodies {
             builder.body(body_spec(b));
@@ -245,7 +245,7 @@ impl LoadedScene {
         // cannot reach).
         let joints_only = builder.build().map_err(|e| self.build_error(&e))?;
         for f in &s.fingers {
-            let point = f.point.as_ref().map_or([0.0; 3], |p| *p.get_ref());
+            let point = f.point.as_ref().map_or([0.0; 3], |p| p.get_ref().get());
             let spec = match f.grasp.as_ref().map_or(GraspSpec::Point, |g| *g.get_ref()) {
                 GraspSpec::Point => {
                     FingerSpec::point(f.name.get_ref().clone(), f.body.get_ref().clone(), point)
@@ -257,6 +257,7 @@ impl LoadedScene {
             builder.finger(spec);
         }
         let model = builder.build().map_err(|e| self.build_error(&e))?;
+        self.check_limits_at_q0(&model)?;
 
         let devices = s
             .devices
@@ -269,7 +270,7 @@ impl LoadedScene {
                 orientation_wxyz: d
                     .orientation
                     .as_ref()
-                    .map_or([1.0, 0.0, 0.0, 0.0], |q| normalised(*q.get_ref())),
+                    .map_or([1.0, 0.0, 0.0, 0.0], |q| normalised(*q.get_ref()).get()),
                 hand: self.hand(d.hand.as_ref()),
             })
             .collect();
@@ -318,12 +319,12 @@ impl LoadedScene {
             HandPath::Circle {
                 radius_m: c.radius,
                 hz: c.hz,
-                u: c.u,
-                v: c.v,
+                u: c.u.get(),
+                v: c.v.get(),
             }
         } else if let Some(l) = &h.line {
             HandPath::Line {
-                to_m: l.get_ref().to,
+                to_m: l.get_ref().to.get(),
                 seconds: l.get_ref().seconds,
             }
         } else if let Some(t) = &h.trace {
@@ -344,6 +345,57 @@ impl LoadedScene {
             stiffness_n_per_m: h.stiffness.as_ref().map(|x| *x.get_ref()),
             damping_n_s_per_m: h.damping.as_ref().map(|x| *x.get_ref()),
         }
+    }
+
+    /// An initial configuration outside a joint's own limits is an error at
+    /// that joint's `limits` (the fast loop would start with a violated
+    /// inequality and ask for an enormous force to fix it in one tick).
+    fn check_limits_at_q0(&self, model: &Model) -> Result<(), SceneError> {
+        /// Slack for a configuration written with finite digits: 1 µm or µrad.
+        const SLACK: f64 = 1e-6;
+        let mut ev = model.evaluation();
+        if ev
+            .evaluate(model, model.q0(), &model.initial_targets())
+            .is_err()
+        {
+            return Ok(()); // non-finite q0: the builder's checks report it
+        }
+        for (r, row) in model.rows().iter().enumerate() {
+            let v = ev.values()[r];
+            if row.sense != Sense::Inequality || v >= -SLACK {
+                continue;
+            }
+            let c = &model.constraints()[row.constraint.index()];
+            let Some(joint) = c.name.strip_suffix(".limits") else {
+                continue;
+            };
+            let j = match joint
+                .strip_prefix('#')
+                .and_then(|k| k.parse::<usize>().ok())
+            {
+                Some(k) => self.spec.joints.get(k.saturating_sub(1)),
+                None => self
+                    .spec
+                    .joints
+                    .iter()
+                    .find(|j| j.name.as_ref().is_some_and(|n| n.get_ref() == joint)),
+            };
+            let span = j
+                .and_then(|j| j.limits.as_ref().map(Spanned::span))
+                .unwrap_or(0..0);
+            let unit = match row.unit {
+                RowUnit::Angle => "rad",
+                _ => "m",
+            };
+            return Err(self.error_at(
+                span,
+                format!(
+                    "joint `{joint}`: the initial configuration (bodies' positions and orientations as written) is outside these limits by {:.3e} {unit}; move the bodies inside the limits or widen them",
+                    -v
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Maps a builder error to the span of the field it is about.
@@ -406,6 +458,9 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
     match e {
         BuildError::NonFinite {
             field: "position", ..
+        }
+        | BuildError::OutOfRange {
+            field: "position", ..
         } => or_name(b.position.as_ref().map(Spanned::span)),
         BuildError::NonFinite {
             field: "orientation",
@@ -426,7 +481,7 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
 fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
     let head = j.name.as_ref().map_or(j.kind.span(), Spanned::span);
     let or_head = |v: Option<Range<usize>>| v.unwrap_or_else(|| head.clone());
-    let [bi, bj] = j.bodies.get_ref();
+    let [bi, bj] = &j.bodies.get_ref().0;
     match e {
         BuildError::UnknownBody { body, .. } => {
             if bi.get_ref() == body {
@@ -445,8 +500,14 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         BuildError::NonFinite {
             field: "anchors", ..
         }
+        | BuildError::OutOfRange {
+            field: "anchors", ..
+        }
         | BuildError::CoincidentAnchors { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
         BuildError::NonFinite {
+            field: "length", ..
+        }
+        | BuildError::OutOfRange {
             field: "length", ..
         }
         | BuildError::NonPositiveLength { .. }

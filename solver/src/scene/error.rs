@@ -64,27 +64,73 @@ fn floor_char_boundary(text: &str, mut i: usize) -> usize {
     i
 }
 
+/// Characters of the source line shown before the error's column, at most.
+const EXCERPT_BEFORE: usize = 40;
+/// Characters of the source line shown in all, at most.
+const EXCERPT_WIDTH: usize = 100;
+
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
             "{}:{}:{}: {}",
-            self.file, self.line, self.column, self.message
+            escape_controls(&self.file),
+            self.line,
+            self.column,
+            escape_controls(&self.message)
         )?;
         if !self.source_line.is_empty() {
             let gutter = self.line.to_string().len();
+            let (excerpt, caret) = excerpt(&self.source_line, self.column);
             write!(
                 f,
-                "\n {:>gutter$} | {}\n {:>gutter$} | {:>col$}",
+                "\n {:>gutter$} | {excerpt}\n {:>gutter$} | {}^",
                 self.line,
-                self.source_line,
                 "",
-                "^",
-                col = self.column
+                " ".repeat(caret - 1)
             )?;
         }
         Ok(())
     }
+}
+
+/// Text from a scene file made safe to print: control characters (ANSI
+/// escapes, NUL, …) are written as `\u{…}` escapes, never sent raw to a
+/// terminal.
+pub fn escape_controls(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && c != '\n' {
+            out.extend(c.escape_unicode());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The part of `line` around 1-based character `column`, at most
+/// [`EXCERPT_WIDTH`] characters with `…` where it was clipped and control
+/// characters shown as `�` (one column each, so the caret stays aligned),
+/// and the caret's 1-based column in the excerpt.
+fn excerpt(line: &str, column: usize) -> (String, usize) {
+    let n = line.chars().count();
+    let column = column.clamp(1, n + 1);
+    let start = column.saturating_sub(EXCERPT_BEFORE + 1);
+    let end = (start + EXCERPT_WIDTH).min(n);
+    let mut out = String::new();
+    let mut caret = column - start;
+    if start > 0 {
+        out.push('…');
+        caret += 1;
+    }
+    for c in line.chars().skip(start).take(end - start) {
+        out.push(if c.is_control() { '\u{fffd}' } else { c });
+    }
+    if end < n {
+        out.push('…');
+    }
+    (out, caret)
 }
 
 impl std::error::Error for SceneError {}
@@ -105,6 +151,45 @@ mod tests {
             shown.starts_with("s.toml:4:6: bad\n 4 | namé = 1\n   |      ^"),
             "{shown}"
         );
+    }
+
+    #[test]
+    fn long_lines_print_a_clipped_excerpt_with_the_caret_on_the_column() {
+        // Column 70 001: the old printer panicked (width argument out of range).
+        let mut text = "x = [".to_string();
+        text.push_str(&"1, ".repeat(23_332));
+        let at = text.len();
+        text.push_str("oops]\n");
+        let e = SceneError::at("s.toml", &text, at..at + 1, "not a number");
+        assert_eq!(e.column, at + 1);
+        let shown = e.to_string();
+        let lines: Vec<&str> = shown.lines().collect();
+        assert_eq!(lines[0], format!("s.toml:1:{}: not a number", at + 1));
+        let code = lines[1].split_once(" | ").unwrap().1;
+        let caret = lines[2].split_once(" | ").unwrap().1;
+        assert!(code.chars().count() <= EXCERPT_WIDTH + 2, "{code}");
+        assert!(code.starts_with('…') && code.contains("oops]"), "{code}");
+        // The caret sits under the `o` of `oops`.
+        let under = code.chars().nth(caret.chars().count() - 1).unwrap();
+        assert_eq!(under, 'o', "{code}\n{caret}");
+    }
+
+    #[test]
+    fn control_characters_are_never_printed_raw() {
+        let text = "name = \"\u{1b}[31mred\u{0}\"\n";
+        let e = SceneError::at(
+            "s\u{7}.toml",
+            text,
+            0..1,
+            "unknown body `\u{1b}[31mred\u{0}`",
+        );
+        let shown = e.to_string();
+        assert!(
+            !shown.chars().any(|c| c.is_control() && c != '\n'),
+            "{shown:?}"
+        );
+        assert!(shown.contains("\\u{1b}[31mred\\u{0}"), "{shown}");
+        assert!(shown.starts_with("s\\u{7}.toml:1:1:"), "{shown}");
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Checks on semantic-area polygons: enough vertices, planar, not degenerate,
 //! not self-intersecting.
 
-use super::spec::Vec3;
+/// A point or vector, metres.
+type Vec3 = [f64; 3];
 
 fn sub(a: Vec3, b: Vec3) -> Vec3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

@@ -11,9 +11,56 @@ use std::collections::BTreeMap;
 use toml::Spanned;
 
 /// A 3-vector in the file: `[x, y, z]`.
-pub type Vec3 = [f64; 3];
+pub type Vec3 = Arr<f64, 3>;
 /// A quaternion in the file: `[w, x, y, z]` (normalised on load).
-pub type Quat = [f64; 4];
+pub type Quat = Arr<f64, 4>;
+
+/// A TOML array of exactly `N` elements. Serde's own `[T; N]` reads the
+/// first `N` elements and silently drops the rest (`position` with four
+/// numbers passed as three); this one refuses any other length.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Arr<T, const N: usize>(pub [T; N]);
+
+impl<T, const N: usize> std::ops::Deref for Arr<T, N> {
+    type Target = [T; N];
+    fn deref(&self) -> &[T; N] {
+        &self.0
+    }
+}
+
+impl<T: Copy, const N: usize> Arr<T, N> {
+    /// The elements as a plain array.
+    pub fn get(&self) -> [T; N] {
+        self.0
+    }
+}
+
+impl<const M: usize, const N: usize> Arr<Arr<f64, M>, N> {
+    /// An array of arrays as plain nested arrays.
+    pub fn nested(&self) -> [[f64; M]; N] {
+        self.0.map(|a| a.0)
+    }
+}
+
+impl<'a, T, const N: usize> IntoIterator for &'a Arr<T, N> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Arr<T, N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<T>::deserialize(d)?;
+        let len = v.len();
+        <[T; N]>::try_from(v).map(Arr).map_err(|_| {
+            serde::de::Error::custom(format!(
+                "invalid length {len}, expected an array of length {N}"
+            ))
+        })
+    }
+}
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -196,19 +243,19 @@ pub struct JointSection {
     /// The joint kind.
     pub kind: Spanned<JointKindSpec>,
     /// Body i, body j.
-    pub bodies: Spanned<[Spanned<String>; 2]>,
+    pub bodies: Spanned<Arr<Spanned<String>, 2>>,
     /// Body-local anchor points k_i, k_j, m.
     #[serde(default)]
-    pub anchors: Option<Spanned<[Vec3; 2]>>,
+    pub anchors: Option<Spanned<Arr<Vec3, 2>>>,
     /// Body-local axes h_i, h_j.
     #[serde(default)]
-    pub axes: Option<Spanned<[Vec3; 2]>>,
+    pub axes: Option<Spanned<Arr<Vec3, 2>>>,
     /// Distance joints: strut length, m.
     #[serde(default)]
     pub length: Option<Spanned<f64>>,
     /// Inequality on the joint coordinate.
     #[serde(default)]
-    pub limits: Option<Spanned<[f64; 2]>>,
+    pub limits: Option<Spanned<Arr<f64, 2>>>,
     /// Design variables.
     #[serde(default)]
     pub free: Vec<Spanned<FreeSpec>>,

@@ -8,7 +8,7 @@
 //! always points at the first problem a reader meets.
 
 use super::SceneError;
-use super::spec::{AreaSection, DeviceSection, HandSection, SceneFile, ShapeSpec, Vec3};
+use super::spec::{AreaSection, Arr, DeviceSection, HandSection, SceneFile, ShapeSpec, Vec3};
 use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use toml::Spanned;
@@ -25,7 +25,7 @@ impl Checker<'_> {
         SceneError::at(self.file, self.text, span, msg)
     }
 
-    fn finite<const N: usize>(&self, v: &Spanned<[f64; N]>, what: &str) -> Check {
+    fn finite<const N: usize>(&self, v: &Spanned<Arr<f64, N>>, what: &str) -> Check {
         match v.get_ref().iter().find(|x| !x.is_finite()) {
             Some(x) => Err(self.err(
                 v.span(),
@@ -198,7 +198,14 @@ impl Checker<'_> {
         }
         self.finite(&a.normal, "area normal")?;
         self.nonzero_vec(*a.normal.get_ref(), a.normal.span(), "area normal")?;
-        super::polygon::check(a.polygon.get_ref()).map_err(|m| self.err(a.polygon.span(), m))
+        super::polygon::check(
+            &a.polygon
+                .get_ref()
+                .iter()
+                .map(|p| p.get())
+                .collect::<Vec<_>>(),
+        )
+        .map_err(|m| self.err(a.polygon.span(), m))
     }
 
     fn devices(&self, s: &SceneFile) -> Check {
@@ -236,6 +243,11 @@ impl Checker<'_> {
     }
 
     fn hand(&self, h: &Spanned<HandSection>) -> Check {
+        // Bounds of a scripted hand: a session lasts at most a day, a hand
+        // does not circle faster than 100 Hz or wider than 10 m.
+        const MAX_HAND_SECONDS: f64 = 86_400.0;
+        const MAX_HAND_HZ: f64 = 100.0;
+        const MAX_HAND_RADIUS_M: f64 = 10.0;
         let hs = h.get_ref();
         let kinds = [
             hs.still.is_some(),
@@ -249,14 +261,25 @@ impl Checker<'_> {
                 "hand needs exactly one of `still`, `circle`, `line` or `trace`",
             ));
         }
+        if let Some(still) = &hs.still
+            && !*still.get_ref()
+        {
+            return Err(self.err(
+                still.span(),
+                "`still = false` means nothing: write `still = true`, or give the hand a `circle`, `line` or `trace`",
+            ));
+        }
         if let Some(c) = &hs.circle {
             let cs = c.get_ref();
-            let ok = cs.radius.is_finite() && cs.radius >= 0.0 && cs.hz.is_finite() && cs.hz >= 0.0;
+            let ok = cs.radius.is_finite()
+                && (0.0..=MAX_HAND_RADIUS_M).contains(&cs.radius)
+                && cs.hz.is_finite()
+                && (0.0..=MAX_HAND_HZ).contains(&cs.hz);
             if !ok {
                 return Err(self.err(
                     c.span(),
                     format!(
-                        "circle radius {} / hz {} must be finite and ≥ 0",
+                        "circle radius {} m / hz {} must be finite, radius 0–{MAX_HAND_RADIUS_M} m, hz 0–{MAX_HAND_HZ}",
                         cs.radius, cs.hz
                     ),
                 ));
@@ -266,11 +289,17 @@ impl Checker<'_> {
         }
         if let Some(l) = &hs.line {
             let ls = l.get_ref();
-            if !(ls.to.iter().all(|x| x.is_finite()) && ls.seconds.is_finite() && ls.seconds > 0.0)
+            if !(ls.to.iter().all(|x| x.is_finite())
+                && ls.seconds.is_finite()
+                && ls.seconds > 0.0
+                && ls.seconds <= MAX_HAND_SECONDS)
             {
                 return Err(self.err(
                     l.span(),
-                    "line `to` must be finite and `seconds` finite and > 0",
+                    format!(
+                        "line `to` must be finite and `seconds` in (0, {MAX_HAND_SECONDS}], got {}",
+                        ls.seconds
+                    ),
                 ));
             }
         }
