@@ -37,7 +37,7 @@ pub enum DeviceError {
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
     /// The file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: cannot read or write it")]
     Io {
         /// The file.
         path: PathBuf,

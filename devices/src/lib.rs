@@ -58,4 +58,4 @@ pub use safety::{
     CutReason, CutRecord, FaultRecord, Health, SafeDevice, SafetyConfig, SafetyCounters,
     SafetyEvent, WriteOutcome,
 };
-pub use trace::{Trace, TraceHeader, TraceRecorder, TraceRow};
+pub use trace::{Trace, TraceHeader, TraceRecorder, TraceRow, TraceStream};

@@ -1,19 +1,21 @@
 //! [`ReplayDevice`]: plays a recorded [`Trace`] back as a device, so a
 //! deterministic session driven by it reproduces the recorded forces bit for bit.
 //!
-//! `read(now)` returns the reading built from the counts of the last row whose
-//! time is ≤ `now` (the same conversion a live device uses:
-//! [`crate::PhantomModel::reading_from_counts`]); before the first row it
-//! reports [`DeviceFault::Dropped`]. The gimbal is not recorded, so the
-//! orientation is the identity. `write` moves nothing; it reports the force
-//! as produced so the safety layer sees a healthy device.
+//! `read(now)` returns the reading built from the counts and gimbal
+//! orientation of the last row whose time is ≤ `now` (the same conversion a
+//! live device uses: [`crate::PhantomModel::reading_from_counts`]); before the
+//! first row it reports [`DeviceFault::Dropped`], and more than one period
+//! past the last row [`DeviceFault::Disconnected`]: a trace that ends is a
+//! device that went away, so the safety layer latches and cuts force. `write`
+//! moves nothing; it reports the force as produced (a replayed device has no
+//! motors), so the safety layer sees a healthy device.
 //!
 //! # Real-time
 //! `read` advances a cursor (amortised O(1)); no allocation.
 
 use std::time::Duration;
 
-use nalgebra::Vector3;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport};
 use crate::error::DeviceError;
@@ -46,6 +48,11 @@ impl ReplayDevice {
         &self.trace
     }
 
+    /// Time of the last row: how far the trace reaches.
+    pub fn end(&self) -> Duration {
+        self.trace.rows.last().map_or(Duration::ZERO, |r| r.time)
+    }
+
     /// True once `read` has reached the last row.
     pub fn finished(&self) -> bool {
         self.cursor + 1 >= self.trace.rows.len()
@@ -62,8 +69,18 @@ impl Device for ReplayDevice {
         while self.cursor + 1 < rows.len() && rows[self.cursor + 1].time <= now {
             self.cursor += 1;
         }
+        let period =
+            Duration::from_nanos(1_000_000_000 / u64::from(self.trace.header.rate_hz.max(1)));
         match rows.get(self.cursor) {
-            Some(row) if row.time <= now => Ok(self.model.reading_from_counts(&row.counts, now)),
+            Some(row) if self.cursor + 1 == rows.len() && now > row.time + period => {
+                Err(DeviceFault::Disconnected)
+            }
+            Some(row) if row.time <= now => {
+                let mut r = self.model.reading_from_counts(&row.counts, now);
+                let [w, x, y, z] = row.orientation_wxyz;
+                r.orientation_device = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
+                Ok(r)
+            }
             _ => Err(DeviceFault::Dropped),
         }
     }

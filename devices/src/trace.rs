@@ -1,39 +1,61 @@
 //! Device traces: record on the fast thread into a preallocated buffer, write
 //! the file afterwards off the real-time thread, parse it back for replay.
 //!
-//! # File format (text, `haptloop-trace v1`)
+//! A session records by streaming: the fast thread pushes each row into a
+//! bounded lock-free queue ([`TraceRecorder::streaming`]) and the reporting
+//! thread drains it to the file as the run goes ([`TraceStream`]), so a long
+//! or high-rate recording needs no memory for the whole run; when the disk
+//! cannot keep up, the queue fills and rows are dropped and counted.
+//!
+//! # File format (text, `haptloop-trace v2`)
 //!
 //! ```text
-//! # haptloop-trace v1
+//! # haptloop-trace v2
+//! # scene: four-bar
 //! # model: phantom-premium-1.5
 //! # rate_hz: 1000
 //! # units: t_ns = nanoseconds since session start; c0..c2 = encoder counts;
 //! #   cmd_* = commanded force, N, device frame (before the safety layer);
 //! #   out_* = force sent to the device, N, device frame (after it);
-//! #   hand_* = hand target offset, m, device frame, from the tip's start
-//! t_ns,c0,c1,c2,cmd_x,cmd_y,cmd_z,out_x,out_y,out_z,hand_x,hand_y,hand_z
-//! 1000000,0,-3,2,0,-1.25,0,0,-0.00125,0,0,-0.005,0
+//! #   hand_* = hand target offset, m, device frame, from the tip's start;
+//! #   q* = stylus orientation sensed by the gimbal (w, x, y, z), device frame
+//! t_ns,c0,c1,c2,cmd_x,cmd_y,cmd_z,out_x,out_y,out_z,hand_x,hand_y,hand_z,qw,qx,qy,qz
+//! 0,0,-3,2,0,0,0,0,0,0,0,0,0,1,0,0,0
+//! 1000000,0,-3,2,0,-1.25,0,0,-0.00125,0,0,-0.005,0,1,0,0,0
+//! # dropped_rows: 0
 //! ```
 //!
-//! Floats are written with Rust's shortest round-trip formatting, so parsing a
-//! file gives back the recorded `f64` values bit for bit (NaN is written `NaN`).
-//! The header lines are `# key: value`; `model` and `rate_hz` are required.
+//! The row at t = 0 is the reading the device was registered with. Floats are
+//! written with Rust's shortest round-trip formatting, so parsing a file gives
+//! back the recorded `f64` values bit for bit (NaN is written `NaN`). Lines
+//! `# key: value` may appear anywhere; `scene`, `model` and `rate_hz` are
+//! required, times must increase strictly.
 
-use std::io::Write;
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
+
+use crossbeam::queue::ArrayQueue;
 
 use nalgebra::Vector3;
 
 use crate::device::ARM_JOINTS;
 use crate::error::TraceError;
 
-const MAGIC: &str = "# haptloop-trace v1";
-const COLUMNS: &str = "t_ns,c0,c1,c2,cmd_x,cmd_y,cmd_z,out_x,out_y,out_z,hand_x,hand_y,hand_z";
+const MAGIC: &str = "# haptloop-trace v2";
+const COLUMNS: &str =
+    "t_ns,c0,c1,c2,cmd_x,cmd_y,cmd_z,out_x,out_y,out_z,hand_x,hand_y,hand_z,qw,qx,qy,qz";
+/// Fields per row.
+const FIELDS: usize = 17;
 
 /// Header of a trace.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TraceHeader {
+    /// Scene the trace was recorded in.
+    pub scene: String,
     /// Device model name (`phantom-premium-1.5`).
     pub model: String,
     /// Loop rate the trace was recorded at, ticks per second.
@@ -53,14 +75,31 @@ pub struct TraceRow {
     pub output_n_device: Vector3<f64>,
     /// Hand target offset, metres, device frame.
     pub hand_offset_m_device: Vector3<f64>,
+    /// Stylus orientation sensed by the gimbal, `[w, x, y, z]`, device frame.
+    pub orientation_wxyz: [f64; 4],
 }
 
-/// Records rows into a buffer allocated up front.
+/// Records rows on the fast thread: into a buffer allocated up front
+/// ([`with_capacity`](Self::with_capacity)), or into a bounded queue that a
+/// [`TraceStream`] drains to a file ([`streaming`](Self::streaming)).
 #[derive(Debug)]
 pub struct TraceRecorder {
     header: TraceHeader,
-    rows: Vec<TraceRow>,
+    sink: Sink,
     dropped: u64,
+}
+
+#[derive(Debug)]
+enum Sink {
+    Buffer(Vec<TraceRow>),
+    Stream(Arc<TraceQueue>),
+}
+
+/// The queue between a streaming recorder and its [`TraceStream`].
+#[derive(Debug)]
+struct TraceQueue {
+    rows: ArrayQueue<TraceRow>,
+    dropped: AtomicU64,
 }
 
 impl TraceRecorder {
@@ -68,24 +107,57 @@ impl TraceRecorder {
     pub fn with_capacity(header: TraceHeader, capacity: usize) -> Self {
         Self {
             header,
-            rows: Vec::with_capacity(capacity),
+            sink: Sink::Buffer(Vec::with_capacity(capacity)),
             dropped: 0,
         }
     }
 
-    /// Appends a row; when the buffer is full the row is dropped and counted.
-    /// Returns whether the row was kept.
+    /// A recorder that pushes rows into a queue of `capacity` rows, and the
+    /// stream that drains it (on another thread).
+    pub fn streaming(header: TraceHeader, capacity: usize) -> (Self, TraceStream) {
+        let queue = Arc::new(TraceQueue {
+            rows: ArrayQueue::new(capacity.max(1)),
+            dropped: AtomicU64::new(0),
+        });
+        let stream = TraceStream {
+            queue: queue.clone(),
+            header: header.clone(),
+            file: None,
+            written: 0,
+        };
+        let rec = Self {
+            header,
+            sink: Sink::Stream(queue),
+            dropped: 0,
+        };
+        (rec, stream)
+    }
+
+    /// Appends a row; when the buffer or queue is full the row is dropped and
+    /// counted. Returns whether the row was kept.
     ///
     /// # Real-time
-    /// Never allocates (the buffer never grows), no I/O, O(1).
+    /// Never allocates (the buffer never grows; the queue is a fixed ring), no
+    /// lock, no I/O, O(1).
     pub fn record(&mut self, row: TraceRow) -> bool {
-        if self.rows.len() < self.rows.capacity() {
-            self.rows.push(row);
-            true
-        } else {
+        let kept = match &mut self.sink {
+            Sink::Buffer(rows) if rows.len() < rows.capacity() => {
+                rows.push(row);
+                true
+            }
+            Sink::Buffer(_) => false,
+            Sink::Stream(q) => {
+                let kept = q.rows.push(row).is_ok();
+                if !kept {
+                    q.dropped.fetch_add(1, Ordering::Relaxed);
+                }
+                kept
+            }
+        };
+        if !kept {
             self.dropped += 1;
-            false
         }
+        kept
     }
 
     /// Rows that did not fit.
@@ -93,24 +165,169 @@ impl TraceRecorder {
         self.dropped
     }
 
-    /// Rows recorded so far.
+    /// Rows held in the buffer (0 when streaming).
     pub fn len(&self) -> usize {
-        self.rows.len()
+        match &self.sink {
+            Sink::Buffer(rows) => rows.len(),
+            Sink::Stream(_) => 0,
+        }
     }
 
-    /// True when nothing was recorded.
+    /// True when nothing is held in the buffer.
     pub fn is_empty(&self) -> bool {
-        self.rows.is_empty()
+        self.len() == 0
     }
 
-    /// Ends recording (hand this to a non-real-time thread to write).
+    /// Ends buffered recording (hand this to a non-real-time thread to
+    /// write). A streaming recorder's rows are in its stream: the trace
+    /// returned holds none.
     pub fn finish(self) -> Trace {
+        let rows = match self.sink {
+            Sink::Buffer(rows) => rows,
+            Sink::Stream(_) => Vec::new(),
+        };
         Trace {
             header: self.header,
-            rows: self.rows,
+            rows,
             dropped: self.dropped,
         }
     }
+}
+
+/// The draining end of a streaming [`TraceRecorder`]: writes rows to a file
+/// as they arrive. Not for the real-time thread.
+#[derive(Debug)]
+pub struct TraceStream {
+    queue: Arc<TraceQueue>,
+    header: TraceHeader,
+    /// The open file (under `<name>.partial`) and its final path.
+    file: Option<(BufWriter<File>, PathBuf, PathBuf)>,
+    written: u64,
+}
+
+impl TraceStream {
+    /// Starts the file at `path` (written as `<path>.partial` and renamed by
+    /// [`finish`](Self::finish), so a crash never leaves a half trace under
+    /// the real name) and writes the header.
+    pub fn create(mut self, path: &Path) -> Result<Self, TraceError> {
+        let mut name = path.file_name().unwrap_or_default().to_os_string();
+        name.push(".partial");
+        let partial = path.with_file_name(name);
+        let io = |source| TraceError::Io {
+            path: partial.clone(),
+            source,
+        };
+        let mut w = BufWriter::new(File::create(&partial).map_err(io)?);
+        write_header(&mut w, &self.header).map_err(io)?;
+        self.file = Some((w, partial, path.to_owned()));
+        Ok(self)
+    }
+
+    /// Writes every row queued so far; returns how many.
+    pub fn drain(&mut self) -> Result<u64, TraceError> {
+        let mut n = 0;
+        while let Some(row) = self.queue.rows.pop() {
+            if let Some((w, partial, _)) = &mut self.file {
+                write_row(w, &row).map_err(|source| TraceError::Io {
+                    path: partial.clone(),
+                    source,
+                })?;
+            }
+            n += 1;
+        }
+        self.written += n;
+        Ok(n)
+    }
+
+    /// Rows written so far.
+    pub fn written(&self) -> u64 {
+        self.written
+    }
+
+    /// Rows the recorder dropped because the queue was full.
+    pub fn dropped(&self) -> u64 {
+        self.queue.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Drains the rest, writes the dropped-row count, flushes and gives the
+    /// file its final name. Returns the rows dropped.
+    pub fn finish(mut self) -> Result<u64, TraceError> {
+        self.drain()?;
+        let dropped = self.dropped();
+        if let Some((mut w, partial, path)) = self.file.take() {
+            let io = |source| TraceError::Io {
+                path: partial.clone(),
+                source,
+            };
+            writeln!(w, "# dropped_rows: {dropped}").map_err(io)?;
+            w.flush().map_err(io)?;
+            drop(w);
+            std::fs::rename(&partial, &path).map_err(|source| TraceError::Io {
+                path: path.clone(),
+                source,
+            })?;
+        }
+        Ok(dropped)
+    }
+}
+
+fn write_header(w: &mut impl Write, h: &TraceHeader) -> std::io::Result<()> {
+    writeln!(w, "{MAGIC}")?;
+    writeln!(w, "# scene: {}", h.scene)?;
+    writeln!(w, "# model: {}", h.model)?;
+    writeln!(w, "# rate_hz: {}", h.rate_hz)?;
+    writeln!(
+        w,
+        "# units: t_ns = nanoseconds since session start; c0..c2 = encoder counts;"
+    )?;
+    writeln!(
+        w,
+        "#   cmd_* = commanded force, N, device frame (before the safety layer);"
+    )?;
+    writeln!(
+        w,
+        "#   out_* = force sent to the device, N, device frame (after it);"
+    )?;
+    writeln!(
+        w,
+        "#   hand_* = hand target offset, m, device frame, from the tip's start;"
+    )?;
+    writeln!(
+        w,
+        "#   q* = stylus orientation sensed by the gimbal (w, x, y, z), device frame"
+    )?;
+    writeln!(w, "{COLUMNS}")
+}
+
+fn write_row(w: &mut impl Write, r: &TraceRow) -> std::io::Result<()> {
+    let (c, f, o, h, q) = (
+        r.counts,
+        r.command_n_device,
+        r.output_n_device,
+        r.hand_offset_m_device,
+        r.orientation_wxyz,
+    );
+    writeln!(
+        w,
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        r.time.as_nanos(),
+        c[0],
+        c[1],
+        c[2],
+        f.x,
+        f.y,
+        f.z,
+        o.x,
+        o.y,
+        o.z,
+        h.x,
+        h.y,
+        h.z,
+        q[0],
+        q[1],
+        q[2],
+        q[3]
+    )
 }
 
 /// A recorded trace.
@@ -127,52 +344,11 @@ pub struct Trace {
 impl Trace {
     /// Writes the text format. Not for the real-time thread.
     pub fn write_to(&self, mut w: impl Write) -> Result<(), TraceError> {
-        writeln!(w, "{MAGIC}")?;
-        writeln!(w, "# model: {}", self.header.model)?;
-        writeln!(w, "# rate_hz: {}", self.header.rate_hz)?;
-        writeln!(w, "# dropped_rows: {}", self.dropped)?;
-        writeln!(
-            w,
-            "# units: t_ns = nanoseconds since session start; c0..c2 = encoder counts;"
-        )?;
-        writeln!(
-            w,
-            "#   cmd_* = commanded force, N, device frame (before the safety layer);"
-        )?;
-        writeln!(
-            w,
-            "#   out_* = force sent to the device, N, device frame (after it);"
-        )?;
-        writeln!(
-            w,
-            "#   hand_* = hand target offset, m, device frame, from the tip's start"
-        )?;
-        writeln!(w, "{COLUMNS}")?;
+        write_header(&mut w, &self.header)?;
         for r in &self.rows {
-            let (c, f, o, h) = (
-                r.counts,
-                r.command_n_device,
-                r.output_n_device,
-                r.hand_offset_m_device,
-            );
-            writeln!(
-                w,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                r.time.as_nanos(),
-                c[0],
-                c[1],
-                c[2],
-                f.x,
-                f.y,
-                f.z,
-                o.x,
-                o.y,
-                o.z,
-                h.x,
-                h.y,
-                h.z
-            )?;
+            write_row(&mut w, r)?;
         }
+        writeln!(w, "# dropped_rows: {}", self.dropped)?;
         Ok(())
     }
 
@@ -202,7 +378,7 @@ impl Trace {
             Some((_, l)) => return Err(err(1, format!("expected `{MAGIC}`, found `{l}`"))),
             None => return Err(err(1, "empty file".into())),
         }
-        let (mut model, mut rate_hz, mut dropped) = (None, None, 0u64);
+        let (mut scene, mut model, mut rate_hz, mut dropped) = (None, None, None, 0u64);
         let mut rows = Vec::new();
         let mut columns_seen = false;
         for (i, raw) in lines {
@@ -214,6 +390,7 @@ impl Trace {
                 if let Some((k, v)) = meta.split_once(':') {
                     let v = v.trim();
                     match k.trim() {
+                        "scene" => scene = Some(v.to_owned()),
                         "model" => model = Some(v.to_owned()),
                         "rate_hz" => {
                             rate_hz = Some(v.parse::<u32>().map_err(|_| {
@@ -237,12 +414,30 @@ impl Trace {
                 columns_seen = true;
                 continue;
             }
-            rows.push(parse_row(line).map_err(|m| err(n, m))?);
+            let row = parse_row(line).map_err(|m| err(n, m))?;
+            if let Some(last) = rows.last().map(|r: &TraceRow| r.time)
+                && row.time <= last
+            {
+                return Err(err(
+                    n,
+                    format!(
+                        "t_ns {} does not follow the previous row's {}: times must increase",
+                        row.time.as_nanos(),
+                        last.as_nanos()
+                    ),
+                ));
+            }
+            rows.push(row);
         }
+        let scene = scene.ok_or_else(|| err(1, "header has no `# scene:` line".into()))?;
         let model = model.ok_or_else(|| err(1, "header has no `# model:` line".into()))?;
         let rate_hz = rate_hz.ok_or_else(|| err(1, "header has no `# rate_hz:` line".into()))?;
         Ok(Self {
-            header: TraceHeader { model, rate_hz },
+            header: TraceHeader {
+                scene,
+                model,
+                rate_hz,
+            },
             rows,
             dropped,
         })
@@ -251,8 +446,8 @@ impl Trace {
 
 fn parse_row(line: &str) -> Result<TraceRow, String> {
     let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-    if fields.len() != 13 {
-        return Err(format!("expected 13 columns, found {}", fields.len()));
+    if fields.len() != FIELDS {
+        return Err(format!("expected {FIELDS} columns, found {}", fields.len()));
     }
     let int = |k: usize| {
         fields[k]
@@ -279,6 +474,7 @@ fn parse_row(line: &str) -> Result<TraceRow, String> {
         command_n_device: vec3(4)?,
         output_n_device: vec3(7)?,
         hand_offset_m_device: vec3(10)?,
+        orientation_wxyz: [float(13)?, float(14)?, float(15)?, float(16)?],
     })
 }
 
@@ -293,6 +489,7 @@ mod tests {
             command_n_device: Vector3::new(0.1 * k as f64, 1.0 / 3.0, f64::NAN),
             output_n_device: Vector3::new(-1e-300, 2.5, 0.0),
             hand_offset_m_device: Vector3::new(std::f64::consts::PI * 1e-3, 0.0, -0.0),
+            orientation_wxyz: [0.5, -0.5, 0.5, 1.0 / 3.0],
         }
     }
 
@@ -300,6 +497,7 @@ mod tests {
     fn text_round_trip_is_bit_exact_and_full_buffer_counts_drops() {
         let mut rec = TraceRecorder::with_capacity(
             TraceHeader {
+                scene: "four-bar".into(),
                 model: "phantom-omni".into(),
                 rate_hz: 1000,
             },
@@ -337,17 +535,25 @@ mod tests {
 
     #[test]
     fn parse_errors_name_source_and_line() {
-        let bad = format!("{MAGIC}\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n1,2,3\n");
-        let e = Trace::parse(&bad, "x.trace").unwrap_err().to_string();
-        assert!(e.starts_with("x.trace:5: expected 13 columns"), "{e}");
+        let head =
+            format!("{MAGIC}\n# scene: s\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n");
+        let e = Trace::parse(&format!("{head}1,2,3\n"), "x.trace")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("x.trace:6: expected 17 columns"), "{e}");
         let e = Trace::parse("hello\n", "x.trace").unwrap_err().to_string();
         assert!(
-            e.starts_with("x.trace:1: expected `# haptloop-trace v1`"),
+            e.starts_with("x.trace:1: expected `# haptloop-trace v2`"),
             "{e}"
         );
         let e = Trace::parse(&format!("{MAGIC}\n# rate_hz: 1000\n{COLUMNS}\n"), "x.trace")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("no `# model:`"), "{e}");
+        assert!(e.contains("no `# scene:`"), "{e}");
+        let row = |t: u64| format!("{t},0,0,0,0,0,0,0,0,0,0,0,0,1,0,0,0\n");
+        let e = Trace::parse(&format!("{head}{}{}{}", row(0), row(2), row(1)), "x.trace")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("x.trace:8: t_ns 1 does not follow"), "{e}");
     }
 }

@@ -60,10 +60,14 @@ fn mounted(model: &str) -> MountedDevice<SimPhantom> {
 fn read_write_safety_trace_and_replay_do_not_allocate() {
     let mut devices = [mounted("phantom-premium-1.5"), mounted("phantom-omni")];
     let header = TraceHeader {
+        scene: "no-alloc".into(),
         model: "phantom-premium-1.5".into(),
         rate_hz: 1000,
     };
-    let mut rec = TraceRecorder::with_capacity(header, 500); // fills up: drops are counted, not allocated
+    let mut rec = TraceRecorder::with_capacity(header.clone(), 500); // fills up: drops are counted, not allocated
+    // The session's recorder: a bounded queue, never drained here, so it
+    // fills and counts drops without allocating.
+    let (mut streaming, stream) = TraceRecorder::streaming(header, 300);
     let finger = Vector3::new(0.0, -0.005, 0.0);
     let ((), stats) = count(|| {
         for k in 1..=1000u32 {
@@ -80,20 +84,28 @@ fn read_write_safety_trace_and_replay_do_not_allocate() {
                 if k % 251 == 0 {
                     d.device.clear_fault();
                 }
+                if k % 333 == 0 {
+                    d.device.stop(now); // zero force and motors off
+                }
                 if i == 0 {
-                    rec.record(TraceRow {
+                    let q = r.reading.orientation_device.quaternion();
+                    let row = TraceRow {
                         time: now,
                         counts: r.reading.joint_counts,
                         command_n_device: f,
                         output_n_device: out.force_n_device,
                         hand_offset_m_device: Vector3::zeros(),
-                    });
+                        orientation_wxyz: [q.w, q.i, q.j, q.k],
+                    };
+                    rec.record(row);
+                    streaming.record(row);
                 }
             }
         }
     });
     assert_eq!(stats.total(), 0, "fast path allocated: {stats:?}");
     assert_eq!(rec.dropped(), 500);
+    assert_eq!((streaming.dropped(), stream.dropped()), (700, 700));
     // The faults did fire (the counted path was the faulty one too).
     assert!(devices[0].device.counters().events().count() >= 5);
 

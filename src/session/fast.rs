@@ -102,7 +102,10 @@ pub struct FastLoop<C: Clock> {
     pub(super) health: Vec<Health>,
     /// Encoder counts read this tick, per device.
     pub(super) counts: Vec<[i32; 3]>,
-    /// One per device when recording (`--record`), else empty.
+    /// Gimbal orientation read this tick, per device, `[w, x, y, z]`.
+    pub(super) orientations: Vec<[f64; 4]>,
+    /// One per device when recording (`--record`), else empty: rows go to a
+    /// bounded queue the reporter drains.
     pub(super) recorders: Vec<TraceRecorder>,
 }
 
@@ -140,11 +143,6 @@ impl<C: Clock> FastLoop<C> {
     pub fn rig(&self) -> &Rig {
         &self.rig
     }
-
-    /// Takes the device-trace recorders (empty unless recording).
-    pub fn take_recorders(&mut self) -> Vec<TraceRecorder> {
-        std::mem::take(&mut self.recorders)
-    }
 }
 
 impl<C: Clock> TickBody for FastLoop<C> {
@@ -160,7 +158,10 @@ impl<C: Clock> TickBody for FastLoop<C> {
         for i in 0..self.targets.len() {
             let dev = &mut self.rig.devices[self.rig.finger_device[i]];
             let r = dev.read_scene(now);
-            self.counts[self.rig.finger_device[i]] = r.reading.joint_counts;
+            let d = self.rig.finger_device[i];
+            self.counts[d] = r.reading.joint_counts;
+            let q = r.reading.orientation_device.quaternion();
+            self.orientations[d] = [q.w, q.i, q.j, q.k];
             self.targets[i] = self.rig.target(i, r.tip_m_scene, r.orientation_scene);
         }
         let steps = self
@@ -193,6 +194,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                     command_n_device: dev.mount.force_to_device(&command),
                     output_n_device: written.force_n_device,
                     hand_offset_m_device: dev.device.device().hand_offset_m_device(now),
+                    orientation_wxyz: self.orientations[d],
                 });
             }
             let health = dev.device.health();

@@ -28,7 +28,7 @@ pub use stats::{FingerStats, RunStats};
 use crate::scenes::Scene;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
-use haptloop_devices::{TraceHeader, TraceRecorder};
+use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
 use haptloop_rt::clock::{Clock, MockClock, MonotonicClock, Nanos};
 use haptloop_rt::exchange::{mailbox, program_channel};
 use haptloop_rt::schedule::{
@@ -37,6 +37,7 @@ use haptloop_rt::schedule::{
 };
 use haptloop_rt::thread::Granted;
 use haptloop_solver::{Placement, PlacementOptions, Program, SolveInfo};
+use nalgebra::Vector3;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -46,6 +47,9 @@ use std::time::Duration;
 const TRACE_QUEUE: usize = 1 << 15;
 /// Programs in flight between the slow and fast loops.
 const PROGRAM_QUEUE: usize = 4;
+/// Rows per device a recording may queue between two drains by the reporter
+/// (every 100 ms, or every slow step when deterministic): 1.6 s at 20 kHz.
+const RECORD_QUEUE: usize = 1 << 15;
 /// The slow loop's period in real time, and in ticks in deterministic mode at
 /// 1 kHz (scaled with the rate).
 const SLOW_PERIOD: Duration = Duration::from_millis(5);
@@ -95,6 +99,9 @@ pub struct Built<C: Clock> {
     pub slow: SlowLoop,
     /// The queue of trace samples the reporter drains.
     pub trace: Arc<ArrayQueue<TraceSample>>,
+    /// One stream per device when recording (`--record`), drained by the
+    /// reporter into `<device>.trace`.
+    pub device_traces: Vec<TraceStream>,
     /// The initial assembly.
     pub assembly: Option<SolveInfo>,
 }
@@ -127,7 +134,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         None
     };
     let program = Box::new(Handover::new(program));
-    let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref())?;
+    let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
     let n = model.n_coords();
     let (snapshot, snapshots) = mailbox(|| Snapshot {
         q: Vec::with_capacity(n),
@@ -139,22 +146,48 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let fingers = model.fingers().len();
     let targets = model.initial_targets();
     let health = vec![haptloop_devices::Health::Ok; rig.devices.len()];
-    let recorders = match &plan.record {
-        Some(_) => rig
-            .devices
-            .iter()
-            .zip(&scene.compiled.devices)
-            .map(|(_, d)| {
+    // Recording streams: the fast loop pushes rows into a bounded queue per
+    // device, the reporter writes them out as the run goes (no buffer for the
+    // whole run; a full queue drops and counts rows). The first row is the
+    // reading each device was registered with, so a replay registers
+    // identically.
+    let (recorders, device_traces) = match &plan.record {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            let mut recorders = Vec::new();
+            let mut streams = Vec::new();
+            for (k, d) in scene.compiled.devices.iter().enumerate() {
                 let header = TraceHeader {
+                    scene: scene.compiled.name.clone(),
                     model: d.model.clone(),
                     rate_hz: plan.rate_hz,
                 };
-                TraceRecorder::with_capacity(header, plan.ticks() as usize + 16)
-            })
-            .collect(),
-        None => Vec::new(),
+                let (mut rec, stream) = TraceRecorder::streaming(header, RECORD_QUEUE);
+                if let Some(r) = rig.registered[k] {
+                    let q = r.orientation_device.quaternion();
+                    rec.record(TraceRow {
+                        time: Duration::ZERO,
+                        counts: r.joint_counts,
+                        command_n_device: Vector3::zeros(),
+                        output_n_device: Vector3::zeros(),
+                        hand_offset_m_device: Vector3::zeros(),
+                        orientation_wxyz: [q.w, q.i, q.j, q.k],
+                    });
+                }
+                let path = dir.join(format!("{}.trace", d.name));
+                streams.push(
+                    stream
+                        .create(&path)
+                        .with_context(|| format!("recording device `{}`", d.name))?,
+                );
+                recorders.push(rec);
+            }
+            (recorders, streams)
+        }
+        None => (Vec::new(), Vec::new()),
     };
     let counts = vec![[0; 3]; rig.devices.len()];
+    let rig_devices = rig.devices.len();
     // A violation above the scene's tolerance (else 0.1 mm) triggers a
     // re-projection; one above a tenth of the mechanism's size means it came
     // apart.
@@ -175,6 +208,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         cut_until: 0,
         health,
         counts,
+        orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
         recorders,
     };
     let slow = SlowLoop {
@@ -195,6 +229,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     Ok(Built {
         fast,
         slow,
+        device_traces,
         trace,
         assembly,
     })
@@ -239,20 +274,7 @@ fn finish<C: Clock>(
     wall_start: Nanos,
 ) -> Result<SessionOutcome> {
     recorder.finish()?;
-    let (report, histograms, granted, mut fast, slow, assembly, trace) = finished;
-    if let Some(dir) = &plan.record {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        for (rec, d) in fast
-            .take_recorders()
-            .into_iter()
-            .zip(&scene.compiled.devices)
-        {
-            let path = dir.join(format!("{}.trace", d.name));
-            rec.finish()
-                .save(&path)
-                .with_context(|| format!("writing {}", path.display()))?;
-        }
-    }
+    let (report, histograms, granted, fast, slow, assembly, trace) = finished;
     let device_events = fast
         .rig()
         .devices
@@ -348,7 +370,8 @@ fn run_deterministic(
     names: &[String],
 ) -> Result<Finished<MockClock>> {
     let clock = MockClock::new(Nanos(0));
-    let built = build(scene, plan, clock.clone())?;
+    let mut built = build(scene, plan, clock.clone())?;
+    recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
     let mut body = Lockstep {
@@ -393,8 +416,10 @@ fn run_real_time(
         fast,
         mut slow,
         trace,
+        device_traces,
         assembly,
     } = built;
+    recorder.attach_device_traces(device_traces);
     let handle = spawn_loop(
         &plan.schedule(),
         MonotonicClock::new(),

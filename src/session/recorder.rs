@@ -5,6 +5,7 @@
 use super::fast::TraceSample;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
+use haptloop_devices::TraceStream;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -50,6 +51,10 @@ pub struct Recorder {
     pub latest: Vec<TraceSample>,
     /// Samples drained.
     pub samples: u64,
+    /// Device-trace streams being recorded (`--record`).
+    device_traces: Vec<TraceStream>,
+    /// Device-trace rows dropped because a queue was full (known at finish).
+    pub device_trace_dropped: u64,
 }
 
 impl Recorder {
@@ -80,11 +85,23 @@ impl Recorder {
             violation: Series::with_budget(ticks),
             latest: vec![TraceSample::default(); fingers.len()],
             samples: 0,
+            device_traces: Vec::new(),
+            device_trace_dropped: 0,
         })
     }
 
-    /// Moves every queued sample into the file and the series.
+    /// Takes over the device-trace streams of a recording session; they are
+    /// drained with every [`drain`](Self::drain).
+    pub fn attach_device_traces(&mut self, streams: Vec<TraceStream>) {
+        self.device_traces = streams;
+    }
+
+    /// Moves every queued sample into the file and the series, and every
+    /// queued device-trace row into its file.
     pub fn drain(&mut self, queue: &ArrayQueue<TraceSample>, names: &[String]) -> Result<()> {
+        for t in &mut self.device_traces {
+            t.drain()?;
+        }
         while let Some(s) = queue.pop() {
             let i = usize::from(s.finger);
             if let Some((w, _, _)) = &mut self.csv {
@@ -108,8 +125,12 @@ impl Recorder {
         Ok(())
     }
 
-    /// Flushes the CSV file and gives it its final name (`trace.csv`).
+    /// Flushes the CSV file and gives it its final name (`trace.csv`), and
+    /// finishes every device trace.
     pub fn finish(&mut self) -> Result<()> {
+        for t in std::mem::take(&mut self.device_traces) {
+            self.device_trace_dropped += t.finish()?;
+        }
         if let Some((mut w, partial, path)) = self.csv.take() {
             w.flush()
                 .with_context(|| format!("writing {}", partial.display()))?;

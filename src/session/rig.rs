@@ -3,7 +3,7 @@
 //! initial world position, plus the grasp offset a rigid finger needs.
 
 use crate::scenes::Scene;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use haptloop_devices::{
     Device, DeviceFault, DeviceInfo, DeviceReading, Grip, Hand, MotorReport, Mount, MountedDevice,
     ReplayDevice, SafetyConfig, SimOptions, SimPhantom, Trace, Trajectory,
@@ -88,6 +88,9 @@ pub struct Rig {
     /// For each model finger: the body orientation relative to the device's
     /// sensed orientation at registration (rigid grasps hold it).
     pub grasp_offset: Vec<UnitQuaternion<f64>>,
+    /// For each device: the reading it was registered with at t = 0 (what a
+    /// recording stores as its first row).
+    pub registered: Vec<Option<DeviceReading>>,
     /// For each model finger: point or rigid.
     pub grasp: Vec<Grasp>,
 }
@@ -123,11 +126,57 @@ fn scene_to_device_trajectory(
     mount.trajectory_to_device(&scene)
 }
 
+/// A replayed trace must come from this scene, this device model and this
+/// rate, and reach the end of the run: anything else would replay motion
+/// that belongs to another session, silently.
+fn check_replay(
+    trace: &Trace,
+    path: &Path,
+    scene: &str,
+    model: &str,
+    rate_hz: u32,
+    duration: Duration,
+) -> Result<()> {
+    let h = &trace.header;
+    let at = path.display();
+    if h.scene != scene {
+        bail!("{at}: recorded in scene `{}`, not `{scene}`", h.scene);
+    }
+    if h.model != model {
+        bail!(
+            "{at}: recorded on a `{}`, but this scene's device is a `{model}`",
+            h.model
+        );
+    }
+    if h.rate_hz != rate_hz {
+        bail!(
+            "{at}: recorded at {} Hz; this run is at {rate_hz} Hz (pass --rate {})",
+            h.rate_hz,
+            h.rate_hz
+        );
+    }
+    let end = trace.rows.last().map_or(Duration::ZERO, |r| r.time);
+    if end < duration {
+        bail!(
+            "{at}: the trace covers {:.3} s; this run needs {:.3} s (pass --seconds {:.3} or less)",
+            end.as_secs_f64(),
+            duration.as_secs_f64(),
+            end.as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
 impl Rig {
     /// Builds every device of `scene` for a loop at `rate_hz`, replaying the
     /// traces in `replay` (one `<device>.trace` each) instead of simulating when
     /// given, and registers each on its finger's initial world position.
-    pub fn build(scene: &Scene, rate_hz: u32, replay: Option<&Path>) -> Result<Rig> {
+    pub fn build(
+        scene: &Scene,
+        rate_hz: u32,
+        replay: Option<&Path>,
+        duration: Duration,
+    ) -> Result<Rig> {
         let c = &scene.compiled;
         let model = &c.model;
         let q0 = model.q0();
@@ -144,6 +193,7 @@ impl Rig {
                     let path = dir.join(format!("{}.trace", d.name));
                     let trace = Trace::load(&path)
                         .with_context(|| format!("replaying device `{}`", d.name))?;
+                    check_replay(&trace, &path, &c.name, &d.model, rate_hz, duration)?;
                     SessionDevice::Replay(Box::new(ReplayDevice::new(trace)?))
                 }
                 None => {
@@ -171,6 +221,7 @@ impl Rig {
             devices.push(MountedDevice::new(d.name.clone(), device, safety, mount)?);
         }
         let mut rig = Rig {
+            registered: vec![None; devices.len()],
             devices,
             finger_device,
             grasp_offset: vec![UnitQuaternion::identity(); model.fingers().len()],
@@ -186,6 +237,7 @@ impl Rig {
                 .expect("every finger has a point");
             let dev = &mut rig.devices[rig.finger_device[i]];
             let reading = dev.register(Duration::ZERO, &at);
+            rig.registered[rig.finger_device[i]] = Some(reading);
             let sensed = dev.mount.orientation_to_scene(&reading.orientation_device);
             let body = model
                 .body_rotation(q0, f.body)

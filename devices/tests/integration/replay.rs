@@ -21,6 +21,7 @@ fn record() -> Trace {
     });
     let mut dev = safe_sim("phantom-premium-1.5", hand.clone(), SafetyConfig::default());
     let header = TraceHeader {
+        scene: "wall".into(),
         model: "phantom-premium-1.5".into(),
         rate_hz: 1000,
     };
@@ -36,6 +37,10 @@ fn record() -> Trace {
             command_n_device: cmd,
             output_n_device: out.force_n_device,
             hand_offset_m_device: hand.trajectory.sample(now).offset_m,
+            orientation_wxyz: {
+                let q = r.orientation_device.quaternion();
+                [q.w, q.i, q.j, q.k]
+            },
         });
     }
     assert_eq!(rec.dropped(), 0);
