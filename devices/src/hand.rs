@@ -2,7 +2,7 @@
 //! that follows a trajectory.
 //!
 //! Trajectories are **offsets** (metres, device frame) from the tip's position
-//! when the session starts (the anchor), matching `hand` in `scene-format.md`:
+//! when the session starts (the anchor), matching `hand` in `docs/scene-format.md`:
 //! `still`, `line {to, seconds}` then hold, `circle {radius, hz, u, v}` =
 //! r((cos ωt − 1)u + sin ωt v), and a recorded `trace` ([`HandTrace`]). The
 //! session converts scene-frame offsets with

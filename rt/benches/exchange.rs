@@ -18,7 +18,8 @@ use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// A 1 KiB snapshot, the size used in `rt-anchors.md` §1.3.
+/// A 1 KiB snapshot: the order of a session snapshot of a mid-size mechanism
+/// (~130 coordinates).
 #[derive(Clone)]
 struct Snapshot {
     tick: u64,

@@ -9,7 +9,8 @@
 //! Neither side ever blocks on the other, and the fast side never allocates,
 //! frees or wakes a thread. The slow side polls at its own rate: waking it from
 //! the fast thread would cost a futex syscall and a cross-CPU IPI (≈ 10 µs
-//! median on the development VM, see `rt-anchors.md` §1.3).
+//! median measured on the development VM with a futex ping-pong between two
+//! pinned threads).
 
 mod handover;
 mod mailbox;

@@ -1,4 +1,4 @@
-//! The builder's vocabulary. It mirrors `scene-format.md` one-to-one so a scene
+//! The builder's vocabulary. It mirrors `docs/scene-format.md` one-to-one so a scene
 //! file compiles into builder calls: `[[body]]` → [`BodySpec`], `[[joint]]` →
 //! [`JointSpec`], `[[finger]]` → [`FingerSpec`], `scene.gravity` →
 //! [`ModelBuilder::gravity`](crate::ModelBuilder::gravity). Units are SI;

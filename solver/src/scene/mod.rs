@@ -1,4 +1,4 @@
-//! Scene files (TOML, `scene-format.md`): load, validate, compile.
+//! Scene files (TOML, `docs/scene-format.md`): load, validate, compile.
 //!
 //! ```text
 //!  text ──toml+serde──► spec::SceneFile (typed, every value Spanned)

@@ -1,4 +1,4 @@
-//! The scene file as typed values, exactly as `scene-format.md` spells it.
+//! The scene file as typed values, exactly as `docs/scene-format.md` spells it.
 //!
 //! Every value a later check may complain about keeps its byte span
 //! ([`Spanned`]) so the complaint can name the line and column. Unknown keys,
