@@ -440,3 +440,91 @@ fn an_out_of_range_priority_is_a_usage_error_for_run_and_probe() {
         );
     }
 }
+
+/// The zero-allocation rule on every path of the tick, not only the calm
+/// one: a slow loop running on its own thread hands programs over (the
+/// deliberately unstable gain fails every tick, so the slow loop keeps
+/// re-projecting), the fault path and its force cut, injected safety events,
+/// device traces recorded into their queues, and the force solve's
+/// release-and-re-solve branch (Stewart's stroke limits). Only the fast
+/// thread is counted; the slow thread allocates freely, as it may.
+#[test]
+fn the_fast_loop_tick_allocates_nothing_on_every_path() {
+    use haptloop::session::SessionFault;
+    use haptloop_rt::schedule::{SafetyEvent, TickBody};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let cases = [("stewart", None, 6.0), ("four-bar", Some(1e20), 2.0)];
+    let mut swapped = 0;
+    let mut releases = 0;
+    for (name, gain, seconds) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = resolve(name).unwrap();
+        let options = SessionOptions {
+            gain,
+            record: Some(dir.path().to_path_buf()),
+            ..deterministic(seconds)
+        };
+        let plan = Plan::new(&scene, &options).unwrap();
+        let clock = MockClock::new(Nanos(0));
+        let built = session::build(&scene, &plan, clock.clone()).unwrap();
+        let session::Built {
+            mut fast,
+            mut slow,
+            trace,
+            ..
+        } = built;
+        let done = Arc::new(AtomicBool::new(false));
+        let flag = done.clone();
+        let slow_thread = std::thread::spawn(move || {
+            while !flag.load(Ordering::Acquire) {
+                slow.step();
+                std::thread::yield_now();
+            }
+            slow.stats()
+        });
+        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
+        let stop = StopFlag::new();
+        periodic.run(&mut fast, RunLimit::slots(100), &stop);
+        let chunks = (plan.ticks() - 100) / 100;
+        let (_, stats) = count(|| {
+            for k in 0..chunks {
+                periodic.run(&mut fast, RunLimit::slots(100), &stop);
+                if k % 7 == 3 {
+                    fast.on_safety(SafetyEvent::Fault(SessionFault::Solver));
+                }
+                if k % 11 == 5 {
+                    fast.on_safety(SafetyEvent::MissStreak { misses: 5 });
+                }
+                while trace.pop().is_some() {}
+            }
+        });
+        done.store(true, Ordering::Release);
+        let slow_stats = slow_thread.join().unwrap();
+        assert_eq!(
+            stats.total(),
+            0,
+            "{name}: the fast loop allocated: {stats:?}"
+        );
+        assert!(
+            fast.stats().force_cuts >= chunks / 7,
+            "{name}: cut path not taken"
+        );
+        swapped += fast.stats().programs_swapped;
+        releases += fast.program().force_releases();
+        if gain.is_some() {
+            assert_eq!(
+                fast.stats().solver_failures,
+                fast.stats().ticks,
+                "{name}: the fault path must be the one taken"
+            );
+            assert!(slow_stats.reprojections > 0);
+        }
+    }
+    assert!(
+        swapped > 0,
+        "no program was handed over during the counted ticks"
+    );
+    assert!(releases > 0, "the release-and-re-solve branch never ran");
+}

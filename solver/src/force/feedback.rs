@@ -42,6 +42,9 @@ pub(crate) struct Feedback {
     scale: Vec<f64>,
     /// attachment − target at the previous tick, per finger (coupling damping).
     prev_error: Vec<Vector3<f64>>,
+    /// Ticks on which an active inequality would have pulled and was
+    /// released (the solve ran again without it).
+    releases: u64,
 }
 
 impl Feedback {
@@ -90,6 +93,7 @@ impl Feedback {
             gram,
             solve,
             prev_error: vec![Vector3::zeros(); fingers.len()],
+            releases: 0,
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -143,6 +147,12 @@ impl Feedback {
     /// Carries finger `from` of `old`'s coupling history into finger `to`.
     pub fn copy_finger(&mut self, to: usize, old: &Feedback, from: usize) {
         self.prev_error[to] = old.prev_error[from];
+    }
+
+    /// Ticks on which an active inequality was released and the solve ran
+    /// again.
+    pub fn releases(&self) -> u64 {
+        self.releases
     }
 
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
@@ -215,6 +225,7 @@ impl Feedback {
         if !released {
             return self.wrenches(s, settings, q, ev, targets, dt_s, out);
         }
+        self.releases += 1;
         self.solve_multipliers(ev, settings)?;
         self.wrenches(s, settings, q, ev, targets, dt_s, out)?;
         if settings.update == UpdateRule::Projected {

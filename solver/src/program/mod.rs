@@ -214,6 +214,12 @@ impl Program {
         &self.redundancy
     }
 
+    /// Ticks on which the force solve released an active inequality that
+    /// would have pulled and solved again (the release-and-re-solve branch).
+    pub fn force_releases(&self) -> u64 {
+        self.feedback.releases()
+    }
+
     /// The sizes beyond which a tick refuses its result as diverged
     /// ([`TickOutcome::Diverged`]).
     pub fn divergence_limits(&self) -> &DivergenceLimits {
