@@ -117,3 +117,34 @@ fn the_peaucellier_scene_is_assembled_and_q_lies_on_its_line() {
     // x = (a² − b²)/(2r) = (0.01 − 0.0016)/0.1.
     assert!((q.x - 0.084).abs() < 1e-12, "Q at {q:?}");
 }
+
+/// Inputs that once crashed something (the fuzz target's crashes land here,
+/// see `fuzz/run.sh`, beside hand-made ones for past panics): each loads or
+/// fails with a located error whose text prints without panicking and without
+/// raw control characters.
+#[test]
+fn every_fuzz_regression_loads_or_fails_cleanly() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-regressions");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let bytes = std::fs::read(&path).unwrap();
+        let Ok(text) = std::str::from_utf8(&bytes) else {
+            continue;
+        };
+        n += 1;
+        let loaded = haptloop_solver::scene::parse("fuzz.toml", text, None)
+            .and_then(haptloop::scenes::check_loaded);
+        if let Err(e) = loaded {
+            let shown = e.to_string();
+            assert!(
+                !shown.chars().any(|c| c.is_control() && c != '\n'),
+                "{}: {shown:?}",
+                path.display()
+            );
+            assert!(shown.starts_with(&format!("fuzz.toml:{}:{}:", e.line, e.column)));
+            assert!(shown.lines().nth(1).is_none_or(|l| l.chars().count() < 120));
+        }
+    }
+    assert!(n >= 3, "only {n} regression inputs");
+}
