@@ -106,7 +106,7 @@ fn exchange(c: &mut Criterion) {
 
     let (mut w, mut r) = mailbox(snapshot);
     let mut k = 0u64;
-    g.bench_function("mailbox_read", |b| {
+    g.bench_function("mailbox_publish_then_read_one_thread", |b| {
         b.iter(|| {
             k += 1;
             w.publish_with(|s| s.tick = k); // a fresh value every time: the swap path
@@ -178,7 +178,7 @@ fn distribution() {
     );
     let (mut w, mut r) = mailbox(snapshot);
     let mut k = 0u64;
-    measure("exchange/mailbox_read", &mut || {
+    measure("exchange/mailbox_publish_then_read_one_thread", &mut || {
         k += 1;
         w.publish_with(|s| s.tick = k);
         black_box(r.read(|s| s.tick));
