@@ -150,8 +150,13 @@ fn the_k_rule_speeds_convergence_tenfold() {
             (r.converged, r.iterations)
         };
         let (ok_scaled, n_scaled) = iterations(None);
-        let (_, n_unscaled) = iterations(Some(1.0));
+        let (ok_unscaled, n_unscaled) = iterations(Some(1.0));
         assert!(ok_scaled, "scaled converges");
+        // Both must converge: a capped unscaled run would make any ratio hold.
+        assert!(
+            ok_unscaled,
+            "unscaled did not converge in {n_unscaled} iterations"
+        );
         assert!(10 * n_scaled < n_unscaled, "{n_scaled} vs {n_unscaled}");
     }
 }
