@@ -80,11 +80,18 @@ pub fn run() -> Result<ExitCode> {
 
 /// First Ctrl-C, SIGTERM or SIGHUP: ask the fast loop to stop at its next tick
 /// boundary (motors off, reports and files still written). A second one: exit
-/// at once with status 130.
+/// at once with status 130. While a session is still being built (no loop
+/// runs, no device has been driven) the first one exits at once with status
+/// 130 and gives back the output directory it had claimed.
 fn install_ctrl_c() -> Result<StopFlag> {
     let stop = StopFlag::new();
     let flag = stop.clone();
     ctrlc::set_handler(move || {
+        if !crate::session::loops_running() {
+            eprintln!("\nhaptloop: interrupted before the session started");
+            output::abandon_claim();
+            std::process::exit(130);
+        }
         if flag.is_requested() {
             std::process::exit(130);
         }

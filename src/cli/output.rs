@@ -10,6 +10,28 @@ use std::path::{Path, PathBuf};
 /// Name of the lock file a run keeps in its output directory while it runs.
 pub const LOCK_NAME: &str = ".haptloop-run.lock";
 
+/// The directory this process has claimed and not yet released, so a signal
+/// that ends the process before the run starts can give it back.
+static CLAIMED: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Gives back the claimed directory of a run that never started: removes its
+/// lock and its unfinished `.partial` files, then the directory if nothing
+/// else is in it. For the signal handler.
+pub fn abandon_claim() {
+    let dir = CLAIMED.lock().ok().and_then(|mut c| c.take());
+    if let Some(dir) = dir {
+        let _ = fs::remove_file(dir.join(LOCK_NAME));
+        if let Ok(entries) = fs::read_dir(&dir) {
+            for e in entries.flatten() {
+                if e.file_name().to_string_lossy().ends_with(".partial") {
+                    let _ = fs::remove_file(e.path());
+                }
+            }
+        }
+        let _ = fs::remove_dir(&dir); // only succeeds when empty
+    }
+}
+
 /// An output directory claimed by this run: it was empty (or new) and holds
 /// this run's lock file until [`RunDir::release`].
 #[derive(Debug)]
@@ -39,6 +61,9 @@ impl RunDir {
             .create_new(true)
             .open(dir.join(LOCK_NAME))
             .with_context(|| format!("--out {}: another run claimed it first", dir.display()))?;
+        if let Ok(mut c) = CLAIMED.lock() {
+            *c = Some(dir.to_path_buf());
+        }
         Ok(RunDir {
             dir: dir.to_path_buf(),
         })
@@ -66,6 +91,9 @@ impl RunDir {
 
     /// Removes the lock: the run is complete.
     pub fn release(self) -> Result<()> {
+        if let Ok(mut c) = CLAIMED.lock() {
+            c.take();
+        }
         let lock = self.dir.join(LOCK_NAME);
         fs::remove_file(&lock).with_context(|| format!("removing {}", lock.display()))
     }

@@ -235,6 +235,33 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     })
 }
 
+/// Sessions whose loops are running, process-wide. While none is (a session
+/// is still being built: program, factorisations, assembly), there is nothing
+/// to stop at a tick boundary, so the command line's signal handler exits at
+/// once instead of waiting for the build ([`loops_running`]).
+static LOOPS_RUNNING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// True while some session's loops are running in this process.
+pub fn loops_running() -> bool {
+    LOOPS_RUNNING.load(Ordering::Acquire) > 0
+}
+
+/// Counts a session's loops as running while alive.
+struct LoopsRunning;
+
+impl LoopsRunning {
+    fn start() -> Self {
+        LOOPS_RUNNING.fetch_add(1, Ordering::AcqRel);
+        LoopsRunning
+    }
+}
+
+impl Drop for LoopsRunning {
+    fn drop(&mut self) {
+        LOOPS_RUNNING.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
 /// Runs `scene` as planned. `stop` ends it early (at a tick boundary) and the
 /// outcome is still complete. `on_status` receives a one-line status about
 /// once a second (real time) in real-time mode.
@@ -373,6 +400,7 @@ fn run_deterministic(
     let mut built = build(scene, plan, clock.clone())?;
     recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
+    let _running = LoopsRunning::start();
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
     let mut body = Lockstep {
         fast: built.fast,
@@ -420,6 +448,7 @@ fn run_real_time(
         assembly,
     } = built;
     recorder.attach_device_traces(device_traces);
+    let _running = LoopsRunning::start();
     let handle = spawn_loop(
         &plan.schedule(),
         MonotonicClock::new(),
