@@ -54,10 +54,11 @@ impl Feedback {
         model: &Model,
         ev: &Evaluation,
         settings: &SolverSettings,
+        excluded: &[bool],
     ) -> Result<Self, faer::sparse::FaerError> {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
-        let gram = Gram::new(model, jac, &masses);
+        let gram = Gram::new(model, jac, &masses, excluded);
         let cg = match settings.force_solver {
             ForceSolver::Cholesky => None,
             ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
@@ -100,6 +101,13 @@ impl Feedback {
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
         })
+    }
+
+    /// Equality rows dependent on earlier rows of the same body pair at q0
+    /// (`ev` evaluated there): to leave out of A before it is built (pass them
+    /// to [`Feedback::new`] as excluded). Allocates.
+    pub fn locally_dependent(model: &Model, ev: &Evaluation, s: &Scaling) -> Vec<usize> {
+        redundancy::locally_dependent(model, ev, s, &BodyMass::of_model(model))
     }
 
     /// Finds the rows of `model` to mask (see `redundancy`) at q0, where `ev`

@@ -26,6 +26,9 @@ pub(crate) enum Slot {
     J(usize),
     /// Index among the finger rows.
     F(usize),
+    /// Left out of the solve altogether (a row found dependent before A is
+    /// built: it has no place in A's pattern).
+    Out,
 }
 
 /// One row touching one body: its first value index on the body's columns.
@@ -78,11 +81,14 @@ pub(crate) struct Gram {
 }
 
 impl Gram {
-    /// The pattern of `model`'s A from its Jacobian pattern. Allocates.
-    pub fn new(model: &Model, jac: &Jacobian, masses: &[BodyMass]) -> Self {
+    /// The pattern of `model`'s A from its Jacobian pattern, without the rows
+    /// `excluded` marks (empty: none). Allocates.
+    pub fn new(model: &Model, jac: &Jacobian, masses: &[BodyMass], excluded: &[bool]) -> Self {
         let (mut slot, mut finger_rows, mut j_rows) = (Vec::new(), Vec::new(), Vec::new());
         for (i, row) in model.rows().iter().enumerate() {
-            if model.constraints()[row.constraint.index()].finger.is_some() {
+            if excluded.get(i).copied().unwrap_or(false) {
+                slot.push(Slot::Out);
+            } else if model.constraints()[row.constraint.index()].finger.is_some() {
                 slot.push(Slot::F(finger_rows.len()));
                 finger_rows.push(i);
             } else {
@@ -102,6 +108,9 @@ impl Gram {
             let (o, first, first_pair) = (m.offset, entries.len(), pairs.len());
             for k in col_ptr[o + 3]..col_ptr[o + 4] {
                 let (row, p3) = (col_rows[k], col_val[k]);
+                if slot[row] == Slot::Out {
+                    continue;
+                }
                 let has_r = p3 >= row_ptr[row] + 3 && col_idx[p3 - 3] == o;
                 let (pos, width) = if has_r { (p3 - 3, 7) } else { (p3, 4) };
                 entries.push(Entry { row, pos, width });
@@ -143,6 +152,9 @@ impl Gram {
                     (Slot::J(x), Slot::J(y)) => find(x.max(y), x.min(y)),
                     (Slot::F(f), Slot::J(j)) | (Slot::J(j), Slot::F(f)) => nnz + f * n_j + j,
                     (Slot::F(x), Slot::F(y)) => nnz + m_f * n_j + x.max(y) * m_f + x.min(y),
+                    (Slot::Out, _) | (_, Slot::Out) => {
+                        unreachable!("excluded rows have no entries")
+                    }
                 };
                 Product {
                     a,
@@ -278,7 +290,7 @@ mod tests {
         ev.evaluate(&model, &q, &model.initial_targets()).unwrap();
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(&model);
-        let mut gram = Gram::new(&model, jac, &masses);
+        let mut gram = Gram::new(&model, jac, &masses, &[]);
         let scale: Vec<f64> = (0..model.n_rows())
             .map(|i| 1.0 + 0.1 * (i % 3) as f64)
             .collect();

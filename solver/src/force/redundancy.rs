@@ -43,6 +43,18 @@
 //! and 5.6e-4 (sphere toy). Only below [`PRETEST_RATIO`] does the dense QR
 //! run.
 //!
+//! **Before A exists: rows dependent within their body pair.** A is built
+//! over the rows that survive a first, local pass: equality rows are grouped
+//! by the moving bodies they touch (one or two: at most 14 columns) and, in
+//! model order within each group, a row within [`REDUNDANCY_TOLERANCE`] of the
+//! span of the group's earlier rows (same metric) is dependent. Such a row is
+//! dependent on the earlier rows of the whole model too, so the ordered check
+//! would mask it anyway; finding it first keeps it out of A's pattern. Without
+//! it, many joints between the same two bodies (each row coupled to every
+//! other through the shared body) made A a dense m × m matrix: 1000 revolutes
+//! cost minutes and gigabytes at `Program::new`; with it the pass is
+//! O(m · 14²) and A keeps at most 14 such rows per pair (BENCHMARKS.md).
+//!
 //! **Inequality rows** (limits, contacts) are tested one by one against the
 //! kept equality rows (one sparse solve each: the residual of the projection
 //! on their span, computed as a vector, not by cancelling squares): a
@@ -109,6 +121,93 @@ pub struct Redundancy {
     pub conditioning: Option<f64>,
     /// Whether the dense ordered QR ran.
     pub dense: bool,
+    /// Of `rows`, those the per-body-pair pass found before A was built.
+    pub local: usize,
+}
+
+/// Equality rows dependent on earlier rows touching the same moving bodies
+/// (see the module docs), ascending. O(rows × 14²). Allocates.
+pub(crate) fn locally_dependent(
+    model: &Model,
+    ev: &Evaluation,
+    s: &Scaling,
+    masses: &[BodyMass],
+) -> Vec<usize> {
+    let q = model.q0();
+    let jac = ev.jacobian();
+    let mut block = vec![usize::MAX; model.n_coords()];
+    let mut halves = Vec::with_capacity(masses.len());
+    for (k, m) in masses.iter().enumerate() {
+        let o = m.offset;
+        block[o..o + 7].fill(k);
+        let e = Vector4::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
+        halves.push(
+            BodyFrame::new(Vector3::new(q[o], q[o + 1], q[o + 2]), e.into())
+                .and_then(|f| m.inv_rotational_mass(&f, &e).cholesky())
+                .map(|c| (1.0 / m.mass.sqrt(), c.l().transpose())),
+        );
+    }
+    let mut groups: std::collections::BTreeMap<(usize, usize), Vec<[f64; 14]>> =
+        std::collections::BTreeMap::new();
+    let mut dependent = Vec::new();
+    'rows: for i in (0..model.n_rows()).filter(|&i| s.role[i] == Role::Equality) {
+        let span = jac.row_ptr()[i]..jac.row_ptr()[i + 1];
+        let (mut b0, mut b1) = (usize::MAX, usize::MAX);
+        for p in span.clone() {
+            let b = block[jac.col_idx()[p]];
+            if b == usize::MAX || halves[b].is_none() {
+                continue 'rows; // a design variable or an unfactorable body
+            }
+            if b0 == usize::MAX || b0 == b {
+                b0 = b;
+            } else if b1 == usize::MAX || b1 == b {
+                b1 = b;
+            } else {
+                continue 'rows;
+            }
+        }
+        if b0 == usize::MAX {
+            continue;
+        }
+        let key = (b0.min(b1), b0.max(b1));
+        let mut raw = [0.0; 14];
+        for p in span {
+            let c = jac.col_idx()[p];
+            let b = block[c];
+            let half = if b == key.0 { 0 } else { 7 };
+            raw[half + c - masses[b].offset] = s.ell[i] * jac.values()[p];
+        }
+        let mut v = [0.0; 14];
+        for (half, b) in [(0, key.0), (7, key.1)] {
+            if let Some(Some((inv_sqrt_m, lt))) = halves.get(b) {
+                for c in 0..3 {
+                    v[half + c] = raw[half + c] * inv_sqrt_m;
+                }
+                let ce =
+                    lt * Vector4::new(raw[half + 3], raw[half + 4], raw[half + 5], raw[half + 6]);
+                v[half + 3..half + 7].copy_from_slice(ce.as_slice());
+            }
+        }
+        let own = norm(&v);
+        let basis = groups.entry(key).or_default();
+        for _ in 0..2 {
+            for u in basis.iter() {
+                let t = dot(&v, u);
+                for (x, y) in v.iter_mut().zip(u) {
+                    *x -= t * y;
+                }
+            }
+        }
+        let tail = norm(&v);
+        if tail.partial_cmp(&(REDUNDANCY_TOLERANCE * own)) != Some(Ordering::Greater)
+            || basis.len() == 14
+        {
+            dependent.push(i);
+        } else {
+            basis.push(v.map(|x| x / tail));
+        }
+    }
+    dependent
 }
 
 /// Runs the check of `mode` for `model` at q0 (`ev` evaluated there) with the

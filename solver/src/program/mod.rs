@@ -64,10 +64,10 @@ pub use report::{
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::al::SolverSettings;
 use crate::al::fused::Fused;
 use crate::al::projected::Projected;
 use crate::al::scaling::{Scaling, check_stable};
+use crate::al::{RedundancyCheck, SolverSettings};
 use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
 use crate::{Evaluation, FingerTarget, Model, UpdateRule};
@@ -112,9 +112,22 @@ impl Program {
         let mut ev = model.evaluation();
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
-        let mut feedback = Feedback::new(&model, &ev, &settings)
+        // Rows dependent within their body pair never enter A's pattern.
+        let local = match settings.redundancy {
+            RedundancyCheck::Off => Vec::new(),
+            _ => Feedback::locally_dependent(&model, &ev, &scaling),
+        };
+        scaling.mask(&local);
+        let mut excluded = vec![false; model.n_rows()];
+        for &i in &local {
+            excluded[i] = true;
+        }
+        let mut feedback = Feedback::new(&model, &ev, &settings, &excluded)
             .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
-        let redundancy = feedback.find_redundant(&model, &ev, &scaling, settings.redundancy);
+        let mut redundancy = feedback.find_redundant(&model, &ev, &scaling, settings.redundancy);
+        redundancy.local = local.len();
+        redundancy.rows.extend_from_slice(&local);
+        redundancy.rows.sort_unstable();
         scaling.mask(&redundancy.rows);
         let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
         let h = settings.step / (1.0 + settings.gain * sigma_max);

@@ -502,3 +502,58 @@ fn redundancy_cost() {
         );
     }
 }
+
+/// n identical revolutes between the ground and one link: the per-body-pair
+/// pass masks every row after the first joint's before A is built, so A's
+/// factor keeps the size of a single joint whatever n is (it was a dense
+/// 5n × 5n matrix), and the program behaves like the one-joint program.
+#[test]
+fn rows_dependent_within_a_body_pair_never_reach_the_force_factor() {
+    use haptloop_solver::{BodySpec, FingerSpec, JointKind, JointSpec, ModelBuilder};
+    let build = |n: usize| {
+        let mut b = ModelBuilder::new();
+        b.gravity([0.0, 0.0, -9.81]);
+        b.body(BodySpec::fixed("ground"));
+        b.body(BodySpec::new("crank").at([0.0, 0.0, -0.05]).mass(0.05));
+        for k in 0..n {
+            b.joint(
+                JointSpec::new(JointKind::Revolute, "ground", "crank")
+                    .named(format!("j{k}"))
+                    .anchors([0.0; 3], [0.0, 0.0, 0.05])
+                    .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
+            );
+        }
+        b.finger(FingerSpec::point("index", "crank", [0.0, 0.0, 0.0]));
+        Program::new(
+            Arc::new(b.build().unwrap()),
+            settings(UpdateRule::Projected),
+        )
+        .unwrap()
+    };
+    let one = build(1);
+    assert_eq!(one.redundancy().local, 0);
+    for n in [2, 50, 400] {
+        let p = build(n);
+        let r = p.redundancy();
+        assert_eq!(r.local, 5 * (n - 1), "n = {n}");
+        assert_eq!(r.rows.len(), 5 * (n - 1), "n = {n}");
+        assert_eq!(p.force_factor_nnz(), one.force_factor_nnz(), "n = {n}");
+    }
+    // And it still holds the link: one tick toward a displaced finger keeps
+    // the joint rows satisfied as the single-joint program does.
+    let (mut a, mut b) = (build(1), build(400));
+    let mut targets = a.model().initial_targets();
+    targets[0].position_m.x += 0.01;
+    for _ in 0..50 {
+        a.tick(&targets, Duration::from_millis(1));
+        b.tick(&targets, Duration::from_millis(1));
+    }
+    let (ra, rb) = (a.last_report(), b.last_report());
+    assert!(rb.max_violation_m < 1e-9, "{rb:?}");
+    assert!((ra.max_violation_m - rb.max_violation_m).abs() < 1e-9);
+    let (fa, fb) = (a.finger_outputs()[0].force_n, b.finger_outputs()[0].force_n);
+    assert!(
+        (fa - fb).norm() < 1e-6 * fa.norm().max(1e-3),
+        "{fa} vs {fb}"
+    );
+}
