@@ -26,8 +26,9 @@
 //! re-engagement force ramps back over a time proportionate to the gap:
 //! [`RECOVERY_RAMP_PER_GAP`] × the gap, at most [`SafetyConfig::ramp`] (so a
 //! 3 ms stall ramps back in 30 ms, a stall of 100 ms or more over the full
-//! start-up ramp). Start-up, a cleared fault and a velocity cut always use the
-//! full ramp.
+//! start-up ramp), and never shorter than what was left of a ramp under way
+//! (a stall during the start-up ramp does not cut it short). Start-up, a
+//! cleared fault and a velocity cut always use the full ramp.
 //!
 //! # Real-time
 //! `read` and `write` allocate nothing, take no locks and make no syscalls;
@@ -383,7 +384,14 @@ impl<D: Device> SafeDevice<D> {
         let gap = self
             .last_write
             .map_or(Duration::ZERO, |w| now.saturating_sub(w));
-        self.restart_ramp(self.config.ramp.min(gap * RECOVERY_RAMP_PER_GAP));
+        // A stall never shortens a ramp under way (the start-up ramp above
+        // all): the new ramp lasts at least what was left of the old one.
+        let left = match self.ramp_start {
+            Some(start) => self.ramp_len.saturating_sub(now.saturating_sub(start)),
+            None => self.ramp_len,
+        };
+        let len = self.config.ramp.min(gap * RECOVERY_RAMP_PER_GAP).max(left);
+        self.restart_ramp(len);
         self.last_cut = Some(CutRecord {
             reason: CutReason::Watchdog,
             at: now,

@@ -241,3 +241,28 @@ fn recovery_after_a_stall_ramps_in_proportion_to_the_gap() {
     }
     assert_eq!(outs[150], 1.0);
 }
+
+#[test]
+fn a_stall_during_the_start_up_ramp_does_not_shorten_it() {
+    let mut dev = safe_sim("phantom-omni", Hand::still(), SafetyConfig::default());
+    let f = Vector3::new(0.0, 0.0, 1.0);
+    for k in 1..=100u64 {
+        dev.read(tick(k));
+        dev.write(f, tick(k));
+    }
+    // A 20 ms stall 0.1 s into the 1 s ramp: when the watchdog fires (at
+    // 111 ms, 110 ms after the ramp began) 890 ms of it were left.
+    for k in 101..=120u64 {
+        dev.read(tick(k));
+    }
+    assert_eq!(dev.last_cut().unwrap().reason, CutReason::Watchdog);
+    let mut last = 0.0;
+    for k in 121..=1200u64 {
+        dev.read(tick(k));
+        let z = dev.write(f, tick(k)).force_n_device.z;
+        let expected = ((k - 121) as f64 / 890.0).min(1.0);
+        assert!((z - expected).abs() < 1e-9, "tick {k}: {z} vs {expected}");
+        last = z;
+    }
+    assert_eq!(last, 1.0);
+}
