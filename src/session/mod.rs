@@ -47,6 +47,9 @@ use std::time::Duration;
 const TRACE_QUEUE: usize = 1 << 15;
 /// Programs in flight between the slow and fast loops.
 const PROGRAM_QUEUE: usize = 4;
+/// Environment variable that delays `build` by that many milliseconds (at
+/// most 60 s): lets tests interrupt a session while it is being built.
+pub const SLOW_BUILD_ENV: &str = "HAPTLOOP_TEST_SLOW_BUILD_MS";
 /// Rows per device a recording may queue between two drains by the reporter
 /// (every 100 ms, or every slow step when deterministic): 1.6 s at 20 kHz.
 const RECORD_QUEUE: usize = 1 << 15;
@@ -110,6 +113,14 @@ pub struct Built<C: Clock> {
 /// their fingers), the exchange between the loops and every buffer the fast
 /// loop will use. All allocation of a session happens here.
 pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
+    // A testing aid: stretch the build (off the real-time thread, before any
+    // device is driven) so a test can signal the process while it builds.
+    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
+    }
     let model = Arc::new(scene.compiled.model.clone());
     let mut program =
         Program::new(model.clone(), plan.solver).context("building the fast-loop program")?;

@@ -97,7 +97,8 @@ impl Placement {
         let jac = eval.jacobian();
         let raw = pattern::analyse(jac, options.dense_column_threshold);
         let low = LowRank::new(jac, &raw.dense_cols, &raw.f_rows);
-        let factor = NormalFactor::analyze(&raw, low.rank()).ok_or(PlacementError::Symbolic)?;
+        let factor =
+            NormalFactor::analyze(&raw, low.dense_columns()).ok_or(PlacementError::Symbolic)?;
         let stats = PlacementStats {
             rows: m,
             coords: n,
