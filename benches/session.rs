@@ -51,7 +51,9 @@ fn session_tick(c: &mut Criterion) {
 /// the default scene, 4 s at 1 kHz after a 0.5 s settle, per filter setting.
 fn filter_sweep() {
     println!("\nvelocity filter sweep (four-bar, 4 s at 1 kHz; |ΔF| between ticks, N)");
-    println!("| τ | Eq. 7 part p50 | p99 | coupling part p99 | solver output p99 (before the safety layer) |");
+    println!(
+        "| τ | Eq. 7 part p50 | p99 | coupling part p99 | solver output p99 (before the safety layer) |"
+    );
     println!("|---|---|---|---|---|");
     for tau_ms in [0.0, 2.0, 5.0, 10.0, 20.0] {
         let scene = resolve("four-bar").expect("default scene");
