@@ -4,6 +4,10 @@
 //! the dependent rows out of A, so the cost should grow linearly with n.
 //! (With the check off, `Program::new` refuses this model: A is singular.)
 //!
+//! `program_build/ladder/{20,40,80}`: a planar ladder of pinned rods with that
+//! many closed loops (3 redundant rows each), where the ordered check runs:
+//! a sparse factorisation in model order, linear in the ladder's length.
+//!
 //! Run: `cargo bench -p haptloop-solver --bench program_build`
 
 use std::hint::black_box;
@@ -15,6 +19,10 @@ use haptloop_solver::{
     BodySpec, FingerSpec, JointKind, JointSpec, Model, ModelBuilder, Program, RedundancyCheck,
     SolverSettings,
 };
+
+#[allow(dead_code)]
+#[path = "../tests/al/planar.rs"]
+mod ladder;
 
 fn many_revolutes(n: usize) -> Arc<Model> {
     let mut b = ModelBuilder::new();
@@ -46,6 +54,12 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| black_box(Program::new(m.clone(), settings).unwrap()))
             });
         }
+    }
+    for cells in [20, 40, 80] {
+        let model = Arc::new(ladder::ladder(cells));
+        g.bench_with_input(BenchmarkId::new("ladder", cells), &model, |b, m| {
+            b.iter(|| black_box(Program::new(m.clone(), SolverSettings::default()).unwrap()))
+        });
     }
     g.finish();
 }

@@ -30,10 +30,13 @@
 //! cycles, so the kept rows are those of a spanning tree, which pin the
 //! out-of-plane motion at every planar configuration, not only at q0.
 //!
-//! The dense QR costs O(n m r) (n body coordinates, m equality rows, r the
-//! rank): 57 rows × 49 coordinates on the Peaucellier linkage cost 0.1 ms,
-//! the sphere toy's 828 × 924 cost 240 ms, 60 times its whole
-//! `Program::new` (BENCHMARKS.md). So
+//! The test runs as a sparse Cholesky of A (scaled to a unit diagonal) in
+//! model order: row j's pivot is its squared distance from the span of the
+//! rows before it, and a pivot at round-off is replaced (dynamic
+//! regularisation), which drops the row from the rest of the factorisation as
+//! the QR skips it. A dense Householder QR with the same criterion, O(n m r)
+//! (n body coordinates, m equality rows, r the rank; a 241-body ladder of
+//! loops took 1.08 s), remains as the fallback if faer fails. So
 //! [`RedundancyCheck::Auto`] first estimates the smallest eigenvalue of A
 //! (equality rows) by inverse iteration with its sparse factor, a few sparse
 //! solves: a singular A shows as λ_min ≤ 1e-10 × max diag (the factor's
@@ -99,6 +102,15 @@ pub const REDUNDANCY_TOLERANCE: f64 = 1e-8;
 /// a singular-value ratio of 1e-4, far above a singular A's (≤ 1e-10 after
 /// the factor's regularisation) and below the built-in mechanisms' (≥ 5.8e-5).
 pub const PRETEST_RATIO: f64 = 1e-8;
+
+/// The ordered sparse test's pivot threshold, relative to a row's own squared
+/// length: a squared distance of 1e-12 (distance 1e-6). The factorisation
+/// squares the distances, so it resolves about √ε ≈ 1.5e-8 of a row's length:
+/// the dense QR's 1e-8 ([`REDUNDANCY_TOLERANCE`]) is below that resolution,
+/// while dependent rows come out at round-off (≤ 1e-14 squared) and no
+/// independent row of the built-in or test mechanisms is closer than 0.096
+/// (9e-3 squared): 1e-12 separates the two by orders of magnitude each way.
+const ORDERED_PIVOT: f64 = 1e-12;
 
 /// Inverse iterations of the pretest. Each multiplies the weight of an
 /// eigenvalue ≤ 1e-10 relative by ≥ 1e6 over any eigenvalue ≥ 1e-4.
@@ -254,7 +266,10 @@ pub(crate) fn detect(
         || ratio.partial_cmp(&PRETEST_RATIO) != Some(Ordering::Greater)
     {
         out.dense = true;
-        out.rows = dependent_in_order(model, ev, masses, &s.ell, &equality);
+        out.rows = match f.dependent_in_order_sparse(&scale, s) {
+            Some(rows) => rows,
+            None => dependent_in_order(model, ev, masses, &s.ell, &equality),
+        };
         for &i in &out.rows {
             scale[i] = 0.0;
         }
@@ -330,6 +345,100 @@ impl<'a> Factored<'a> {
             }
         }
         self.solve.factor(g).is_ok()
+    }
+
+    /// The ordered test of the module docs without dense reflectors: with A
+    /// assembled for `scale` (as [`factor`](Self::factor) leaves it), scale A
+    /// to a unit diagonal and factor it in model order (identity ordering,
+    /// simplicial LLᵀ). Row j's pivot is its squared distance from the span of
+    /// the rows before it, relative to its own length; a pivot at or below
+    /// [`ORDERED_PIVOT`] is replaced by 4 (faer's dynamic regularisation), so
+    /// the dependent row drops out of the rest of the factorisation exactly as
+    /// the QR skips it, and shows as a diagonal of L ≥ 1.5, which no kept row
+    /// can have (its pivot is at most its unit diagonal). Fill follows the
+    /// model's order, so banded structures (chains, ladders, lattices written
+    /// row by row) cost linear time. `None` if faer fails (the caller falls
+    /// back to the dense QR).
+    fn dependent_in_order_sparse(&mut self, scale: &[f64], s: &Scaling) -> Option<Vec<usize>> {
+        use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+        use faer::linalg::cholesky::llt::factor::LltRegularization;
+        use faer::sparse::linalg::SupernodalThreshold;
+        use faer::sparse::linalg::cholesky::{
+            CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+            factorize_symbolic_cholesky,
+        };
+        use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+        use faer::{Par, Side};
+
+        let g = &*self.gram;
+        let n = g.n_j;
+        let (lcp, lri) = (g.pattern.col_ptr(), g.pattern.row_idx());
+        let d: Vec<f64> = (0..n)
+            .map(|j| g.values[g.diag[j]].max(f64::MIN_POSITIVE))
+            .collect();
+        // Upper triangle in CSC: entry (c, r), c ≤ r, goes to column r.
+        let mut cp = vec![0usize; n + 1];
+        for c in 0..n {
+            for &r in &lri[lcp[c]..lcp[c + 1]] {
+                cp[r + 1] += 1;
+            }
+        }
+        for j in 0..n {
+            cp[j + 1] += cp[j];
+        }
+        let mut next = cp.clone();
+        let mut ri = vec![0usize; cp[n]];
+        let mut vals = vec![0.0; cp[n]];
+        for c in 0..n {
+            let span = lcp[c]..lcp[c + 1];
+            for (&r, &v) in lri[span.clone()].iter().zip(&g.values[span]) {
+                ri[next[r]] = c;
+                vals[next[r]] = v / (d[r] * d[c]).sqrt();
+                next[r] += 1;
+            }
+        }
+        let pattern = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
+        // faer: Identity ordering reads the upper triangle (crate-api-notes §1).
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.as_ref(),
+            Side::Upper,
+            SymmetricOrdering::Identity,
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+                ..Default::default()
+            },
+        )
+        .ok()?;
+        let SymbolicCholeskyRaw::Simplicial(simplicial) = symbolic.raw() else {
+            return None;
+        };
+        let mut mem = MemBuffer::new(StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+        ]));
+        let mut l = vec![0.0; symbolic.len_val()];
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut l,
+                SparseColMatRef::new(pattern.as_ref(), &vals),
+                Side::Upper,
+                LltRegularization {
+                    dynamic_regularization_delta: 4.0,
+                    dynamic_regularization_epsilon: ORDERED_PIVOT,
+                },
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .ok()?;
+        let (col_ptr, row_idx) = (simplicial.col_ptr(), simplicial.row_idx());
+        let mut dependent = Vec::new();
+        for (j, &row) in g.j_rows.iter().enumerate() {
+            let at = (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j)?;
+            if l[at] >= 1.5 && scale[row] != 0.0 && s.role[row] == Role::Equality {
+                dependent.push(row);
+            }
+        }
+        Some(dependent)
     }
 
     /// λ_min / max diag over the rows with a non-zero scale, by inverse

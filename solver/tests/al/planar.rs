@@ -155,3 +155,29 @@ pub fn planar_four_bar(gravity: [f64; 3]) -> Model {
     l.finger("coupler", (a + b) / 2.0);
     l.build()
 }
+
+/// A ladder of `cells` square cells of side 5 cm in z = 0: rails and rungs
+/// are rods, every corner a pin; the first rung is pinned to the ground. Each
+/// cell closes a loop, so each repeats 3 out-of-plane rows.
+pub fn ladder(cells: usize) -> Model {
+    let mut p = Planar::new([0.0, 0.0, -9.81]);
+    let h = 0.05;
+    for k in 0..=cells {
+        let x = k as f64 * h;
+        p.link(&format!("v{k}"), Vector2::new(x, 0.0), Vector2::new(x, h));
+    }
+    for k in 0..cells {
+        let (x0, x1) = (k as f64 * h, (k + 1) as f64 * h);
+        let (b, t) = (format!("b{k}"), format!("t{k}"));
+        p.link(&b, Vector2::new(x0, 0.0), Vector2::new(x1, 0.0));
+        p.link(&t, Vector2::new(x0, h), Vector2::new(x1, h));
+        let (v0, v1) = (format!("v{k}"), format!("v{}", k + 1));
+        p.pin(&format!("{b}a"), &b, &v0, Vector2::new(x0, 0.0));
+        p.pin(&format!("{b}b"), &b, &v1, Vector2::new(x1, 0.0));
+        p.pin(&format!("{t}a"), &t, &v0, Vector2::new(x0, h));
+        p.pin(&format!("{t}b"), &t, &v1, Vector2::new(x1, h));
+    }
+    p.pin("ground-pin", "ground", "v0", Vector2::new(0.0, 0.0));
+    p.finger(&format!("v{cells}"), Vector2::new(cells as f64 * h, h));
+    p.build()
+}

@@ -557,3 +557,25 @@ fn rows_dependent_within_a_body_pair_never_reach_the_force_factor() {
         "{fa} vs {fb}"
     );
 }
+
+/// A 12-cell ladder of pinned rods (12 closed loops): the ordered check, run
+/// as a sparse factorisation in model order, masks 3 out-of-plane rows per
+/// loop, and what it keeps is independent and has the rank of all the rows
+/// (an SVD of the dense C_q, computed separately, is the judge).
+#[test]
+fn a_ladder_of_loops_masks_three_rows_per_loop_and_keeps_the_rank() {
+    let model = ladder(12);
+    let p = program(model.clone(), SolverSettings::default());
+    let red = p.redundancy().clone();
+    assert!(red.dense, "{red:?}");
+    assert_eq!(red.rows.len(), 3 * 12, "{red:?}");
+    let all = equality_rows(&model);
+    let kept: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|i| !red.rows.contains(i))
+        .collect();
+    let r = rank(&model, &all);
+    assert_eq!(rank(&model, &kept), r);
+    assert_eq!(kept.len(), r);
+}
