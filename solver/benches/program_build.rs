@@ -15,37 +15,18 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use haptloop_solver::{
-    BodySpec, FingerSpec, JointKind, JointSpec, Model, ModelBuilder, Program, RedundancyCheck,
-    SolverSettings,
-};
+use haptloop_solver::{Program, RedundancyCheck, SolverSettings};
 
 #[allow(dead_code)]
 #[path = "../tests/al/planar.rs"]
 mod ladder;
-
-fn many_revolutes(n: usize) -> Arc<Model> {
-    let mut b = ModelBuilder::new();
-    b.body(BodySpec::fixed("ground"));
-    b.body(BodySpec::new("crank").at([0.0, 0.0, -0.05]).mass(0.05));
-    for k in 0..n {
-        b.joint(
-            JointSpec::new(JointKind::Revolute, "ground", "crank")
-                .named(format!("j{k}"))
-                .anchors([0.0; 3], [0.0, 0.0, 0.05])
-                .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
-        );
-    }
-    b.finger(FingerSpec::point("index", "crank", [0.0; 3]));
-    Arc::new(b.build().unwrap())
-}
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("program_build");
     g.sample_size(10).measurement_time(Duration::from_secs(4));
     for (mode, name, sizes) in [(RedundancyCheck::Auto, "auto", &[100, 400, 1000][..])] {
         for &n in sizes {
-            let model = many_revolutes(n);
+            let model = Arc::new(ladder::many_revolutes(n));
             let settings = SolverSettings {
                 redundancy: mode,
                 ..SolverSettings::default()

@@ -181,3 +181,23 @@ pub fn ladder(cells: usize) -> Model {
     p.finger(&format!("v{cells}"), Vector2::new(cells as f64 * h, h));
     p.build()
 }
+
+/// A link hanging from the ground by `n` identical revolutes (axis y, pin at
+/// the origin, link centre 5 cm below), with a point finger at its centre:
+/// every joint after the first repeats the first's 5 rows.
+pub fn many_revolutes(n: usize) -> Model {
+    let mut b = ModelBuilder::new();
+    b.gravity([0.0, 0.0, -9.81]);
+    b.body(BodySpec::fixed("ground"));
+    b.body(BodySpec::new("crank").at([0.0, 0.0, -0.05]).mass(0.05));
+    for k in 0..n {
+        b.joint(
+            JointSpec::new(JointKind::Revolute, "ground", "crank")
+                .named(format!("j{k}"))
+                .anchors([0.0; 3], [0.0, 0.0, 0.05])
+                .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
+        );
+    }
+    b.finger(FingerSpec::point("index", "crank", [0.0; 3]));
+    b.build().expect("the revolute stack builds")
+}

@@ -509,26 +509,8 @@ fn redundancy_cost() {
 /// 5n × 5n matrix), and the program behaves like the one-joint program.
 #[test]
 fn rows_dependent_within_a_body_pair_never_reach_the_force_factor() {
-    use haptloop_solver::{BodySpec, FingerSpec, JointKind, JointSpec, ModelBuilder};
     let build = |n: usize| {
-        let mut b = ModelBuilder::new();
-        b.gravity([0.0, 0.0, -9.81]);
-        b.body(BodySpec::fixed("ground"));
-        b.body(BodySpec::new("crank").at([0.0, 0.0, -0.05]).mass(0.05));
-        for k in 0..n {
-            b.joint(
-                JointSpec::new(JointKind::Revolute, "ground", "crank")
-                    .named(format!("j{k}"))
-                    .anchors([0.0; 3], [0.0, 0.0, 0.05])
-                    .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
-            );
-        }
-        b.finger(FingerSpec::point("index", "crank", [0.0, 0.0, 0.0]));
-        Program::new(
-            Arc::new(b.build().unwrap()),
-            settings(UpdateRule::Projected),
-        )
-        .unwrap()
+        Program::new(Arc::new(many_revolutes(n)), settings(UpdateRule::Projected)).unwrap()
     };
     let one = build(1);
     assert_eq!(one.redundancy().local, 0);
