@@ -301,6 +301,8 @@ struct Factored<'a> {
     cw: Vec<f64>,
     /// n_J.
     x: Vec<f64>,
+    /// Per model row: a quaternion-norm row?
+    norm_rows: Vec<bool>,
 }
 
 impl<'a> Factored<'a> {
@@ -324,6 +326,14 @@ impl<'a> Factored<'a> {
             u: vec![0.0; m],
             cw: vec![0.0; m],
             x: vec![0.0; n_j],
+            norm_rows: model
+                .rows()
+                .iter()
+                .map(|r| {
+                    model.constraints()[r.constraint.index()].kind
+                        == crate::constraint::ConstraintKind::QuaternionNorm
+                })
+                .collect(),
         }
     }
 
@@ -373,30 +383,52 @@ impl<'a> Factored<'a> {
         let g = &*self.gram;
         let n = g.n_j;
         let (lcp, lri) = (g.pattern.col_ptr(), g.pattern.row_idx());
+        // Elimination order: the quaternion-norm rows first, then every other
+        // row in model order. A norm row constrains |e|, which no joint row
+        // sees (R(e) is invariant to scaling e), so it is never dependent on
+        // joint rows and its place does not change which joint rows are; put
+        // first, eliminating it only couples rows that already share its body,
+        // whereas left in body order it links bodies far apart in the model
+        // and the factor fills in.
+        let norm = |j: usize| {
+            let row = g.j_rows[j];
+            self.norm_rows[row]
+        };
+        let mut order: Vec<usize> = (0..n).filter(|&j| norm(j)).collect();
+        order.extend((0..n).filter(|&j| !norm(j)));
+        let mut at = vec![0usize; n];
+        for (k, &j) in order.iter().enumerate() {
+            at[j] = k;
+        }
         let d: Vec<f64> = (0..n)
             .map(|j| g.values[g.diag[j]].max(f64::MIN_POSITIVE))
             .collect();
-        // Upper triangle in CSC: entry (c, r), c ≤ r, goes to column r.
+        // Upper triangle in the elimination order, CSC: entry (a, b), a ≤ b,
+        // goes to column b (rows sorted below).
         let mut cp = vec![0usize; n + 1];
         for c in 0..n {
             for &r in &lri[lcp[c]..lcp[c + 1]] {
-                cp[r + 1] += 1;
+                cp[at[r].max(at[c]) + 1] += 1;
             }
         }
         for j in 0..n {
             cp[j + 1] += cp[j];
         }
         let mut next = cp.clone();
-        let mut ri = vec![0usize; cp[n]];
-        let mut vals = vec![0.0; cp[n]];
+        let mut entries = vec![(0usize, 0.0f64); cp[n]];
         for c in 0..n {
             let span = lcp[c]..lcp[c + 1];
             for (&r, &v) in lri[span.clone()].iter().zip(&g.values[span]) {
-                ri[next[r]] = c;
-                vals[next[r]] = v / (d[r] * d[c]).sqrt();
-                next[r] += 1;
+                let (a, b) = (at[r].min(at[c]), at[r].max(at[c]));
+                entries[next[b]] = (a, v / (d[r] * d[c]).sqrt());
+                next[b] += 1;
             }
         }
+        for b in 0..n {
+            entries[cp[b]..cp[b + 1]].sort_unstable_by_key(|e| e.0);
+        }
+        let ri: Vec<usize> = entries.iter().map(|e| e.0).collect();
+        let vals: Vec<f64> = entries.iter().map(|e| e.1).collect();
         let pattern = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
         // faer: Identity ordering reads the upper triangle (crate-api-notes §1).
         let symbolic = factorize_symbolic_cholesky(
@@ -433,11 +465,13 @@ impl<'a> Factored<'a> {
         let (col_ptr, row_idx) = (simplicial.col_ptr(), simplicial.row_idx());
         let mut dependent = Vec::new();
         for (j, &row) in g.j_rows.iter().enumerate() {
-            let at = (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j)?;
-            if l[at] >= 1.5 && scale[row] != 0.0 && s.role[row] == Role::Equality {
+            let k = at[j];
+            let diag = (col_ptr[k]..col_ptr[k + 1]).find(|&p| row_idx[p] == k)?;
+            if l[diag] >= 1.5 && scale[row] != 0.0 && s.role[row] == Role::Equality {
                 dependent.push(row);
             }
         }
+        dependent.sort_unstable();
         Some(dependent)
     }
 
