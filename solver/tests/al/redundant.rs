@@ -55,6 +55,14 @@ fn equality_rows(model: &Model) -> Vec<usize> {
         .collect()
 }
 
+/// `rows` less `masked`.
+fn without(rows: &[usize], masked: &[usize]) -> Vec<usize> {
+    rows.iter()
+        .copied()
+        .filter(|i| !masked.contains(i))
+        .collect()
+}
+
 /// Rows 2..5 of a revolute (the out-of-plane pin, the two tilts).
 fn out_of_plane_rows(model: &Model, joint: &str) -> Vec<usize> {
     let c = &model.constraints()[model.constraint_id(joint).unwrap().index()];
@@ -84,11 +92,7 @@ fn masked_rows_are_dependent_and_close_the_loops() {
         // Dependent: the kept rows have the rank of all rows, and are
         // independent among themselves.
         let all = equality_rows(&model);
-        let kept: Vec<usize> = all
-            .iter()
-            .copied()
-            .filter(|i| !red.rows.contains(i))
-            .collect();
+        let kept = without(&all, &red.rows);
         assert_eq!(rank(&model, &all), rank_expected);
         assert_eq!(rank(&model, &kept), rank_expected);
         assert_eq!(kept.len(), rank_expected);
@@ -552,11 +556,7 @@ fn a_ladder_of_loops_masks_three_rows_per_loop_and_keeps_the_rank() {
     assert!(red.dense, "{red:?}");
     assert_eq!(red.rows.len(), 3 * 12, "{red:?}");
     let all = equality_rows(&model);
-    let kept: Vec<usize> = all
-        .iter()
-        .copied()
-        .filter(|i| !red.rows.contains(i))
-        .collect();
+    let kept = without(&all, &red.rows);
     let r = rank(&model, &all);
     assert_eq!(rank(&model, &kept), r);
     assert_eq!(kept.len(), r);
