@@ -3,6 +3,7 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::constraint::block::{Block, Ctx, NoJacobian};
+use crate::constraint::witness::Witness;
 use crate::jacobian::Jacobian;
 use crate::model::initial_frame;
 use crate::rotation::BodyFrame;
@@ -89,6 +90,9 @@ pub struct Evaluation {
     frames: Vec<BodyFrame>,
     values: Vec<f64>,
     jacobian: Jacobian,
+    /// Parameters of the contact rows, one per slot (see
+    /// [`crate::constraint::witness`]).
+    witnesses: Vec<Witness>,
 }
 
 impl Evaluation {
@@ -102,6 +106,7 @@ impl Evaluation {
             frames,
             values: vec![0.0; model.n_rows()],
             jacobian: Jacobian::new(model),
+            witnesses: vec![Witness::Off; model.contact.slots],
         }
     }
 
@@ -114,6 +119,20 @@ impl Evaluation {
     /// C_q at the last successful [`evaluate`](Self::evaluate).
     pub fn jacobian(&self) -> &Jacobian {
         &self.jacobian
+    }
+
+    /// The witness table: the parameters of the model's contact rows, one
+    /// entry per slot ([`Model::contact`]). All `Off` until set.
+    pub fn witnesses(&self) -> &[Witness] {
+        &self.witnesses
+    }
+
+    /// The witness table, to change in place.
+    ///
+    /// # Real-time
+    /// No allocation: the table's length is fixed by the model.
+    pub fn witnesses_mut(&mut self) -> &mut [Witness] {
+        &mut self.witnesses
     }
 
     /// Fills C(q) and C_q(q) for configuration `q` and one target per finger.
@@ -164,9 +183,15 @@ impl Evaluation {
             frames,
             values,
             jacobian,
+            witnesses,
             ..
         } = self;
-        let x = Ctx { q, frames, targets };
+        let x = Ctx {
+            q,
+            frames,
+            targets,
+            witnesses,
+        };
         let (blocks, vals) = jacobian.blocks_and_values_mut();
         for ((g, info), b) in model.geometry.iter().zip(&model.constraints).zip(blocks) {
             let c = &mut values[info.rows.clone()];

@@ -83,6 +83,7 @@ pub mod al;
 pub mod constraint;
 mod evaluate;
 pub mod force;
+pub mod geometry;
 mod ids;
 mod jacobian;
 pub mod mechanisms;
@@ -99,9 +100,10 @@ pub use force::{FingerWrench, Redundancy, ReferenceError, reference_finger_wrenc
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
 pub use model::{
-    Body, BodySpec, BuildError, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, DesignVar,
-    Finger, FingerSpec, Grasp, JointKind, JointSpec, Layout, Model, ModelBuilder, Owner,
-    PlaneOwner, PointPlaneSpec, UnknownName,
+    Body, BodySpec, BuildError, ContactLayout, ContactPair, DEFAULT_FINGERTIP_RADIUS_M,
+    DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, DesignVar, FINGERTIP_MASS_KG, Finger,
+    FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model, ModelBuilder, Owner,
+    PlaneOwner, PointPlaneSpec, Shape, UnknownName,
 };
 pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,

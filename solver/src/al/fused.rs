@@ -141,6 +141,7 @@ impl Fused {
         targets: &[FingerTarget],
         lambda: &mut [f64],
         g: &mut [f64],
+        witnesses: &[crate::constraint::witness::Witness],
     ) -> Result<(), EvalError> {
         self.prepare(model, q, targets)?;
         g.fill(0.0);
@@ -148,6 +149,7 @@ impl Fused {
             q: &*q,
             frames: &self.frames,
             targets,
+            witnesses,
         };
         let mut sink = GradSink {
             rows: [RowGrad::default(); MAX_ROWS],

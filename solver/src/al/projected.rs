@@ -169,9 +169,9 @@ impl Projected {
         }
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
-                Role::Equality => y,
+                Role::Equality | Role::Friction => y,
                 Role::Finger | Role::Redundant => 0.0,
-                Role::Inequality => (-y).max(0.0),
+                Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }
         Ok(Some(size))

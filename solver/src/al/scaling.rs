@@ -28,7 +28,7 @@
 //! a = h K σ and β = h k₂ σ is stable iff 0 < a < 2 and 0 < β < 4 − 2a.
 
 use crate::al::SolverSettings;
-use crate::{Jacobian, Model, RowUnit, Sense};
+use crate::{ConstraintKind, Jacobian, Model, RowUnit, Sense};
 
 /// What a row does in the update.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,8 +37,14 @@ pub(crate) enum Role {
     Equality,
     /// A finger row: penalty only (a weighted objective term, no multiplier).
     Finger,
-    /// C ≥ 0 with a projected multiplier ν ≥ 0.
+    /// C ≥ 0 with a projected multiplier ν ≥ 0 (joint limits).
     Inequality,
+    /// A contact witness row: C ≥ 0 like [`Role::Inequality`], but its
+    /// violation is a penetration (reported apart from the joints').
+    Contact,
+    /// A friction stick row: C = 0 while its contact sticks, else free. Only
+    /// the projected rule and the force solve use it (its gains are 0).
+    Friction,
     /// A row found linearly dependent on the kept rows at `Program::new`
     /// (`force::redundancy`): evaluated and its violation reported, but it
     /// takes part in no update and no force solve (gain 0, multiplier 0).
@@ -80,7 +86,9 @@ impl Scaling {
             let r = match (info.finger.is_some(), row.sense) {
                 (true, _) => Role::Finger,
                 (false, Sense::Equality) => Role::Equality,
+                (false, Sense::Inequality) if info.kind == ConstraintKind::Contact => Role::Contact,
                 (false, Sense::Inequality) => Role::Inequality,
+                (false, Sense::Friction) => Role::Friction,
             };
             let e = match row.unit {
                 RowUnit::Length => 1.0,
@@ -93,8 +101,9 @@ impl Scaling {
             };
             role.push(r);
             ell.push(e);
-            penalty.push(s.gain * w * e * e);
-            integral.push(if r == Role::Finger {
+            let frozen = r == Role::Friction;
+            penalty.push(if frozen { 0.0 } else { s.gain * w * e * e });
+            integral.push(if r == Role::Finger || frozen {
                 0.0
             } else {
                 s.multiplier_gain * e * e

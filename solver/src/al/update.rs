@@ -36,11 +36,11 @@ pub(crate) fn row_weight(s: &Scaling, i: usize, c: f64, lambda: &mut f64) -> f64
             *lambda + s.penalty[i] * c
         }
         Role::Finger => s.penalty[i] * c,
-        Role::Inequality => {
+        Role::Inequality | Role::Contact => {
             *lambda = (*lambda - s.integral[i] * c).max(0.0);
             -(*lambda - s.penalty[i] * c).max(0.0)
         }
-        Role::Redundant => {
+        Role::Redundant | Role::Friction => {
             *lambda = 0.0;
             0.0
         }
@@ -80,7 +80,9 @@ pub(crate) fn step(s: &Scaling, h: f64, q: &mut [f64], q_ref: &[f64], g: &[f64])
 }
 
 /// Constraint violation of one evaluated C, finger rows excluded (their
-/// residual is the tracking error, reported per finger). Equalities count
+/// residual is the tracking error, reported per finger), contact rows
+/// reported as penetration apart, friction stick rows not at all (their
+/// value is a tangential slip, not an error). Equalities count
 /// |C_i|, inequalities max(0, −C_i); redundant (masked) rows count by their
 /// sense like the others: masking changes how a row is solved, not whether
 /// its violation is reported.
@@ -96,6 +98,9 @@ pub(crate) struct Violation {
     pub rms_m: f64,
     /// Largest ℓ_i |C_i| over all counted rows (angle and norm rows times L), metres.
     pub max_scaled_m: f64,
+    /// Deepest penetration of a contact witness row, max(0, −C), metres
+    /// (not part of the other figures).
+    pub max_penetration_m: f64,
 }
 
 impl Violation {
@@ -108,7 +113,11 @@ impl Violation {
         let (mut sum, mut count) = (0.0, 0usize);
         for (i, (&ci, row)) in c.iter().zip(model.rows()).enumerate() {
             let e = match (s.role[i], row.sense) {
-                (Role::Finger, _) => continue,
+                (Role::Finger | Role::Friction, _) | (Role::Redundant, Sense::Friction) => continue,
+                (Role::Contact, _) => {
+                    v.max_penetration_m = v.max_penetration_m.max(-ci);
+                    continue;
+                }
                 (Role::Equality, _) | (Role::Redundant, Sense::Equality) => ci.abs(),
                 (Role::Inequality, _) | (Role::Redundant, Sense::Inequality) => (-ci).max(0.0),
             };

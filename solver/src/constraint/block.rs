@@ -20,6 +20,8 @@ pub(crate) struct Ctx<'a> {
     pub frames: &'a [BodyFrame],
     /// One target per finger, world frame.
     pub targets: &'a [FingerTarget],
+    /// The witness table (contact rows' parameters).
+    pub witnesses: &'a [crate::constraint::witness::Witness],
 }
 
 impl Ctx<'_> {

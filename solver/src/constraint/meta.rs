@@ -39,6 +39,10 @@ pub enum ConstraintKind {
     DistanceLimit,
     /// Point–plane non-penetration N·P ≥ 0 (contact witness): 1 row, m.
     PointPlaneInequality,
+    /// The witness rows of a tracked contact pair (≥ 0, one per slot), m.
+    Contact,
+    /// The two friction stick rows of a fingertip contact, m.
+    ContactFriction,
 }
 
 impl ConstraintKind {
@@ -47,7 +51,7 @@ impl ConstraintKind {
         use ConstraintKind::*;
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
-            | PointPlaneInequality => return RowUnit::Length,
+            | PointPlaneInequality | Contact | ContactFriction => return RowUnit::Length,
             Perpendicular | RevoluteLimit => return RowUnit::Angle,
             QuaternionNorm => return RowUnit::Dimensionless,
             Universal | Revolute | Fixed | RigidFinger => 3,
@@ -64,9 +68,10 @@ impl ConstraintKind {
     pub fn sense(self) -> Sense {
         use ConstraintKind::*;
         match self {
-            RevoluteLimit | PrismaticLimit | DistanceLimit | PointPlaneInequality => {
+            RevoluteLimit | PrismaticLimit | DistanceLimit | PointPlaneInequality | Contact => {
                 Sense::Inequality
             }
+            ContactFriction => Sense::Friction,
             _ => Sense::Equality,
         }
     }
@@ -90,6 +95,8 @@ impl ConstraintKind {
             PrismaticLimit => "prismatic limit",
             DistanceLimit => "distance limit",
             PointPlaneInequality => "point-plane inequality",
+            Contact => "contact",
+            ContactFriction => "contact friction",
         }
     }
 }
@@ -107,6 +114,9 @@ pub enum Sense {
     Equality,
     /// C ≥ 0 (feasible side positive).
     Inequality,
+    /// A friction stick row: C = 0 while its contact sticks (the Coulomb
+    /// cone holds), free while it slips.
+    Friction,
 }
 
 /// The physical unit of a row's value, for per-row scaling (K of Eq. 3) and for

@@ -14,6 +14,7 @@
 //! | `finger.rs` | point grasp / rigid grasp | 3 / 3 + 3 | m, angle |
 //! | `quat_norm.rs` | Euler-parameter norm, one per moving body | 1 | dimensionless |
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
+//! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
 
@@ -31,6 +32,7 @@ pub(crate) mod revolute;
 pub(crate) mod spherical;
 pub(crate) mod universal;
 pub(crate) mod weld;
+pub mod witness;
 
 pub use meta::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 
@@ -50,6 +52,7 @@ pub(crate) enum Geometry {
     Finger(finger::Finger),
     QuatNorm(quat_norm::QuatNorm),
     Limit(limit::Limit),
+    Contact(witness::ContactRows),
 }
 
 impl Geometry {
@@ -67,6 +70,7 @@ impl Geometry {
             Self::Finger(f) => f.rows(),
             Self::QuatNorm(_) => quat_norm::QuatNorm::ROWS,
             Self::Limit(_) => limit::Limit::ROWS,
+            Self::Contact(c) => c.rows as usize,
         }
     }
 
@@ -90,6 +94,7 @@ impl Geometry {
             Self::Finger(j) => j.pair.groups(),
             Self::QuatNorm(j) => j.groups(),
             Self::Limit(j) => j.groups(),
+            Self::Contact(c) => c.pair.groups(),
         }
     }
 
@@ -108,6 +113,7 @@ impl Geometry {
             // The norm row writes raw values only; any frame will do.
             Self::QuatNorm(_) => [0, 0],
             Self::Limit(j) => j.pair().frame,
+            Self::Contact(c) => c.pair.frame,
         }
     }
 
@@ -126,6 +132,7 @@ impl Geometry {
             Self::Finger(j) => j.eval(x, c, sink),
             Self::QuatNorm(j) => j.eval(x, c, sink),
             Self::Limit(j) => j.eval(x, c, sink),
+            Self::Contact(j) => j.eval(x, c, sink),
         }
     }
 }

@@ -45,6 +45,8 @@ pub(crate) struct Feedback {
     /// Ticks on which an active inequality would have pulled and was
     /// released (the solve ran again without it).
     releases: u64,
+    /// Per row: a friction stick row that is currently sticking (active).
+    pub stick: Vec<bool>,
 }
 
 impl Feedback {
@@ -95,6 +97,7 @@ impl Feedback {
             solve,
             prev_error: vec![Vector3::zeros(); fingers.len()],
             releases: 0,
+            stick: vec![false; model.n_rows()],
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -222,7 +225,7 @@ impl Feedback {
         // again: the bound keeps the tick's cost fixed.
         let mut released = false;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
-            if s.role[row] == Role::Inequality
+            if matches!(s.role[row], Role::Inequality | Role::Contact)
                 && self.scale[row] != 0.0
                 && self.solve.joint_multiplier(self.gram.n_j, j) > 0.0
             {
@@ -255,8 +258,11 @@ impl Feedback {
     fn activate(&mut self, s: &Scaling, c: &[f64], lambda: &[f64]) {
         for (i, sc) in self.scale.iter_mut().enumerate() {
             let active = match s.role[i] {
-                Role::Inequality => lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND,
+                Role::Inequality | Role::Contact => {
+                    lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND
+                }
                 Role::Equality | Role::Finger => true,
+                Role::Friction => self.stick.get(i).copied().unwrap_or(false),
                 Role::Redundant => false,
             };
             *sc = if active { s.ell[i] } else { 0.0 };

@@ -8,7 +8,10 @@ use super::compiler::{Compiler, compile_finger};
 use super::error::{BuildError, Owner};
 use super::joints::compile_joint;
 use super::layout::Layout;
-use super::spec::{BodySpec, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, FingerSpec, JointSpec};
+use super::spec::{
+    BodySpec, DEFAULT_DENSITY_KG_M3, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, FINGERTIP_MASS_KG,
+    FingerSpec, Fingertip, JointSpec, Shape,
+};
 use super::{Body, Model, initial_frame, next_model_id};
 use crate::constraint::quat_norm::QuatNorm;
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, RowInfo};
@@ -85,12 +88,23 @@ impl ModelBuilder {
                 field: "gravity",
             });
         }
+        let tips = self
+            .fingers
+            .iter()
+            .filter_map(|f| f.tip.map(|t| tip_body(f, &t)))
+            .collect::<Result<Vec<_>, _>>()?;
         let bodies = self
             .bodies
             .iter()
+            .chain(&tips)
             .enumerate()
             .map(|(i, s)| body(i, s))
             .collect::<Result<Vec<_>, _>>()?;
+        let mut bodies = bodies;
+        let first_tip = self.bodies.len();
+        for b in &mut bodies[first_tip..] {
+            b.fingertip = true;
+        }
         let mut by_name = HashMap::new();
         for (i, b) in bodies.iter().enumerate() {
             if by_name.insert(b.name.as_str(), BodyId(i as u32)).is_some() {
@@ -179,6 +193,7 @@ impl ModelBuilder {
             gravity: Vector3::from(self.gravity),
             equality_rows,
             characteristic_length,
+            contact: super::ContactLayout::default(),
         })
     }
 }
@@ -207,6 +222,96 @@ impl Assembler {
     }
 }
 
+/// The fingertip body of a contact finger: a ball of the finger's radius and
+/// [`FINGERTIP_MASS_KG`] at its start position.
+fn tip_body(f: &FingerSpec, t: &Fingertip) -> Result<BodySpec, BuildError> {
+    let owner = || Owner::Finger(f.name.clone());
+    if !(t.radius_m.is_finite() && t.radius_m > 0.0 && t.radius_m <= 1.0) {
+        return Err(BuildError::BadFingertip {
+            owner: owner(),
+            field: "radius",
+            value: t.radius_m,
+            why: "finite, > 0 and at most 1 m",
+        });
+    }
+    if !(t.friction.is_finite() && (0.0..=10.0).contains(&t.friction)) {
+        return Err(BuildError::BadFingertip {
+            owner: owner(),
+            field: "friction",
+            value: t.friction,
+            why: "finite and in [0, 10]",
+        });
+    }
+    if !t.position_m.iter().all(|x| x.is_finite()) {
+        return Err(BuildError::NonFinite {
+            owner: owner(),
+            field: "position",
+        });
+    }
+    super::compiler::in_range(&owner(), "position", &t.position_m)?;
+    let i = 0.4 * FINGERTIP_MASS_KG * t.radius_m * t.radius_m;
+    Ok(BodySpec::new(f.body.clone())
+        .at(t.position_m)
+        .mass(FINGERTIP_MASS_KG)
+        .inertia([i; 3])
+        .shape(Shape::Sphere {
+            radius_m: t.radius_m,
+        }))
+}
+
+/// Mass and inertia of a body: as given; else from its shape at its density
+/// (inertia scaled to a given mass); else the defaults.
+fn mass_and_inertia(
+    s: &BodySpec,
+    owner: &dyn Fn() -> Owner,
+) -> Result<(f64, [f64; 3]), BuildError> {
+    let from_shape = match &s.shape {
+        Some(shape) => {
+            let density = s.density_kg_m3.unwrap_or(DEFAULT_DENSITY_KG_M3);
+            if !(density.is_finite() && density > 0.0) {
+                return Err(BuildError::Shape {
+                    owner: owner(),
+                    field: "density",
+                    error: crate::geometry::ShapeError::Size {
+                        field: "density",
+                        value: density,
+                    },
+                });
+            }
+            if s.mass_kg.is_some() && s.inertia_kg_m2.is_some() {
+                // Checked for sizes only: mass and inertia are given.
+                shape.collider().map_err(|error| BuildError::Shape {
+                    owner: owner(),
+                    field: "shape",
+                    error,
+                })?;
+                None
+            } else {
+                Some(
+                    shape
+                        .mass_properties(density)
+                        .map_err(|error| BuildError::Shape {
+                            owner: owner(),
+                            field: "shape",
+                            error,
+                        })?,
+                )
+            }
+        }
+        None => None,
+    };
+    let mass_kg = s
+        .mass_kg
+        .or(from_shape.map(|m| m.mass_kg))
+        .unwrap_or(DEFAULT_MASS_KG);
+    let inertia = match (s.inertia_kg_m2, from_shape) {
+        (Some(i), _) => i,
+        (None, Some(m)) => m.inertia_kg_m2.map(|x| x * mass_kg / m.mass_kg),
+        (None, None) => [0.4 * mass_kg * DEFAULT_INERTIA_RADIUS_M * DEFAULT_INERTIA_RADIUS_M; 3],
+    };
+    Ok((mass_kg, inertia))
+}
+
 fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     if s.name.is_empty() {
         return Err(BuildError::EmptyName {
@@ -227,7 +332,10 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     finite("position", &s.position_m)?;
     super::compiler::in_range(&owner(), "position", &s.position_m)?;
     finite("orientation", &s.orientation_wxyz)?;
-    let mass_kg = s.mass_kg.unwrap_or(DEFAULT_MASS_KG);
+    if let Some(m) = s.mass_kg {
+        finite("mass", &[m])?;
+    }
+    let (mass_kg, inertia) = mass_and_inertia(s, &owner)?;
     finite("mass", &[mass_kg])?;
     if mass_kg <= 0.0 {
         return Err(BuildError::NonPositiveMass {
@@ -235,8 +343,6 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             mass_kg,
         });
     }
-    let sphere = 0.4 * mass_kg * DEFAULT_INERTIA_RADIUS_M * DEFAULT_INERTIA_RADIUS_M;
-    let inertia = s.inertia_kg_m2.unwrap_or([sphere; 3]);
     finite("inertia", &inertia)?;
     let [a, b, c] = inertia;
     let slack = 1e-9 * (a + b + c);
@@ -267,5 +373,7 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         orientation: UnitQuaternion::from_quaternion(q),
         mass_kg,
         inertia_kg_m2: Vector3::from(inertia),
+        shape: s.shape.clone(),
+        fingertip: false,
     })
 }

@@ -178,6 +178,7 @@ pub(super) fn compile_finger(
         point_m: point,
         grasp: s.grasp,
         constraint,
+        tip: s.tip,
     };
     let info = ConstraintInfo {
         name: s.name.clone(),

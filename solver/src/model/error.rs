@@ -233,6 +233,28 @@ pub enum BuildError {
         /// The body.
         body: String,
     },
+    /// A shape that cannot be used (sizes, hull, mass from density).
+    #[error("{owner}: `{field}`: {error}")]
+    Shape {
+        /// The body.
+        owner: Owner,
+        /// `shape` or `density`.
+        field: &'static str,
+        /// What is wrong.
+        error: crate::geometry::ShapeError,
+    },
+    /// A contact finger's radius or friction out of range.
+    #[error("{owner}: `{field}` = {value} must be {why}")]
+    BadFingertip {
+        /// The finger.
+        owner: Owner,
+        /// `radius` or `friction`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// The valid range.
+        why: &'static str,
+    },
 }
 
 impl BuildError {
@@ -262,7 +284,9 @@ impl BuildError {
             | LengthOutsideLimits { owner, .. }
             | UnsupportedFree { owner, .. }
             | DuplicateFree { owner, .. }
-            | FingerOnFixedBody { owner, .. } => owner,
+            | FingerOnFixedBody { owner, .. }
+            | Shape { owner, .. }
+            | BadFingertip { owner, .. } => owner,
         }
     }
 }

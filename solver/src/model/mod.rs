@@ -5,6 +5,7 @@
 
 mod build;
 mod compiler;
+mod contact;
 mod error;
 mod inequality;
 mod joints;
@@ -12,12 +13,13 @@ mod layout;
 mod spec;
 
 pub use build::ModelBuilder;
+pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
 pub use layout::{DesignVar, Layout};
 pub use spec::{
-    BodySpec, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, FingerSpec, Grasp, JointKind,
-    JointSpec, UnknownName,
+    BodySpec, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam,
+    FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape, UnknownName,
 };
 
 use std::ops::Range;
@@ -44,6 +46,10 @@ pub struct Body {
     pub mass_kg: f64,
     /// Principal moments of inertia about the body axes, kg·m².
     pub inertia_kg_m2: Vector3<f64>,
+    /// Collision shape, body frame (`None`: takes part in no contact).
+    pub shape: Option<Shape>,
+    /// A contact finger's fingertip: driven by its finger, feels no gravity.
+    pub fingertip: bool,
 }
 
 /// One finger: a point (or rigid) grasp of a moving body.
@@ -55,10 +61,12 @@ pub struct Finger {
     pub body: BodyId,
     /// Attachment point, metres, body frame.
     pub point_m: Vector3<f64>,
-    /// Point (3 rows) or rigid (6 rows).
+    /// Point (3 rows), rigid (6 rows) or contact (a fingertip body, 3 rows).
     pub grasp: Grasp,
     /// Its constraint.
     pub constraint: ConstraintId,
+    /// A contact finger's fingertip (radius, friction).
+    pub tip: Option<Fingertip>,
 }
 
 /// A validated mechanism. See the [crate docs](crate) for how it is used.
@@ -75,6 +83,7 @@ pub struct Model {
     pub(crate) gravity: Vector3<f64>,
     pub(crate) equality_rows: usize,
     pub(crate) characteristic_length: f64,
+    pub(crate) contact: ContactLayout,
 }
 
 fn next_model_id() -> u64 {

@@ -7,6 +7,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+pub use crate::geometry::{DEFAULT_DENSITY_KG_M3, Shape};
+
 /// Default mass when a body gives none, kilograms.
 pub const DEFAULT_MASS_KG: f64 = 1.0;
 
@@ -29,9 +31,16 @@ pub struct BodySpec {
     pub orientation_wxyz: [f64; 4],
     /// Mass, kilograms (default [`DEFAULT_MASS_KG`]).
     pub mass_kg: Option<f64>,
-    /// Principal moments of inertia in the body frame, kg·m² (default: a solid
-    /// sphere of radius [`DEFAULT_INERTIA_RADIUS_M`] and the body's mass).
+    /// Principal moments of inertia in the body frame, kg·m² (default: the
+    /// shape's, scaled to the body's mass; without a shape, a solid sphere of
+    /// radius [`DEFAULT_INERTIA_RADIUS_M`] and the body's mass).
     pub inertia_kg_m2: Option<[f64; 3]>,
+    /// Collision shape (body frame); a body without one takes part in no
+    /// contact.
+    pub shape: Option<Shape>,
+    /// kg/m³: mass and inertia from the shape when `mass_kg` is `None`
+    /// (default [`DEFAULT_DENSITY_KG_M3`]).
+    pub density_kg_m3: Option<f64>,
 }
 
 impl BodySpec {
@@ -44,6 +53,8 @@ impl BodySpec {
             orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
             mass_kg: None,
             inertia_kg_m2: None,
+            shape: None,
+            density_kg_m3: None,
         }
     }
 
@@ -76,6 +87,18 @@ impl BodySpec {
     /// Sets the principal moments of inertia, kg·m².
     pub fn inertia(mut self, inertia_kg_m2: [f64; 3]) -> Self {
         self.inertia_kg_m2 = Some(inertia_kg_m2);
+        self
+    }
+
+    /// Sets the collision shape.
+    pub fn shape(mut self, shape: Shape) -> Self {
+        self.shape = Some(shape);
+        self
+    }
+
+    /// Sets the density, kg/m³.
+    pub fn density(mut self, density_kg_m3: f64) -> Self {
+        self.density_kg_m3 = Some(density_kg_m3);
         self
     }
 }
@@ -169,6 +192,10 @@ named_enum!(
         Point = "point",
         /// The finger holds the body rigidly: point and orientation (6 rows).
         Rigid = "rigid",
+        /// A fingertip ball that pushes on shapes and never pulls: a body of
+        /// its own, driven by the device through a point grasp (3 rows) at
+        /// its centre.
+        Contact = "contact",
     }
 );
 
@@ -259,17 +286,42 @@ impl JointSpec {
     }
 }
 
+/// Default fingertip radius of a contact finger, metres: 8 mm, a human
+/// fingertip's pad.
+pub const DEFAULT_FINGERTIP_RADIUS_M: f64 = 0.008;
+
+/// Mass of a contact finger's fingertip ball, kilograms: 10 g, light next to
+/// the objects it pushes (so their inertia, not its own, is what Eq. 7 feeds
+/// back) yet a well-conditioned body. It feels no gravity (the user's hand
+/// carries it).
+pub const FINGERTIP_MASS_KG: f64 = 0.01;
+
+/// A contact finger's fingertip (see [`Grasp::Contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fingertip {
+    /// Where the fingertip starts, metres, world frame (the device is
+    /// registered there).
+    pub position_m: [f64; 3],
+    /// Ball radius, metres.
+    pub radius_m: f64,
+    /// Coulomb friction coefficient of its contacts (0: frictionless).
+    pub friction: f64,
+}
+
 /// A `[[finger]]` entry (the device binding lives outside the solver).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FingerSpec {
     /// Required, unique.
     pub name: String,
-    /// The moving body held.
+    /// The moving body held (a contact finger: its fingertip body,
+    /// `"<name>.tip"`, created by the builder).
     pub body: String,
     /// Body-frame attachment point, metres.
     pub point_m: [f64; 3],
-    /// Point or rigid grasp.
+    /// Point, rigid or contact grasp.
     pub grasp: Grasp,
+    /// The fingertip of a contact finger.
+    pub tip: Option<Fingertip>,
 }
 
 impl FingerSpec {
@@ -280,6 +332,29 @@ impl FingerSpec {
             body: body.into(),
             point_m,
             grasp: Grasp::Point,
+            tip: None,
+        }
+    }
+
+    /// A contact finger: a fingertip ball of `radius_m` starting at
+    /// `position_m` (world), with Coulomb `friction` at its contacts.
+    pub fn contact(
+        name: impl Into<String>,
+        position_m: [f64; 3],
+        radius_m: f64,
+        friction: f64,
+    ) -> Self {
+        let name = name.into();
+        Self {
+            body: format!("{name}.tip"),
+            name,
+            point_m: [0.0; 3],
+            grasp: Grasp::Contact,
+            tip: Some(Fingertip {
+                position_m,
+                radius_m,
+                friction,
+            }),
         }
     }
 

@@ -354,6 +354,7 @@ impl Program {
                 targets,
                 &mut self.lambda,
                 &mut self.g,
+                self.ev.witnesses(),
             )
             .map_err(TickOutcome::Eval)
     }

@@ -1,0 +1,543 @@
+//! The active set of non-penetration inequalities (Choi & Cremer §3.2), run
+//! on the slow loop once per cycle from a snapshot of the fast loop's
+//! configuration.
+//!
+//! ```text
+//!  poses ──► broad phase (BVH, AABBs loosened by each pair's reach)
+//!        ──► narrow phase per candidate (warm-started GJK, nearest features)
+//!        ──► per pair: add below contact_distance + reach (pre-emptive),
+//!            replace primitives whose features changed (required removal),
+//!            drop beyond release_distance (optional removal),
+//!            expand to nearby vertices (§3.2.1 before it happens),
+//!            on penetration: expand the witness to the higher-dimensional
+//!            feature and ask for a backup (revert, add, retry)
+//!        ──► Cycle: did the set of pairs change (a new program) or only the
+//!            primitives in their slots (a witness table for the running one)
+//! ```
+//!
+//! **Reach.** The fast loop runs several ticks between two cycles, on the
+//! witnesses it was given. A pair is tracked pre-emptively when its surfaces
+//! are closer than `contact_distance` plus twice the distance the two bodies
+//! moved (relative, translation plus rotation at their radii) during the last
+//! cycle: a pair closing in at speed v over a cycle of T is tracked at least
+//! 2 v T before it touches, so a witness row exists before the fast loop
+//! needs it.
+//!
+//! **Tunnelling.** A pair that the swept broad phase (last and current AABBs)
+//! reports, that is not tracked and is separated now but whose shapes swept
+//! through each other along the cycle's translation (parry's time of impact
+//! < 1), passed through without ever being close at a sampled instant: that
+//! is a penetration too, and asks for a backup.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
+use parry3d_f64::query::{ShapeCastOptions, cast_shapes};
+
+use super::broad::BroadPhase;
+use super::convert::{Pose3, to_glam};
+use super::narrow::{PairCache, PairQuery, query_pair};
+use super::pair::{PairView, pack};
+use super::polyhedron::Feature;
+use super::primitives::{expand, primitives, select, value_at};
+use super::shape::Collider;
+use crate::constraint::witness::friction::stick_rows;
+use crate::constraint::witness::{PlaneWitness, Witness, WitnessType, edge_face, face_face};
+
+/// Knobs of the active set, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSettings {
+    /// Witnesses are added below this surface distance (plus the pair's reach).
+    pub contact_distance_m: f64,
+    /// A tracked pair is dropped beyond this distance.
+    pub release_distance_m: f64,
+    /// Penetration deeper than this asks for a backup.
+    pub penetration_tolerance_m: f64,
+    /// Row slots of a body–body pair.
+    pub slots_per_pair: usize,
+    /// Row slots of a fingertip–body pair.
+    pub finger_slots: usize,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        Self {
+            contact_distance_m: 0.005,
+            release_distance_m: 0.02,
+            penetration_tolerance_m: 1e-4,
+            slots_per_pair: 4,
+            finger_slots: 2,
+        }
+    }
+}
+
+/// A body as the contact machinery sees it.
+#[derive(Debug, Clone)]
+pub struct ContactBody {
+    /// Its collider.
+    pub collider: Collider,
+    /// Fixed bodies never collide with each other.
+    pub fixed: bool,
+    /// A contact finger's fingertip: always end 0 of its pairs; two
+    /// fingertips do not collide.
+    pub fingertip: bool,
+    /// Coulomb μ of a fingertip's contacts (0: frictionless).
+    pub friction: f64,
+}
+
+/// One tracked pair's state.
+#[derive(Debug, Clone)]
+struct Tracked {
+    cache: PairCache,
+    witnesses: Vec<Witness>,
+    friction: Option<[PlaneWitness; 2]>,
+    distance_m: f64,
+}
+
+/// A tracked pair as a model needs it to lay out its rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub struct PairSpec {
+    /// Body indices (end 0 = A, end 1 = B).
+    pub bodies: [u32; 2],
+    /// Witness row slots.
+    pub slots: u32,
+    /// Two friction stick rows (a fingertip with μ > 0).
+    pub friction: bool,
+}
+
+/// What one cycle found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Cycle {
+    /// The set of tracked pairs changed: the model's rows must be rebuilt.
+    pub structure_changed: bool,
+    /// Primitives whose features changed in pairs that stayed tracked.
+    pub witness_changes: u32,
+    /// Pairs found penetrating deeper than the tolerance, or tunnelled
+    /// through each other: the configuration should be backed up.
+    pub backups: Vec<[u32; 2]>,
+    /// Deepest penetration seen, metres (0 if none).
+    pub max_penetration_m: f64,
+    /// Witnesses expanded to a higher-dimensional feature on penetration.
+    pub expansions: u32,
+    /// Candidate pairs from the broad phase.
+    pub candidates: u32,
+    /// Tracked pairs after the cycle.
+    pub tracked: u32,
+}
+
+/// The active set (see the module docs).
+#[derive(Debug)]
+pub struct ActiveSet {
+    bodies: Vec<Option<ContactBody>>,
+    excluded: Vec<[u32; 2]>,
+    settings: ContactSettings,
+    broad: BroadPhase,
+    tracked: BTreeMap<[u32; 2], Tracked>,
+    last_poses: Vec<Pose3>,
+}
+
+impl ActiveSet {
+    /// One entry per model body (`None`: no shape). `excluded`: pairs that
+    /// never collide (bodies joined by a joint).
+    pub fn new(
+        bodies: Vec<Option<ContactBody>>,
+        excluded: Vec<[u32; 2]>,
+        settings: ContactSettings,
+    ) -> Self {
+        let mut excluded: Vec<[u32; 2]> = excluded
+            .into_iter()
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        excluded.sort_unstable();
+        Self {
+            bodies,
+            excluded,
+            settings,
+            broad: BroadPhase::default(),
+            tracked: BTreeMap::new(),
+            last_poses: Vec::new(),
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ContactSettings {
+        &self.settings
+    }
+
+    /// Number of bodies with a shape.
+    pub fn shaped(&self) -> usize {
+        self.bodies.iter().flatten().count()
+    }
+
+    /// The tracked pairs in row order (sorted by body indices).
+    pub fn pairs(&self) -> Vec<PairSpec> {
+        self.tracked
+            .keys()
+            .map(|&k| {
+                let a = self.bodies[k[0] as usize].as_ref();
+                let fingertip = a.is_some_and(|b| b.fingertip);
+                PairSpec {
+                    bodies: k,
+                    slots: if fingertip {
+                        self.settings.finger_slots
+                    } else {
+                        self.settings.slots_per_pair
+                    } as u32,
+                    friction: a.is_some_and(|b| b.fingertip && b.friction > 0.0),
+                }
+            })
+            .collect()
+    }
+
+    /// The witnesses of pair `bodies` (empty if not tracked).
+    pub fn witnesses(&self, bodies: [u32; 2]) -> &[Witness] {
+        self.tracked
+            .get(&bodies)
+            .map_or(&[], |t| t.witnesses.as_slice())
+    }
+
+    /// Writes every tracked pair's primitives (then `Off`) and friction rows
+    /// into `table`, pair by pair in [`pairs`](Self::pairs) order: `slots`
+    /// rows each, then 2 friction rows where the pair has them. Returns the
+    /// number of entries written.
+    pub fn fill(&self, table: &mut Vec<Witness>) -> usize {
+        table.clear();
+        for spec in self.pairs() {
+            let t = &self.tracked[&spec.bodies];
+            for k in 0..spec.slots as usize {
+                table.push(t.witnesses.get(k).copied().unwrap_or_default());
+            }
+            if spec.friction {
+                match t.friction {
+                    Some(rows) => table.extend(rows.map(Witness::Plane)),
+                    None => table.extend([Witness::Off; 2]),
+                }
+            }
+        }
+        table.len()
+    }
+
+    /// One cycle at `poses` (one per model body, fixed ones included).
+    pub fn update(&mut self, poses: &[Pose3]) -> Cycle {
+        let mut cycle = Cycle::default();
+        if self.last_poses.len() != poses.len() {
+            self.last_poses = poses.to_vec();
+        }
+        let motion: Vec<f64> = poses
+            .iter()
+            .zip(&self.last_poses)
+            .zip(&self.bodies)
+            .map(|((p, l), b)| {
+                let radius = b.as_ref().map_or(0.0, |b| b.collider.radius_m);
+                let angle = rotation_angle(&(p.rot * l.rot.transpose()));
+                (p.r - l.r).norm() + radius * angle
+            })
+            .collect();
+        let max_motion = motion.iter().copied().fold(0.0, f64::max);
+        // Swept broad phase: the current AABBs loosened enough to reach last
+        // cycle's poses and the pre-emptive window.
+        let idx: Vec<u32> = (0..self.bodies.len() as u32)
+            .filter(|&i| self.bodies[i as usize].is_some())
+            .collect();
+        let set: Vec<(&Collider, Pose3)> = idx
+            .iter()
+            .map(|&i| {
+                let b = self.bodies[i as usize].as_ref().expect("shaped");
+                (&b.collider, poses[i as usize])
+            })
+            .collect();
+        let margin = self
+            .settings
+            .release_distance_m
+            .max(self.settings.contact_distance_m)
+            + 4.0 * max_motion;
+        let raw: Vec<(u32, u32)> = self.broad.pairs(&set, margin).to_vec();
+        drop(set);
+        let candidates: Vec<[u32; 2]> = raw
+            .iter()
+            .map(|&(i, j)| [idx[i as usize], idx[j as usize]])
+            .filter_map(|p| self.ordered(p))
+            .collect();
+        cycle.candidates = candidates.len() as u32;
+        let before: Vec<[u32; 2]> = self.tracked.keys().copied().collect();
+        let mut seen = Vec::with_capacity(candidates.len());
+        for pair in candidates {
+            seen.push(pair);
+            let reach = self.settings.contact_distance_m
+                + 2.0 * (motion[pair[0] as usize] + motion[pair[1] as usize]);
+            self.visit(pair, poses, reach, &mut cycle);
+        }
+        // Tracked pairs the broad phase no longer reports are beyond release.
+        seen.sort_unstable();
+        self.tracked.retain(|k, _| seen.binary_search(k).is_ok());
+        let after: Vec<[u32; 2]> = self.tracked.keys().copied().collect();
+        cycle.structure_changed = before != after;
+        cycle.tracked = after.len() as u32;
+        self.last_poses.copy_from_slice(poses);
+        cycle
+    }
+
+    /// The pair in row order (fingertip first, else lower index first), or
+    /// `None` if it never collides.
+    fn ordered(&self, [i, j]: [u32; 2]) -> Option<[u32; 2]> {
+        let (bi, bj) = (
+            self.bodies[i as usize].as_ref()?,
+            self.bodies[j as usize].as_ref()?,
+        );
+        if (bi.fixed && bj.fixed)
+            || (bi.fingertip && bj.fingertip)
+            || self.excluded.binary_search(&[i.min(j), i.max(j)]).is_ok()
+        {
+            return None;
+        }
+        Some(if bj.fingertip && !bi.fingertip {
+            [j, i]
+        } else {
+            [i.min(j), i.max(j)]
+        })
+    }
+
+    fn visit(&mut self, pair: [u32; 2], poses: &[Pose3], reach: f64, cycle: &mut Cycle) {
+        let s = self.settings;
+        let (a, b) = (
+            self.bodies[pair[0] as usize].as_ref().expect("shaped"),
+            self.bodies[pair[1] as usize].as_ref().expect("shaped"),
+        );
+        let view = PairView {
+            a: &a.collider,
+            pa: poses[pair[0] as usize],
+            b: &b.collider,
+            pb: poses[pair[1] as usize],
+        };
+        let slots = if a.fingertip {
+            s.finger_slots
+        } else {
+            s.slots_per_pair
+        };
+        let window = s.release_distance_m.max(s.contact_distance_m + reach);
+        let was = self.tracked.get(&pair).cloned();
+        let mut cache = was.as_ref().map(|t| t.cache.clone()).unwrap_or_default();
+        let Some(q) = query_pair(view.a, &view.pa, view.b, &view.pb, window, &mut cache) else {
+            // Far now. Did it pass through since the last cycle?
+            if was.is_none() && self.tunnelled(pair, poses) {
+                cycle.backups.push(pair);
+            }
+            self.tracked.remove(&pair);
+            return;
+        };
+        let depth = -q.distance_m;
+        if depth > 0.0 {
+            cycle.max_penetration_m = cycle.max_penetration_m.max(depth);
+        }
+        let track = match &was {
+            Some(_) => q.distance_m < s.release_distance_m.max(s.contact_distance_m + reach),
+            None => q.distance_m < s.contact_distance_m + reach,
+        };
+        if !track {
+            if was.is_none() && self.tunnelled(pair, poses) {
+                cycle.backups.push(pair);
+            }
+            self.tracked.remove(&pair);
+            return;
+        }
+        let mut out = Vec::with_capacity(8);
+        if q.features.is_some() {
+            primitives(&view, &q, &mut out);
+        } else if let Some(prev) = &was {
+            cycle.expansions += expand_on_penetration(&view, &prev.witnesses, &mut out);
+        }
+        if out.is_empty() {
+            out.push(fallback(&view, &q));
+        }
+        expand(&view, reach, &mut out);
+        select(&view, slots, &mut out);
+        if depth > s.penetration_tolerance_m {
+            cycle.backups.push(pair);
+        }
+        if let Some(prev) = &was {
+            cycle.witness_changes += changes(&prev.witnesses, &out);
+        }
+        let friction = if a.fingertip && a.friction > 0.0 {
+            let carried = was.as_ref().and_then(|t| t.friction);
+            Some(carried.unwrap_or_else(|| friction_rows(&view, &q)))
+        } else {
+            None
+        };
+        self.tracked.insert(
+            pair,
+            Tracked {
+                cache,
+                witnesses: out,
+                friction,
+                distance_m: q.distance_m,
+            },
+        );
+    }
+
+    /// True when the pair, not close at either end of the cycle, swept
+    /// through itself along the cycle's translations.
+    fn tunnelled(&self, pair: [u32; 2], poses: &[Pose3]) -> bool {
+        let (i, j) = (pair[0] as usize, pair[1] as usize);
+        let (Some(a), Some(b)) = (self.bodies[i].as_ref(), self.bodies[j].as_ref()) else {
+            return false;
+        };
+        let (la, lb) = (self.last_poses[i], self.last_poses[j]);
+        let (va, vb) = (poses[i].r - la.r, poses[j].r - lb.r);
+        let rel = (va - vb).norm();
+        if rel < 0.5 * a.collider.radius_m.min(b.collider.radius_m) {
+            return false;
+        }
+        let opts = ShapeCastOptions {
+            max_time_of_impact: 1.0,
+            stop_at_penetration: false,
+            ..Default::default()
+        };
+        matches!(
+            cast_shapes(
+                &la.to_parry(),
+                to_glam(&va),
+                &*a.collider.full,
+                &lb.to_parry(),
+                to_glam(&vb),
+                &*b.collider.full,
+                opts,
+            ),
+            Ok(Some(hit)) if hit.time_of_impact < 1.0
+        )
+    }
+
+    /// Distance of a tracked pair at the last cycle, metres.
+    pub fn distance(&self, bodies: [u32; 2]) -> Option<f64> {
+        self.tracked.get(&bodies).map(|t| t.distance_m)
+    }
+}
+
+/// Primitives added or removed between the old and the new list, by
+/// features (a primitive that only moved along its face is not a change).
+fn changes(old: &[Witness], new: &[Witness]) -> u32 {
+    let added = new
+        .iter()
+        .filter(|w| !old.iter().any(|o| o.same_features(w)))
+        .count();
+    let removed = old
+        .iter()
+        .filter(|o| !new.iter().any(|w| w.same_features(o)))
+        .count();
+    (added + removed) as u32
+}
+
+/// Subsequent penetration (§3.2.1): the cores overlap, so there are no
+/// nearest features. For each vertex–face primitive of the last cycle, find
+/// the vertices next to its vertex that now lie below its plane; with one,
+/// the edge from the contact vertex to it becomes the witness (edge–face),
+/// with more, their common face (face–face). Returns the expansions made.
+fn expand_on_penetration(view: &PairView, prev: &[Witness], out: &mut Vec<Witness>) -> u32 {
+    let mut made = 0;
+    for w in prev {
+        let Witness::Plane(p) = w else { continue };
+        let pe = p.point_end as usize;
+        let (vkey, fkey) = (p.features[pe], p.features[1 - pe]);
+        if vkey >= 1 << 30 || fkey >> 30 != 2 {
+            continue;
+        }
+        let face = fkey & ((1 << 30) - 1);
+        let v = if pe == 0 { *view } else { view.swapped() };
+        let (Some(pp), Some(ps)) = (v.a.polyhedron(), v.b.polyhedron()) else {
+            continue;
+        };
+        let start = out.len();
+        let violators: Vec<u32> = pp.vertex_edges[vkey as usize]
+            .iter()
+            .map(|&e| pp.other_end(e, vkey))
+            .filter(|&nb| {
+                let (val, _) = value_at(
+                    &Witness::Plane(PlaneWitness {
+                        point: pp.vertices[nb as usize],
+                        point_end: 0,
+                        ..*p
+                    }),
+                    &v.pa,
+                    &v.pb,
+                );
+                val < 0.0
+            })
+            .collect();
+        match violators.as_slice() {
+            [] => continue,
+            [nb] => {
+                let Some(e) = pp.edge_between(vkey, *nb) else {
+                    continue;
+                };
+                let ends = pp.edges[e as usize].vertices;
+                edge_face::reduce(
+                    &v,
+                    [pp.vertices[ends[0] as usize], pp.vertices[ends[1] as usize]],
+                    (
+                        [Feature::Vertex(ends[0]), Feature::Vertex(ends[1])],
+                        Feature::Edge(e),
+                    ),
+                    ps,
+                    face,
+                    out,
+                );
+            }
+            many => {
+                let shared = pp.vertex_faces[vkey as usize].iter().copied().find(|&f| {
+                    many.iter()
+                        .all(|nb| pp.vertex_faces[*nb as usize].contains(&f))
+                });
+                match shared {
+                    Some(f) => face_face::reduce(&v, pp, f, ps, face, out),
+                    None => continue,
+                }
+            }
+        }
+        if pe == 1 {
+            let a_to_b = view.a_to_b();
+            for w in &mut out[start..] {
+                *w = super::primitives::flipped(*w, &a_to_b);
+            }
+        }
+        made += 1;
+    }
+    made
+}
+
+/// A plane through the deepest points of a penetration (parry's contact),
+/// normal out of B: used when nothing better is known.
+fn fallback(view: &PairView, q: &PairQuery) -> Witness {
+    let n_b = view.pb.local_dir(&-q.normal);
+    Witness::Plane(PlaneWitness {
+        origin: WitnessType::VertexFace,
+        features: [
+            pack(Feature::Vertex(u32::MAX >> 2)),
+            pack(Feature::Face(u32::MAX >> 2)),
+        ],
+        point_end: 0,
+        point: view.pa.local_point(&q.core_point_a),
+        plane_point: view.pb.local_point(&q.core_point_b),
+        normal: n_b,
+        margin: view.margin(),
+    })
+}
+
+/// The two stick rows of a fingertip (A) touching B, anchored at B's
+/// closest point with B's outward contact normal.
+fn friction_rows(view: &PairView, q: &PairQuery) -> [PlaneWitness; 2] {
+    let n_b = view.pb.local_dir(&-q.normal);
+    stick_rows(view.pb.local_point(&q.core_point_b), n_b)
+}
+
+/// The angle of a rotation matrix, radians.
+fn rotation_angle(r: &nalgebra::Matrix3<f64>) -> f64 {
+    ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0).acos()
+}
+
+/// World positions of the points the primitives of a pair hold (for
+/// reports and plots).
+pub fn held_points(w: &[Witness], pa: &Pose3, pb: &Pose3) -> Vec<Vector3<f64>> {
+    w.iter()
+        .filter(|w| w.is_on())
+        .map(|w| value_at(w, pa, pb).1)
+        .collect()
+}

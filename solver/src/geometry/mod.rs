@@ -1,0 +1,31 @@
+//! Geometry awareness (Choi & Cremer §3): shapes, the broad and narrow
+//! phases, nearest-feature witnesses turned into constraint primitives, and
+//! the active set that the slow loop maintains. Built on parry3d-f64.
+//!
+//! | file | what it computes |
+//! |---|---|
+//! | `shape.rs` | [`Shape`] (scene vocabulary), mass from density, [`Collider`] (core + margin) |
+//! | `polyhedron.rs` | hull topology, Voronoi prisms, the support-set feature classifier |
+//! | `convert.rs` | nalgebra ↔ parry (glam) conversions, [`Pose3`] |
+//! | `broad.rs` | BVH broad phase (no all-pairs scan) |
+//! | `narrow.rs` | warm-started GJK on cores: distance, closest points, nearest features |
+//! | `pair.rs` | a pair at its poses: frame changes |
+//! | `primitives.rs` | feature pair → witness primitives, pre-emptive expansion, slot choice |
+//! | `active_set.rs` | the slow loop's cycle: add, replace, drop, expand, back up |
+//!
+//! The witness rows themselves (values and analytic Jacobians) live in
+//! `constraint/witness/`, one witness kind per file.
+
+pub mod active_set;
+pub mod broad;
+pub mod convert;
+pub mod narrow;
+pub mod pair;
+pub mod polyhedron;
+pub mod primitives;
+pub mod shape;
+
+pub use active_set::{ActiveSet, ContactBody, ContactSettings, Cycle, PairSpec};
+pub use convert::Pose3;
+pub use polyhedron::{Feature, Polyhedron};
+pub use shape::{Collider, DEFAULT_DENSITY_KG_M3, MassProps, Shape, ShapeError};

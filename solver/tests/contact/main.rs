@@ -1,0 +1,9 @@
+//! Integration tests of the contact machinery (Choi & Cremer §3): witness
+//! rows against finite differences, each witness kind on hand-made geometry,
+//! degenerate geometry, the active set. One binary, a module per area.
+
+#[global_allocator]
+static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
+
+mod common;
+mod witness_fd;
