@@ -117,6 +117,7 @@ pub fn summary(scene: &Scene) -> String {
         let grasp = match mf.grasp {
             Grasp::Point => "point grasp, 3 rows",
             Grasp::Rigid => "rigid grasp, 6 rows",
+            Grasp::Contact => "contact fingertip, 3 rows",
         };
         out += &format!(
             "  finger       {} → device {}, body {}, {grasp}\n",

@@ -107,6 +107,8 @@ pub struct FastLoop<C: Clock> {
     /// One per device when recording (`--record`), else empty: rows go to a
     /// bounded queue the reporter drains.
     pub(super) recorders: Vec<TraceRecorder>,
+    /// Witness tables from the slow loop (scenes with contact).
+    pub(super) inbox: Option<super::contact::WitnessInbox>,
 }
 
 impl<C: Clock> FastLoop<C> {
@@ -151,9 +153,24 @@ impl<C: Clock> TickBody for FastLoop<C> {
     fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
         let now = self.session_time(tick);
         let read_start = self.clock.now();
-        self.stats.programs_swapped +=
-            self.programs
-                .try_swap(&mut self.program, |old, new| new.take_over(old)) as u64;
+        let swapped = self
+            .programs
+            .try_swap(&mut self.program, |old, new| new.take_over(old));
+        self.stats.programs_swapped += swapped as u64;
+        if swapped > 0
+            && let Some(at) = self.program.snapshot_tick
+        {
+            self.stats
+                .contact
+                .record_latency(tick.index.saturating_sub(at));
+        }
+        if let Some(inbox) = &mut self.inbox
+            && let Some(at) = inbox.apply(&mut self.program.program)
+        {
+            self.stats
+                .contact
+                .record_latency(tick.index.saturating_sub(at));
+        }
 
         for i in 0..self.targets.len() {
             let dev = &mut self.rig.devices[self.rig.finger_device[i]];

@@ -11,6 +11,7 @@
 //! possible, with the slow loop stepped in lockstep every few ticks on the same
 //! thread, so two runs produce bit-identical results.
 
+mod contact;
 mod fast;
 mod plan;
 mod recorder;
@@ -18,6 +19,7 @@ mod rig;
 mod slow;
 mod stats;
 
+pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
 pub use plan::{Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
@@ -144,6 +146,18 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     } else {
         None
     };
+    // Contact: the active set at the assembled configuration decides the
+    // model (the mechanism plus the contact rows of the pairs in reach) the
+    // fast loop starts with.
+    let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
+    let mut contact = ContactLoop::new(model.clone(), plan.solver, plan.contact, frames_tx);
+    if let Some(c) = &mut contact {
+        program = c.initial(&q).context("building the contact rows")?;
+        program
+            .set_q(&q)
+            .context("starting from the assembled configuration")?;
+    }
+    let inbox = contact.as_ref().map(|_| WitnessInbox::new(frames_rx));
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
     let n = model.n_coords();
@@ -221,6 +235,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         counts,
         orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
         recorders,
+        inbox,
     };
     let slow = SlowLoop {
         snapshots,
@@ -236,6 +251,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         stats: SlowStats::default(),
         // Every 100 ms of slow-loop steps (each about 5 ms).
         reference_every: 20,
+        contact,
     };
     Ok(Built {
         fast,

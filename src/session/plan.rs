@@ -6,6 +6,7 @@ use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
 use haptloop_rt::thread::ThreadConfig;
 use haptloop_solver::SolverSettings;
+use haptloop_solver::geometry::ContactSettings;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -99,6 +100,8 @@ pub struct Plan {
     pub spin: Duration,
     /// The fast thread's core, priority and memory-locking requests.
     pub thread: ThreadConfig,
+    /// The contact active set's knobs (scenes with shapes).
+    pub contact: ContactSettings,
 }
 
 impl Plan {
@@ -137,6 +140,26 @@ impl Plan {
         if let Some(b) = s.coupling_damping {
             solver.coupling_damping_n_s_per_m = b;
         }
+        if let Some(d) = s.dynamics {
+            solver.dynamics = d;
+        }
+        let mut contact = ContactSettings::default();
+        if let Some(d) = s.contact_distance {
+            contact.contact_distance_m = d;
+        }
+        if let Some(d) = s.release_distance {
+            contact.release_distance_m = d;
+        }
+        if let Some(d) = s.penetration_tolerance {
+            contact.penetration_tolerance_m = d;
+        }
+        if contact.release_distance_m < contact.contact_distance_m {
+            bail!(
+                "[solver] release_distance ({} m) must not be below contact_distance ({} m)",
+                contact.release_distance_m,
+                contact.contact_distance_m
+            );
+        }
         solver.velocity_filter = match options
             .velocity_filter
             .or(s.velocity_filter.map(Duration::from_secs_f64))
@@ -158,6 +181,7 @@ impl Plan {
             replay: options.replay.clone(),
             spin: options.spin,
             thread: options.thread.clone(),
+            contact,
         })
     }
 

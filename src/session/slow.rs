@@ -31,6 +31,9 @@ pub struct Handover {
     pub program: Program,
     /// What to do with the adopted configuration.
     pub correction: Correction,
+    /// Grid slot of the snapshot it answers (contact changes: the latency
+    /// from a witness change to the fast loop using it is measured from it).
+    pub snapshot_tick: Option<u64>,
 }
 
 impl Handover {
@@ -39,6 +42,7 @@ impl Handover {
         Handover {
             program,
             correction: Correction::None,
+            snapshot_tick: None,
         }
     }
 
@@ -94,6 +98,8 @@ pub struct SlowStats {
     /// loads at rest, dense reference solve) between the fast loop's
     /// configuration and the reference, N.
     pub reference_force_error_n: f64,
+    /// The contact active set's figures (`None`: no contact machinery).
+    pub contact: Option<super::contact::ContactSlowStats>,
 }
 
 /// The slow loop's state.
@@ -117,6 +123,8 @@ pub struct SlowLoop {
     pub(super) stats: SlowStats,
     /// Steps between reference measurements (0: never).
     pub(super) reference_every: u64,
+    /// The contact active set, for scenes with shapes that can touch.
+    pub(super) contact: Option<super::contact::ContactLoop>,
 }
 
 /// Largest model (coordinates) whose snapshots are compared with the dense
@@ -133,6 +141,13 @@ impl SlowLoop {
             return;
         }
         self.stats.fresh_snapshots += 1;
+        let snap = self.snapshots.latest();
+        if let Some(c) = &mut self.contact {
+            let q = snap.q.clone();
+            if c.step(&q, snap.tick, snap.solved, &mut self.programs) {
+                return;
+            }
+        }
         let snap = self.snapshots.latest();
         let v = snap.max_violation_m;
         self.stats.max_seen_violation_m = self.stats.max_seen_violation_m.max(v);
@@ -220,14 +235,22 @@ impl SlowLoop {
         } else {
             Correction::Shift(q.iter().zip(snapshot_q).map(|(a, b)| a - b).collect())
         };
-        let Ok(program) = Program::new(self.model.clone(), self.settings) else {
+        let model = match &self.contact {
+            Some(c) => c.current_model().clone(),
+            None => self.model.clone(),
+        };
+        let Ok(mut program) = Program::new(model, self.settings) else {
             return;
         };
+        if let Some(c) = &self.contact {
+            program.apply_witnesses(c.table());
+        }
         if self
             .programs
             .try_send(Box::new(Handover {
                 program,
                 correction,
+                snapshot_tick: None,
             }))
             .is_ok()
         {
@@ -237,7 +260,9 @@ impl SlowLoop {
 
     /// What it saw and did.
     pub fn stats(&self) -> SlowStats {
-        self.stats
+        let mut s = self.stats;
+        s.contact = self.contact.as_ref().map(|c| c.stats());
+        s
     }
 }
 

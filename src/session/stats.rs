@@ -89,6 +89,52 @@ pub struct RunStats {
     pub force_cuts: u64,
     /// Programs swapped in from the slow loop.
     pub programs_swapped: u64,
+    /// Contact figures of the fast loop.
+    pub contact: ContactStats,
+}
+
+/// What the fast loop saw of contact.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactStats {
+    /// Deepest penetration of a witness row at a tick's end, m (ticks that
+    /// succeeded).
+    pub max_penetration_m: f64,
+    /// Most witness rows active (pushing) in one tick.
+    pub max_active: u32,
+    /// Refactorisations for in-tick activation, in all.
+    pub activations: u64,
+    /// Ticks that used all `MAX_ACTIVATIONS` refactorisations.
+    pub activation_limit_ticks: u64,
+    /// Witness tables and contact programs taken over from the slow loop.
+    pub updates: u64,
+    /// Largest and summed latency of those, ticks from the snapshot they
+    /// were computed from to the tick that used them.
+    pub latency_max_ticks: u64,
+    /// Sum of the latencies, ticks (mean = this / updates).
+    pub latency_sum_ticks: u64,
+    /// Most friction pairs sticking at once.
+    pub max_sticking: u32,
+}
+
+impl ContactStats {
+    /// Records one update's latency.
+    #[inline]
+    pub fn record_latency(&mut self, ticks: u64) {
+        self.updates += 1;
+        self.latency_max_ticks = self.latency_max_ticks.max(ticks);
+        self.latency_sum_ticks += ticks;
+    }
+
+    /// Records one tick.
+    #[inline]
+    pub fn record(&mut self, r: &TickReport) {
+        self.max_penetration_m = self.max_penetration_m.max(r.max_penetration_m);
+        self.max_active = self.max_active.max(r.active_contacts);
+        self.activations += u64::from(r.activations);
+        self.activation_limit_ticks +=
+            u64::from(r.activations >= haptloop_solver::program::MAX_ACTIVATIONS);
+        self.max_sticking = self.max_sticking.max(r.sticking);
+    }
 }
 
 impl RunStats {
@@ -109,6 +155,7 @@ impl RunStats {
             faults: 0,
             force_cuts: 0,
             programs_swapped: 0,
+            contact: ContactStats::default(),
         }
     }
 
@@ -121,6 +168,7 @@ impl RunStats {
             self.violation_max_m = self.violation_max_m.max(r.max_violation_m);
             self.violation_max_rad = self.violation_max_rad.max(r.max_violation_rad);
             self.violation_sumsq += r.rms_violation_m * r.rms_violation_m;
+            self.contact.record(r);
         } else {
             self.solver_failures += 1;
         }

@@ -54,11 +54,29 @@ use crate::force::feedback::Feedback;
 use crate::program::TickOutcome;
 use crate::{Evaluation, FingerTarget, Model};
 
+/// A predicted violation below this (metres) makes an inactive inequality
+/// row active within the tick (10 nm: round-off of a step that slides along
+/// a resting contact never triggers it).
+pub(crate) const ACTIVATE_TOLERANCE_M: f64 = 1e-8;
+
+/// What one projected step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Step {
+    /// Applied; its largest scaled coordinate change, metres.
+    Taken(f64),
+    /// Refused: larger than allowed (a diverging chord iteration).
+    Refused,
+    /// Not applied: it would violate inactive inequality rows, now marked in
+    /// the force solve's `forced` set; refactor and take it again.
+    Activate,
+}
+
 /// Buffers of the projected step.
 #[derive(Debug, Clone)]
 pub(crate) struct Projected {
     d: Vec<f64>,
     jd: Vec<f64>,
+    jm: Vec<f64>,
     r: Vec<f64>,
     y: Vec<f64>,
     g: Vec<f64>,
@@ -85,6 +103,7 @@ impl Projected {
         Self {
             d: vec![0.0; n],
             jd: vec![0.0; m],
+            jm: vec![0.0; m],
             r: vec![0.0; m],
             y: vec![0.0; m],
             g: vec![0.0; n],
@@ -117,7 +136,7 @@ impl Projected {
         step: f64,
         max_size_m: f64,
         lambda: &mut [f64],
-    ) -> Result<Option<f64>, TickOutcome> {
+    ) -> Result<Step, TickOutcome> {
         ev.evaluate_values(model, q, targets)
             .map_err(TickOutcome::Eval)?;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
@@ -162,7 +181,24 @@ impl Projected {
             .map(|((d, mg), w)| (step * (d + mg)).abs() * w)
             .fold(0.0, f64::max);
         if size > max_size_m {
-            return Ok(None);
+            return Ok(Step::Refused);
+        }
+        // Predicted values of the inactive inequality rows after the step.
+        jac.mul_vec(&self.mg, &mut self.jm)
+            .map_err(|_| TickOutcome::NonFinite)?;
+        let c = ev.values();
+        let mut activate = false;
+        for (i, &ci) in c.iter().enumerate() {
+            if matches!(s.role[i], Role::Inequality | Role::Contact)
+                && fb.row_scale()[i] == 0.0
+                && ci - step * (self.jd[i] + self.jm[i]) < -ACTIVATE_TOLERANCE_M
+            {
+                fb.forced[i] = true;
+                activate = true;
+            }
+        }
+        if activate {
+            return Ok(Step::Activate);
         }
         for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
             *qc -= step * (d + mg);
@@ -174,6 +210,6 @@ impl Projected {
                 Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }
-        Ok(Some(size))
+        Ok(Step::Taken(size))
     }
 }

@@ -4,6 +4,7 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
+use super::friction::FrictionPair;
 use super::gram::{Gram, Slot};
 use super::inertia::BodyMass;
 use super::motion::Motion;
@@ -47,6 +48,13 @@ pub(crate) struct Feedback {
     releases: u64,
     /// Per row: a friction stick row that is currently sticking (active).
     pub stick: Vec<bool>,
+    /// Per row: an inequality row a step of this tick predicted would be
+    /// violated, kept active until the tick's force solve.
+    pub forced: Vec<bool>,
+    /// The fingertip pairs with friction rows.
+    pub friction: Vec<FrictionPair>,
+    /// Ticks on which a sticking pair left the Coulomb cone (slipped).
+    slips: u64,
 }
 
 impl Feedback {
@@ -98,6 +106,9 @@ impl Feedback {
             prev_error: vec![Vector3::zeros(); fingers.len()],
             releases: 0,
             stick: vec![false; model.n_rows()],
+            forced: vec![false; model.n_rows()],
+            friction: super::friction::pairs_of(model),
+            slips: 0,
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -166,6 +177,29 @@ impl Feedback {
         self.releases
     }
 
+    /// Times a sticking friction pair left the Coulomb cone and slipped.
+    pub fn slips(&self) -> u64 {
+        self.slips
+    }
+
+    /// Refactors the joint block at the tick's chord Jacobian with the
+    /// inequality rows `rows` forced active on top of the usual set (a step
+    /// predicted they would be violated): the projected update's own
+    /// activation within a tick, before the force solve at its end.
+    ///
+    /// # Real-time
+    /// No allocation; one assembly and numeric factorisation.
+    pub fn force_active(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        ev: &Evaluation,
+        lambda: &[f64],
+    ) -> Result<(), FactorError> {
+        self.activate(s, ev.values(), lambda);
+        self.solve_multipliers(ev, settings)
+    }
+
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
     pub fn cg_iterations(&self) -> u32 {
         self.solve.cg.as_ref().map_or(0, |c| c.iterations)
@@ -201,6 +235,9 @@ impl Feedback {
         advance: bool,
         out: &mut [FingerOutput],
     ) -> Result<(), FactorError> {
+        // Rows forced active by the tick's steps are decided afresh by their
+        // multipliers and values now.
+        self.forced.fill(false);
         if advance {
             self.motion.advance(&self.masses, q, dt_s);
         }
@@ -233,6 +270,36 @@ impl Feedback {
                 released = true;
             }
         }
+        // Coulomb: a sticking pair whose friction load exceeds μ times the
+        // user's grip slips this tick.
+        for k in 0..self.friction.len() {
+            let p = self.friction[k];
+            if !(self.stick[p.rows[0]] && self.scale[p.rows[0]] != 0.0) {
+                continue;
+            }
+            let mut lt2 = 0.0;
+            for &row in &p.rows {
+                if let super::gram::Slot::J(j) = self.gram.slot[row] {
+                    lt2 += (s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).powi(2);
+                }
+            }
+            let grip = super::friction::grip(
+                model,
+                q,
+                ev.witnesses(),
+                targets,
+                settings.coupling_stiffness_n_per_m,
+                &p,
+            );
+            if lt2.sqrt() > p.mu * grip {
+                for &row in &p.rows {
+                    self.stick[row] = false;
+                    self.scale[row] = 0.0;
+                }
+                self.slips += 1;
+                released = true;
+            }
+        }
         if !released {
             return self.wrenches(s, settings, q, ev, targets, dt_s, out);
         }
@@ -259,7 +326,7 @@ impl Feedback {
         for (i, sc) in self.scale.iter_mut().enumerate() {
             let active = match s.role[i] {
                 Role::Inequality | Role::Contact => {
-                    lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND
+                    lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND || self.forced[i]
                 }
                 Role::Equality | Role::Finger => true,
                 Role::Friction => self.stick.get(i).copied().unwrap_or(false),

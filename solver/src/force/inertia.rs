@@ -50,6 +50,9 @@ pub(crate) struct BodyMass {
     pub inertia: Vector3<f64>,
     /// c′ (mean principal moment, kg·m²): the mass given to the |e| direction.
     pub norm_mass: f64,
+    /// False for a contact finger's fingertip, which the user's hand carries:
+    /// gravity does not act on it.
+    pub weighs: bool,
 }
 
 impl BodyMass {
@@ -70,6 +73,7 @@ impl BodyMass {
             inv_inertia: j.map(|v| 1.0 / v),
             inertia: j,
             norm_mass: j.sum() / 3.0,
+            weighs: !b.fingertip,
         }
     }
 
@@ -110,6 +114,7 @@ impl BodyMass {
     ) {
         let jw = self.world_inertia(f);
         let tau = -(jw * alpha + w.cross(&(jw * w)));
+        let g = if self.weighs { *g } else { Vector3::zeros() };
         let force = (g - a) * self.mass;
         out[..3].copy_from_slice(force.as_slice());
         out[3..7].copy_from_slice((f.omega.transpose() * tau).as_slice());
@@ -141,6 +146,7 @@ mod tests {
             inv_inertia: Vector3::new(1.0 / 2e-3, 1.0 / 3e-3, 1.0 / 4e-3),
             inertia: Vector3::new(2e-3, 3e-3, 4e-3),
             norm_mass: 3e-3,
+            weighs: true,
         };
         let e = Vector4::new(0.9, -0.3, 0.5, 0.2) * 1.3;
         let f = BodyFrame::new(Vector3::new(0.1, 0.2, 0.3), [e[0], e[1], e[2], e[3]]).unwrap();

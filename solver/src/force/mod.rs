@@ -30,6 +30,11 @@
 //!    directions it cannot move (a 1-DOF linkage, a joint at its limit) the
 //!    error grows and F_c is the wall the user feels.
 //!
+//! Contact rows (`friction`): witness rows are inequality rows of the joint
+//! block (active while pushing or penetrating, released when they would
+//! pull); a fingertip's friction stick rows take part while the Coulomb cone
+//! holds and are released (slip) when it does not.
+//!
 //! Once per program (`redundancy`, on the slow thread): rows linearly
 //! dependent on the others at q0 ([`Redundancy`]) are found by a cheap
 //! conditioning test and, when it fails, a dense ordered QR; they are masked
@@ -42,6 +47,7 @@
 
 mod cg;
 pub(crate) mod feedback;
+pub mod friction;
 mod gram;
 mod inertia;
 mod motion;

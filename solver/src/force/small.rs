@@ -19,11 +19,22 @@ const MAX_SWEEPS: usize = 30;
 
 /// x = A⁺ b for the symmetric n × n matrix `a` (row-major; destroyed: its
 /// diagonal ends up holding the eigenvalues). `v` (n × n) is scratch.
-/// Returns the numerical rank.
+/// Eigenvalues at most [`RANK_TOLERANCE`] × max(largest eigenvalue,
+/// `reference`) count as zero: `reference` is the scale of the matrix the
+/// Schur complement was reduced from (A_FF), so a complement that cancels to
+/// round-off everywhere (a finger on a mechanism with no free motion left,
+/// e.g. held against a stop) has rank 0, not a round-off rank 1 whose
+/// inverse is noise. Returns the numerical rank.
 ///
 /// # Real-time
 /// No allocation; at most 30 sweeps of n²/2 rotations, O(n³) each.
-pub(crate) fn min_norm_solve(a: &mut [f64], b: &[f64], x: &mut [f64], v: &mut [f64]) -> usize {
+pub(crate) fn min_norm_solve(
+    a: &mut [f64],
+    b: &[f64],
+    x: &mut [f64],
+    v: &mut [f64],
+    reference: f64,
+) -> usize {
     let n = b.len();
     v.fill(0.0);
     for i in 0..n {
@@ -58,7 +69,10 @@ pub(crate) fn min_norm_solve(a: &mut [f64], b: &[f64], x: &mut [f64], v: &mut [f
             }
         }
     }
-    let top = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
+    let top = (0..n)
+        .map(|i| a[i * n + i])
+        .fold(0.0, f64::max)
+        .max(reference);
     x.fill(0.0);
     let mut rank = 0;
     for k in 0..n {
@@ -142,7 +156,7 @@ mod tests {
         let a0 = [4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0];
         let b = [1.0, -2.0, 0.5];
         let (mut a, mut x, mut v) = (a0, [0.0; 3], [0.0; 9]);
-        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v), 3);
+        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 0.0), 3);
         for i in 0..3 {
             let r: f64 = (0..3).map(|j| a0[i * 3 + j] * x[j]).sum::<f64>() - b[i];
             assert!(r.abs() < 1e-14, "row {i}: {r}");
@@ -175,7 +189,7 @@ mod tests {
         }
         let b = u.map(|t| 2.0 * t * uu);
         let (mut x, mut v) = ([0.0; 3], [0.0; 9]);
-        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v), 1);
+        assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 0.0), 1);
         for i in 0..3 {
             assert!((x[i] - 2.0 * u[i]).abs() < 1e-13, "{x:?}");
         }

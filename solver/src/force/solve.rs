@@ -153,11 +153,13 @@ impl MultiplierSolve {
             }
         }
         self.schur_keep.copy_from_slice(&self.schur);
+        let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
         self.rank = min_norm_solve(
             &mut self.schur,
             &self.schur_rhs,
             &mut self.lambda_f,
             &mut self.eig,
+            reference,
         );
         if self.lambda_f.iter().all(|v| v.is_finite()) {
             Ok(())

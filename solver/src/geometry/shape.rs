@@ -116,11 +116,21 @@ impl Shape {
                 half_height_m,
                 radius_m,
             } => {
-                let h = pos("half_height", *half_height_m)?;
                 let r = pos("radius", *radius_m)?;
-                let (a, b) = (Vector3::new(0.0, 0.0, -h), Vector3::new(0.0, 0.0, h));
-                let full = SharedShape::new(Capsule::new(to_glam(&a), to_glam(&b), r));
-                (Core::Segment { a, b }, r, full)
+                let h = *half_height_m;
+                if !(h.is_finite() && h >= 0.0) {
+                    return Err(ShapeError::Size {
+                        field: "half_height",
+                        value: h,
+                    });
+                }
+                if h == 0.0 {
+                    (Core::Point, r, SharedShape::new(Ball::new(r)))
+                } else {
+                    let (a, b) = (Vector3::new(0.0, 0.0, -h), Vector3::new(0.0, 0.0, h));
+                    let full = SharedShape::new(Capsule::new(to_glam(&a), to_glam(&b), r));
+                    (Core::Segment { a, b }, r, full)
+                }
             }
             Shape::Convex { points_m } => {
                 let pts: Vec<Vector3<f64>> = points_m.iter().map(|p| Vector3::from(*p)).collect();

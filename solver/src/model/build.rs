@@ -82,6 +82,18 @@ impl ModelBuilder {
     /// Validates everything and compiles the model. The error names the first
     /// offending body, joint or finger (in that order) and what is wrong.
     pub fn build(&self) -> Result<Model, BuildError> {
+        self.build_with(true)
+    }
+
+    /// The same model without the finger constraints: the same bodies
+    /// (contact fingers' fingertips included), the same layout of q, joint
+    /// and quaternion-norm rows only (for re-projection, which must not hold
+    /// a finger where the mechanism cannot reach).
+    pub fn build_joints_only(&self) -> Result<Model, BuildError> {
+        self.build_with(false)
+    }
+
+    fn build_with(&self, with_fingers: bool) -> Result<Model, BuildError> {
         if !self.gravity.iter().all(|v| v.is_finite()) {
             return Err(BuildError::NonFinite {
                 owner: Owner::Scene,
@@ -137,7 +149,8 @@ impl ModelBuilder {
             out.push(info, geometry);
         }
         let mut fingers = Vec::with_capacity(self.fingers.len());
-        for (k, spec) in self.fingers.iter().enumerate() {
+        let finger_specs = if with_fingers { &self.fingers[..] } else { &[] };
+        for (k, spec) in finger_specs.iter().enumerate() {
             if fingers.iter().any(|f: &super::Finger| f.name == spec.name) {
                 return Err(BuildError::DuplicateName {
                     owner: Owner::Finger(spec.name.clone()),

@@ -92,6 +92,12 @@ fn next_model_id() -> u64 {
 }
 
 impl Model {
+    /// This model's identity: every model built or derived gets a new one,
+    /// and an [`Evaluation`](crate::Evaluation) serves only its own.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
     /// All bodies, fixed ones included, in builder order.
     pub fn bodies(&self) -> &[Body] {
         &self.bodies

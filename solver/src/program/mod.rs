@@ -52,9 +52,13 @@
 //! size; nothing iterates to a tolerance. Measured: four-bar 8 µs, Stewart
 //! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
+mod contact;
 mod report;
 mod state;
 mod tick;
+
+pub use contact::DYNAMIC_DAMPING_PER_S;
+pub use tick::MAX_ACTIVATIONS;
 
 pub use report::{
     AssemblyReport, Divergence, DivergenceLimits, FingerOutput, ProgramError, TickOutcome,
@@ -85,8 +89,19 @@ pub struct Program {
     limits: DivergenceLimits,
     ev: Evaluation,
     q: Vec<f64>,
-    /// q₀ of the least-astonishment objective (the previous tick's q).
+    /// q at the start of the tick (restored on failure; the guards measure
+    /// steps from it).
     q_ref: Vec<f64>,
+    /// q₀ of the least-astonishment objective: q at the start of the tick, or
+    /// with `dynamics` its inertial prediction.
+    q_goal: Vec<f64>,
+    /// Refactorisations for in-tick activation this tick.
+    activations: u32,
+    /// Per witness-table slot: a friction stick row (its anchor is the fast
+    /// loop's own while the contact persists).
+    friction_slot: Vec<bool>,
+    /// For each of `feedback.friction`, its index in the model's contact pairs.
+    friction_pair: Vec<usize>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -141,9 +156,24 @@ impl Program {
             settings.finger_weight,
             feedback.mean_mass_kg(),
         );
+        let mut friction_slot = vec![false; model.contact().slots];
+        let mut friction_pair = Vec::new();
+        for (k, pair) in model.contact().pairs.iter().enumerate() {
+            if let Some(f) = pair.friction {
+                let n = model.constraints()[pair.normal.index()].rows.len();
+                friction_slot[pair.first_slot + n] = true;
+                friction_slot[pair.first_slot + n + 1] = true;
+                let _ = f;
+                friction_pair.push(k);
+            }
+        }
         let mut p = Program {
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
+            q_goal: model.q0().to_vec(),
+            activations: 0,
+            friction_slot,
+            friction_pair,
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
             g: vec![0.0; n],

@@ -156,6 +156,16 @@ pub struct TickReport {
     pub rms_violation_m: f64,
     /// Largest finger |attachment − target|, metres.
     pub max_tracking_error_m: f64,
+    /// Deepest penetration of a contact witness row at the final q, metres
+    /// (0 without contacts or when nothing penetrates).
+    pub max_penetration_m: f64,
+    /// Contact witness rows active in the force solve (pushing).
+    pub active_contacts: u32,
+    /// Refactorisations a step needed because it would have violated an
+    /// inactive contact or limit (the fast loop's own activation).
+    pub activations: u32,
+    /// Friction pairs sticking after the force solve.
+    pub sticking: u32,
     /// How it ended.
     pub status: TickOutcome,
 }

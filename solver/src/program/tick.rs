@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use super::report::max_tracking;
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
+use crate::al::projected::Step;
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
@@ -16,6 +17,10 @@ const CHORD_GROWTH: f64 = 2.0;
 /// Steps below this (scaled metres) are never judged: round-off at
 /// convergence fluctuates freely.
 const CHORD_FLOOR_M: f64 = 1e-9;
+
+/// Refactorisations per tick for inequality rows a step would violate (each
+/// costs one assembly and numeric factorisation of the joint block).
+pub const MAX_ACTIVATIONS: u32 = 3;
 
 /// `x ≤ limit`, false for NaN.
 #[inline]
@@ -122,6 +127,7 @@ impl Program {
     /// No allocation; `iterations` update steps.
     pub fn iterate(&mut self, targets: &[FingerTarget], iterations: u32) -> TickOutcome {
         self.q_ref.copy_from_slice(&self.q);
+        self.q_goal.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         let status = match self.iterations(targets, iterations) {
             Ok(_) => match self.diverged_state() {
@@ -158,14 +164,35 @@ impl Program {
     /// (refusing the offending step) when its chord iteration diverges.
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
         let mut allowed = f64::INFINITY;
-        for k in 0..n {
+        self.activations = 0;
+        let mut k = 0;
+        while k < n {
             let done = match self.settings.update {
-                UpdateRule::Gradient => self.gradient_step(targets).map(|()| Some(0.0)),
+                UpdateRule::Gradient => self.gradient_step(targets).map(|()| Step::Taken(0.0)),
                 UpdateRule::Projected => self.projected_step(targets, self.settings.step, allowed),
             };
             match done {
-                Ok(Some(size)) => allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M),
-                Ok(None) => return Ok(k),
+                Ok(Step::Taken(size)) => {
+                    allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
+                    k += 1;
+                }
+                Ok(Step::Activate) if self.activations < MAX_ACTIVATIONS => {
+                    self.activations += 1;
+                    if self
+                        .feedback
+                        .force_active(&self.scaling, &self.settings, &self.ev, &self.lambda)
+                        .is_err()
+                    {
+                        return Err((TickOutcome::ForceSolve, k));
+                    }
+                }
+                Ok(Step::Activate) => {
+                    // Out of refactorisations this tick: stop stepping rather
+                    // than step through the contact; the force solve at the
+                    // end of the tick activates the rows for the next one.
+                    return Ok(k);
+                }
+                Ok(Step::Refused) => return Ok(k),
                 Err(status) => {
                     let status = match status {
                         TickOutcome::Eval(_) if k > 0 => TickOutcome::NonFinite,
@@ -208,6 +235,7 @@ impl Program {
     fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
+        self.predict(dt_s);
         let n = match self.iterations(targets, n) {
             Ok(applied) => applied,
             Err((status, k)) => return self.failed(status, k),
@@ -216,6 +244,9 @@ impl Program {
             return self.failed(TickOutcome::Diverged(d), n);
         }
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
+            return self.failed(TickOutcome::NonFinite, n);
+        }
+        if self.anchor_friction(dt_s) && self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
         let v = Violation::of(&self.model, &self.scaling, self.ev.values());
@@ -250,6 +281,10 @@ impl Program {
             max_norm_violation: v.max_norm,
             rms_violation_m: v.rms_m,
             max_tracking_error_m: max_tracking(&self.outputs),
+            max_penetration_m: v.max_penetration_m.max(0.0),
+            active_contacts: self.active_contacts(),
+            activations: self.activations,
+            sticking: self.sticking(),
             status: TickOutcome::Ok,
         }
     }
@@ -294,6 +329,7 @@ impl Program {
         }
         for k in 0..max_iterations {
             self.q_ref.copy_from_slice(&self.q);
+            self.q_goal.copy_from_slice(&self.q);
             if let Err(status) = self.assembly_step(targets) {
                 self.q.copy_from_slice(&self.q_ref);
                 self.lambda.copy_from_slice(&self.saved_lambda);
@@ -350,7 +386,7 @@ impl Program {
                 &self.scaling,
                 self.h,
                 &mut self.q,
-                &self.q_ref,
+                &self.q_goal,
                 targets,
                 &mut self.lambda,
                 &mut self.g,
@@ -366,14 +402,14 @@ impl Program {
         targets: &[FingerTarget],
         step: f64,
         allowed: f64,
-    ) -> Result<Option<f64>, TickOutcome> {
+    ) -> Result<Step, TickOutcome> {
         self.projected.step(
             &self.model,
             &self.scaling,
             &mut self.ev,
             &mut self.feedback,
             &mut self.q,
-            &self.q_ref,
+            &self.q_goal,
             targets,
             step,
             allowed,
@@ -392,7 +428,17 @@ impl Program {
                     TickOutcome::Ok => {}
                     status => return Err(status),
                 }
-                self.projected_step(targets, 1.0, f64::INFINITY).map(|_| ())
+                for _ in 0..=MAX_ACTIVATIONS {
+                    match self.projected_step(targets, 1.0, f64::INFINITY)? {
+                        Step::Activate => {
+                            self.feedback
+                                .force_active(&self.scaling, &self.settings, &self.ev, &self.lambda)
+                                .map_err(|_| TickOutcome::ForceSolve)?;
+                        }
+                        Step::Taken(_) | Step::Refused => return Ok(()),
+                    }
+                }
+                Ok(())
             }
         }
     }

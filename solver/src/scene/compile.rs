@@ -8,9 +8,13 @@
 use super::LoadedScene;
 use super::SceneError;
 use super::spec::{
-    Arr, BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, SolverSection,
+    Arr, BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, ShapeSpec,
+    SolverSection,
 };
-use crate::model::{BodySpec, BuildError, DesignParam, FingerSpec, JointKind, JointSpec, Owner};
+use crate::model::{
+    BodySpec, BuildError, DEFAULT_FINGERTIP_RADIUS_M, DesignParam, FingerSpec, JointKind,
+    JointSpec, Owner, Shape,
+};
 use crate::{FingerId, Model, ModelBuilder, RowUnit, Sense};
 use std::ops::Range;
 use std::path::PathBuf;
@@ -46,6 +50,10 @@ pub struct SceneSettings {
     pub coupling_damping: Option<f64>,
     /// Velocity low-pass time constant, s.
     pub velocity_filter: Option<f64>,
+    /// Inertial motion (`dynamics`).
+    pub dynamics: Option<bool>,
+    /// Contact penetration beyond which the slow loop backs up, m.
+    pub penetration_tolerance: Option<f64>,
 }
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
@@ -160,6 +168,8 @@ fn settings(s: &SolverSection) -> SceneSettings {
         coupling_stiffness: f(&s.coupling_stiffness),
         coupling_damping: f(&s.coupling_damping),
         velocity_filter: f(&s.velocity_filter),
+        dynamics: s.dynamics.as_ref().map(|x| *x.get_ref()),
+        penetration_tolerance: f(&s.penetration_tolerance),
     }
 }
 
@@ -190,7 +200,28 @@ fn body_spec(b: &BodySection) -> BodySpec {
     }
     spec.mass_kg = b.mass.as_ref().map(|m| *m.get_ref());
     spec.inertia_kg_m2 = b.inertia.as_ref().map(|i| i.get_ref().get());
+    spec.shape = b.shape.as_ref().map(|s| shape(s.get_ref()));
+    spec.density_kg_m3 = b.density.as_ref().map(|d| *d.get_ref());
     spec
+}
+
+fn shape(s: &ShapeSpec) -> Shape {
+    match s {
+        ShapeSpec::Box(h) => Shape::Box {
+            half_extents_m: h.get(),
+        },
+        ShapeSpec::Sphere(r) => Shape::Sphere { radius_m: *r },
+        ShapeSpec::Capsule {
+            half_height,
+            radius,
+        } => Shape::Capsule {
+            half_height_m: *half_height,
+            radius_m: *radius,
+        },
+        ShapeSpec::Convex(pts) => Shape::Convex {
+            points_m: pts.iter().map(|p| p.get()).collect(),
+        },
+    }
 }
 
 fn joint_spec(j: &JointSection) -> JointSpec {
@@ -239,23 +270,34 @@ impl LoadedScene {
         for j in &s.joints {
             builder.joint(joint_spec(j));
         }
-        // The same mechanism without fingers: same bodies, same layout of q,
-        // joint rows only (for re-projection onto the nearest assembled
-        // configuration, which must not hold a finger where the mechanism
-        // cannot reach).
-        let joints_only = builder.build().map_err(|e| self.build_error(&e))?;
         for f in &s.fingers {
             let point = f.point.as_ref().map_or([0.0; 3], |p| p.get_ref().get());
+            let body = || {
+                f.body
+                    .as_ref()
+                    .map_or(String::new(), |b| b.get_ref().clone())
+            };
             let spec = match f.grasp.as_ref().map_or(GraspSpec::Point, |g| *g.get_ref()) {
-                GraspSpec::Point => {
-                    FingerSpec::point(f.name.get_ref().clone(), f.body.get_ref().clone(), point)
-                }
-                GraspSpec::Rigid => {
-                    FingerSpec::rigid(f.name.get_ref().clone(), f.body.get_ref().clone(), point)
-                }
+                GraspSpec::Point => FingerSpec::point(f.name.get_ref().clone(), body(), point),
+                GraspSpec::Rigid => FingerSpec::rigid(f.name.get_ref().clone(), body(), point),
+                GraspSpec::Contact => FingerSpec::contact(
+                    f.name.get_ref().clone(),
+                    f.position.as_ref().map_or([0.0; 3], |p| p.get_ref().get()),
+                    f.radius
+                        .as_ref()
+                        .map_or(DEFAULT_FINGERTIP_RADIUS_M, |r| *r.get_ref()),
+                    f.friction.as_ref().map_or(0.0, |m| *m.get_ref()),
+                ),
             };
             builder.finger(spec);
         }
+        // The same mechanism without finger rows: same bodies (fingertips
+        // included), same layout of q, joint rows only (for re-projection
+        // onto the nearest assembled configuration, which must not hold a
+        // finger where the mechanism cannot reach).
+        let joints_only = builder
+            .build_joints_only()
+            .map_err(|e| self.build_error(&e))?;
         let model = builder.build().map_err(|e| self.build_error(&e))?;
         self.check_limits_at_q0(&model)?;
 
@@ -434,10 +476,22 @@ impl LoadedScene {
                     .nth(usize::from(dup));
                 f.map_or(whole, |f| match e {
                     BuildError::UnknownBody { .. } | BuildError::FingerOnFixedBody { .. } => {
-                        f.body.span()
+                        f.body.as_ref().map_or(f.name.span(), Spanned::span)
                     }
+                    BuildError::NonFinite {
+                        field: "position", ..
+                    }
+                    | BuildError::OutOfRange {
+                        field: "position", ..
+                    } => f.position.as_ref().map_or(f.name.span(), Spanned::span),
                     BuildError::NonFinite { .. } => {
                         f.point.as_ref().map_or(f.name.span(), Spanned::span)
+                    }
+                    BuildError::BadFingertip {
+                        field: "radius", ..
+                    } => f.radius.as_ref().map_or(f.name.span(), Spanned::span),
+                    BuildError::BadFingertip { .. } => {
+                        f.friction.as_ref().map_or(f.name.span(), Spanned::span)
                     }
                     _ => f.name.span(),
                 })
@@ -474,6 +528,10 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
             field: "inertia", ..
         }
         | BuildError::BadInertia { .. } => or_name(b.inertia.as_ref().map(Spanned::span)),
+        BuildError::Shape {
+            field: "density", ..
+        } => or_name(b.density.as_ref().map(Spanned::span)),
+        BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
         _ => b.name.span(),
     }
 }

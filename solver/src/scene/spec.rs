@@ -134,6 +134,11 @@ pub struct SolverSection {
     /// Extra: time constant of the low-pass filter on body velocities
     /// estimated from q, seconds (0 turns it off).
     pub velocity_filter: Option<Spanned<f64>>,
+    /// Extra: inertial motion (bodies keep their velocity and fall under
+    /// gravity) instead of least astonishment alone.
+    pub dynamics: Option<Spanned<bool>>,
+    /// Extra: contact penetration beyond which the slow loop backs up, m.
+    pub penetration_tolerance: Option<Spanned<f64>>,
 }
 
 /// `[[body]]`.
@@ -160,6 +165,9 @@ pub struct BodySection {
     /// Collision shape; a body without one takes part in no contact.
     #[serde(default)]
     pub shape: Option<Spanned<ShapeSpec>>,
+    /// kg/m³: mass and inertia from the shape when `mass` is absent.
+    #[serde(default)]
+    pub density: Option<Spanned<f64>>,
     /// `[[body.offer]]` semantic areas.
     #[serde(default)]
     pub offer: Vec<AreaSection>,
@@ -337,6 +345,8 @@ pub enum GraspSpec {
     Point,
     /// 6 rows: position and orientation follow the finger.
     Rigid,
+    /// A fingertip ball that pushes on shapes and never pulls.
+    Contact,
 }
 
 /// `[[finger]]`.
@@ -347,12 +357,22 @@ pub struct FingerSection {
     pub name: Spanned<String>,
     /// The `[[device]]` that drives it.
     pub device: Spanned<String>,
-    /// The body it holds.
-    pub body: Spanned<String>,
+    /// The body it holds (point and rigid grasps; required there).
+    #[serde(default)]
+    pub body: Option<Spanned<String>>,
     /// Body-local attachment point, m; default the body origin.
     #[serde(default)]
     pub point: Option<Spanned<Vec3>>,
-    /// Point or rigid grasp; default point.
+    /// Point, rigid or contact grasp; default point.
     #[serde(default)]
     pub grasp: Option<Spanned<GraspSpec>>,
+    /// Contact fingers: where the fingertip starts, m, world frame (required).
+    #[serde(default)]
+    pub position: Option<Spanned<Vec3>>,
+    /// Contact fingers: fingertip radius, m (default 0.008).
+    #[serde(default)]
+    pub radius: Option<Spanned<f64>>,
+    /// Contact fingers: Coulomb friction coefficient (default 0).
+    #[serde(default)]
+    pub friction: Option<Spanned<f64>>,
 }

@@ -91,7 +91,72 @@ impl Checker<'_> {
         }
         self.devices(s)?;
         self.finger_wiring(s)?;
+        for f in &s.fingers {
+            self.finger(f)?;
+        }
         self.labels(s)
+    }
+
+    /// A point or rigid finger holds a `body` (at `point`); a contact finger
+    /// is a fingertip of its own that starts at `position`, with an optional
+    /// `radius` and `friction`. Keys of the other kind are errors.
+    fn finger(&self, f: &super::spec::FingerSection) -> Check {
+        let contact = f
+            .grasp
+            .as_ref()
+            .is_some_and(|g| *g.get_ref() == super::spec::GraspSpec::Contact);
+        let name = f.name.get_ref();
+        if contact {
+            if let Some(b) = &f.body {
+                return Err(self.err(
+                    b.span(),
+                    format!("finger `{name}`: a contact finger is a fingertip of its own; it takes `position`, not `body`"),
+                ));
+            }
+            if let Some(p) = &f.point {
+                return Err(self.err(
+                    p.span(),
+                    format!("finger `{name}`: a contact finger has no `point` (its fingertip's centre is the point)"),
+                ));
+            }
+            let Some(p) = &f.position else {
+                return Err(self.err(
+                    f.name.span(),
+                    format!("finger `{name}`: a contact finger needs `position` (where its fingertip starts, world frame)"),
+                ));
+            };
+            self.finite(p, "position")?;
+            if let Some(r) = &f.radius {
+                self.positive(r, "radius")?;
+            }
+            if let Some(mu) = &f.friction {
+                self.non_negative(mu, "friction")?;
+            }
+            return Ok(());
+        }
+        let what = f.grasp.as_ref().map_or("point", |g| match g.get_ref() {
+            super::spec::GraspSpec::Rigid => "rigid",
+            _ => "point",
+        });
+        for (key, span) in [
+            ("position", f.position.as_ref().map(Spanned::span)),
+            ("radius", f.radius.as_ref().map(Spanned::span)),
+            ("friction", f.friction.as_ref().map(Spanned::span)),
+        ] {
+            if let Some(span) = span {
+                return Err(self.err(
+                    span,
+                    format!("finger `{name}`: `{key}` belongs to contact fingers (grasp = \"contact\"); a {what} finger holds a `body` at a `point`"),
+                ));
+            }
+        }
+        if f.body.is_none() {
+            return Err(self.err(
+                f.name.span(),
+                format!("finger `{name}`: a {what} finger needs `body` (the body it holds)"),
+            ));
+        }
+        Ok(())
     }
 
     fn solver(&self, s: &SceneFile) -> Check {
@@ -121,6 +186,7 @@ impl Checker<'_> {
         .chain([
             (&v.violation_tolerance, "violation_tolerance"),
             (&v.contact_distance, "contact_distance"),
+            (&v.penetration_tolerance, "penetration_tolerance"),
         ]) {
             if let Some(x) = x {
                 self.positive(x, what)?;

@@ -6,7 +6,7 @@
 //! written-then-parsed scene reproduces every `f64` bit for bit.
 
 use crate::ModelBuilder;
-use crate::model::{BodySpec, FingerSpec, JointSpec};
+use crate::model::{BodySpec, FingerSpec, JointSpec, Shape};
 use std::fmt::Write as _;
 
 fn num(x: f64) -> String {
@@ -30,6 +30,33 @@ fn body(out: &mut String, b: &BodySpec) {
     }
     if let Some(i) = b.inertia_kg_m2 {
         let _ = writeln!(out, "inertia = {}", arr(&i));
+    }
+    if let Some(d) = b.density_kg_m3 {
+        let _ = writeln!(out, "density = {}", num(d));
+    }
+    match &b.shape {
+        None => {}
+        Some(Shape::Box { half_extents_m: h }) => {
+            let _ = writeln!(out, "shape = {{ box = {} }}", arr(h));
+        }
+        Some(Shape::Sphere { radius_m }) => {
+            let _ = writeln!(out, "shape = {{ sphere = {} }}", num(*radius_m));
+        }
+        Some(Shape::Capsule {
+            half_height_m,
+            radius_m,
+        }) => {
+            let _ = writeln!(
+                out,
+                "shape = {{ capsule = {{ half_height = {}, radius = {} }} }}",
+                num(*half_height_m),
+                num(*radius_m)
+            );
+        }
+        Some(Shape::Convex { points_m }) => {
+            let pts: Vec<String> = points_m.iter().map(|p| arr(p)).collect();
+            let _ = writeln!(out, "shape = {{ convex = [{}] }}", pts.join(", "));
+        }
     }
     out.push('\n');
 }
@@ -64,6 +91,17 @@ fn joint(out: &mut String, j: &JointSpec) {
 }
 
 fn finger(out: &mut String, f: &FingerSpec, device: &str) {
+    if let Some(t) = f.tip {
+        let _ = writeln!(
+            out,
+            "[[finger]]\nname = \"{}\"\ndevice = \"{device}\"\ngrasp = \"contact\"\nposition = {}\nradius = {}\nfriction = {}\n",
+            f.name,
+            arr(&t.position_m),
+            num(t.radius_m),
+            num(t.friction)
+        );
+        return;
+    }
     let _ = writeln!(
         out,
         "[[finger]]\nname = \"{}\"\ndevice = \"{device}\"\nbody = \"{}\"\npoint = {}\ngrasp = \"{}\"\n",

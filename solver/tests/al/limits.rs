@@ -108,3 +108,21 @@ fn an_inactive_limit_contributes_nothing() {
     assert!(rel(&a.constraint_force_n, &b.constraint_force_n) < 1e-9);
     assert!((a.force_n - b.force_n).norm() < 1e-9 * b.force_n.norm());
 }
+
+/// Held against the stop, the mechanism has no free motion left, so the
+/// finger's Schur complement cancels to round-off: its rank must come out 0
+/// on every tick (a round-off rank 1 turned noise into kilonewton spikes of
+/// constraint force on some ticks and not others).
+#[test]
+fn the_finger_load_at_a_stop_is_zero_on_every_tick() {
+    let mut p = limited();
+    let mut worst: f64 = 0.0;
+    for k in 0..3000 {
+        let r = p.tick(&tip_target(0.5), DT);
+        assert_eq!(r.status, haptloop_solver::TickOutcome::Ok, "tick {k}");
+        if k >= 5 {
+            worst = worst.max(p.finger_outputs()[0].constraint_force_n.norm());
+        }
+    }
+    assert!(worst < 1e-9, "largest finger load at the stop: {worst} N");
+}

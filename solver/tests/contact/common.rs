@@ -1,4 +1,5 @@
 //! Shared builders: boxes, spheres and capsules as models and colliders.
+#![allow(dead_code)] // shared by the test modules; not every module uses every helper
 
 use haptloop_solver::geometry::{PairSpec, Pose3, Shape};
 use haptloop_solver::{BodySpec, Model, ModelBuilder};

@@ -141,14 +141,14 @@ pub(crate) struct ContactRows {
 
 impl ContactRows {
     pub fn eval<S: Sink>(&self, x: &Ctx, c: &mut [f64], sink: &mut S) {
-        for r in 0..self.rows as usize {
+        for (r, cr) in c.iter_mut().enumerate().take(self.rows as usize) {
             let w = x
                 .witnesses
                 .get(self.first_slot as usize + r)
                 .copied()
                 .unwrap_or_default();
             let (v, g) = row(&w, &self.pair, x);
-            c[r] = v;
+            *cr = v;
             sink.row(r, &g);
         }
     }

@@ -1,0 +1,157 @@
+//! The program's contact state between the slow loop's witness updates:
+//! the witness table it runs on, inertial prediction, friction stick anchors.
+//!
+//! **Witness updates.** The slow loop publishes a witness table for the
+//! program's model ([`Program::apply_witnesses`]); the fast loop copies it in
+//! at a tick boundary (no allocation: the table's length is the model's) and
+//! refactors once. A fingertip's friction anchors are the fast loop's own
+//! while its contact persists: a stuck contact must not jump to where the
+//! slow loop saw it a few milliseconds ago.
+//!
+//! **Inertial prediction** (`SolverSettings::dynamics`). The least-
+//! astonishment anchor of each tick becomes q̂ = q + v dt (1 − c dt) + g dt²
+//! per body (rotation: e advanced by ω dt (1 − c dt)), from the motion
+//! history's velocities; fingertips keep q̂ = q (their finger drives them).
+//! The projected step minimises ½ (q − q̂)ᵀ M (q − q̂) subject to the joints
+//! and active contacts: a constrained implicit Euler step, which is
+//! dissipative (it never adds energy) on top of the explicit damping c.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::Program;
+use crate::constraint::witness::Witness;
+use crate::force::INEQUALITY_ACTIVE_BAND;
+use crate::force::friction::STICK_SPEED_M_S;
+
+/// Velocity damping of inertial motion, 1/s: a body left alone loses this
+/// fraction of its speed per second (on top of the implicit step's own
+/// dissipation), so objects pushed on a frictionless table come to rest.
+pub const DYNAMIC_DAMPING_PER_S: f64 = 1.0;
+
+impl Program {
+    /// Copies a witness table from the slow loop into the running program and
+    /// refactors. `false` (nothing changed) when its length is not this
+    /// model's [`ContactLayout::slots`](crate::ContactLayout::slots). Friction
+    /// anchors of contacts that persist are kept (see the module docs).
+    ///
+    /// # Real-time
+    /// No allocation; O(slots) copies, one evaluation and one force solve.
+    pub fn apply_witnesses(&mut self, table: &[Witness]) -> bool {
+        let keep = &self.friction_slot;
+        let own = self.ev.witnesses_mut();
+        if table.len() != own.len() {
+            return false;
+        }
+        for (i, (o, t)) in own.iter_mut().zip(table).enumerate() {
+            if keep[i] && o.is_on() && t.is_on() {
+                continue;
+            }
+            *o = *t;
+        }
+        let _ = self.refresh();
+        true
+    }
+
+    /// The witness table in use.
+    pub fn witnesses(&self) -> &[Witness] {
+        self.ev.witnesses()
+    }
+
+    /// Friction pairs that left the Coulomb cone (slipped) since the program
+    /// was built.
+    pub fn slips(&self) -> u64 {
+        self.feedback.slips()
+    }
+
+    /// Sets the least-astonishment anchor q̂ of this tick (see the module docs).
+    pub(super) fn predict(&mut self, dt_s: f64) {
+        self.q_goal.copy_from_slice(&self.q);
+        if !self.settings.dynamics {
+            return;
+        }
+        let g = self.model.gravity_m_s2();
+        let keep = (1.0 - DYNAMIC_DAMPING_PER_S * dt_s).max(0.0);
+        let mo = &self.feedback.motion;
+        for (k, m) in self.feedback.masses.iter().enumerate() {
+            if !m.weighs {
+                continue;
+            }
+            let o = m.offset;
+            let dr = mo.v[k] * (keep * dt_s) + g * (dt_s * dt_s);
+            for c in 0..3 {
+                self.q_goal[o + c] += dr[c];
+            }
+            let turn = UnitQuaternion::from_scaled_axis(mo.w[k] * (keep * dt_s));
+            let e = Quaternion::new(self.q[o + 3], self.q[o + 4], self.q[o + 5], self.q[o + 6]);
+            let e = turn.quaternion() * e;
+            self.q_goal[o + 3..o + 7].copy_from_slice(&[e.w, e.i, e.j, e.k]);
+        }
+    }
+
+    /// Friction anchors after a tick's steps, with C evaluated at the final q:
+    /// a pair not touching (no active normal row within the band) neither
+    /// sticks nor keeps its anchor; a slipping pair is re-anchored under the
+    /// fingertip and sticks again once it slid less than
+    /// [`STICK_SPEED_M_S`] × dt this tick. Returns true if an anchor moved
+    /// (C must be evaluated again).
+    pub(super) fn anchor_friction(&mut self, dt_s: f64) -> bool {
+        let mut moved = false;
+        for k in 0..self.feedback.friction.len() {
+            let p = self.feedback.friction[k];
+            let pair = &self.model.contact().pairs[self.friction_pair[k]];
+            let normal_rows = self.model.constraints()[pair.normal.index()].rows.clone();
+            let c = self.ev.values();
+            let touching = normal_rows
+                .clone()
+                .any(|i| c[i] <= INEQUALITY_ACTIVE_BAND || self.lambda[i] > 0.0);
+            let armed = self.ev.witnesses()[p.slots[0]].is_on();
+            let stuck = self.feedback.stick[p.rows[0]];
+            if stuck && touching && armed {
+                continue;
+            }
+            let slip = c[p.rows[0]].hypot(c[p.rows[1]]);
+            let (Some(tip), Some(body)) = (
+                self.model.body_frame(&self.q, pair.bodies[0]),
+                self.model.body_frame(&self.q, pair.bodies[1]),
+            ) else {
+                continue;
+            };
+            let local: Vector3<f64> = body.rot.tr_mul(&(tip.r - body.r));
+            let table = self.ev.witnesses_mut();
+            for s in p.slots {
+                if let Witness::Plane(w) = &mut table[s] {
+                    w.plane_point = local;
+                    moved = true;
+                }
+            }
+            let stick = armed && touching && slip <= STICK_SPEED_M_S * dt_s;
+            for r in p.rows {
+                self.feedback.stick[r] = stick;
+            }
+        }
+        moved
+    }
+
+    /// Contact witness rows active in the last force solve.
+    pub(super) fn active_contacts(&self) -> u32 {
+        let scale = self.feedback.row_scale();
+        self.model
+            .contact()
+            .pairs
+            .iter()
+            .flat_map(|p| self.model.constraints()[p.normal.index()].rows.clone())
+            .filter(|&i| scale[i] != 0.0)
+            .count() as u32
+    }
+
+    /// Friction pairs sticking after the last force solve.
+    pub(super) fn sticking(&self) -> u32 {
+        self.feedback
+            .friction
+            .iter()
+            .filter(|p| {
+                self.feedback.stick[p.rows[0]] && self.feedback.row_scale()[p.rows[0]] != 0.0
+            })
+            .count() as u32
+    }
+}
