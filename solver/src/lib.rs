@@ -81,6 +81,7 @@
 
 pub mod al;
 pub mod constraint;
+pub mod contact;
 mod evaluate;
 pub mod force;
 pub mod geometry;

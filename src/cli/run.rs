@@ -3,7 +3,7 @@
 use super::output::{RunDir, produce_atomic, write_atomic};
 use super::rt_args::RtArgs;
 use super::values;
-use crate::report::{plots, session as text, summary::Summary};
+use crate::report::{plots, scene_plot, session as text, summary::Summary};
 use crate::scenes::{DEFAULT_SCENE, resolve};
 use crate::session::{self, Plan, SessionOptions};
 use anyhow::Result;
@@ -215,8 +215,16 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
     produce_atomic(&dir.join("latency.svg"), |p| plots::latency(p, o))?;
     produce_atomic(&dir.join("force.svg"), |p| plots::force(p, o))?;
     produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
+    let mut extra = String::new();
+    if let Some(track) = &o.track {
+        write("bodies.csv", track.csv())?;
+        produce_atomic(&dir.join("contact.svg"), |p| {
+            scene_plot::contact(p, &o.plan.scene, track)
+        })?;
+        extra += ", bodies.csv, contact.svg";
+    }
     println!(
-        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg",
+        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg{extra}",
         dir.display()
     );
     Ok(())

@@ -4,5 +4,6 @@
 pub mod figure;
 pub mod plots;
 pub mod probe;
+pub mod scene_plot;
 pub mod session;
 pub mod summary;

@@ -24,10 +24,12 @@ use std::sync::Arc;
 use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, MailboxWriter, ProgramSender};
 use haptloop_solver::constraint::witness::Witness;
-use haptloop_solver::geometry::{ActiveSet, ContactBody, ContactSettings, Cycle, PairSpec, Pose3};
-use haptloop_solver::{ConstraintKind, Model, Program, SolverSettings};
+use haptloop_solver::contact::{ContactManager, ContactUpdate};
+use haptloop_solver::geometry::{ContactSettings, Cycle};
+use haptloop_solver::{Model, Program, SolverSettings};
 
 use super::slow::{Correction, Handover};
+use super::track::BodyTrack;
 
 /// The witness table of one model, published by the slow loop.
 #[derive(Debug, Clone, Default)]
@@ -73,24 +75,14 @@ pub struct ContactSlowStats {
     pub cycle_ns_sum: u64,
 }
 
-/// The slow loop's contact state.
+/// The slow loop's contact state: the solver's [`ContactManager`] plus the
+/// exchange with the fast loop, timing and the body track.
 pub struct ContactLoop {
-    active: ActiveSet,
-    /// The mechanism without contact rows.
-    base: Arc<Model>,
-    /// The model of the program the fast loop was last sent.
-    current: Arc<Model>,
-    /// The pairs of `current`.
-    pairs: Vec<PairSpec>,
-    settings: SolverSettings,
-    table: Vec<Witness>,
-    published: Vec<Witness>,
+    manager: ContactManager,
     frames: MailboxWriter<WitnessFrame>,
     generation: u64,
-    /// q of the last snapshot without a penetration beyond the tolerance.
-    last_clean: Option<Vec<f64>>,
-    poses: Vec<Pose3>,
     stats: ContactSlowStats,
+    track: BodyTrack,
 }
 
 impl ContactLoop {
@@ -102,34 +94,25 @@ impl ContactLoop {
         contact: ContactSettings,
         frames: MailboxWriter<WitnessFrame>,
     ) -> Option<Self> {
-        let bodies = contact_bodies(&base);
-        if bodies.iter().flatten().count() < 2 {
-            return None;
-        }
-        let active = ActiveSet::new(bodies, jointed_pairs(&base), contact);
+        let track = BodyTrack::of_model(&base);
+        let manager = ContactManager::new(base, settings, contact)?;
         Some(Self {
-            active,
-            current: base.clone(),
-            base,
-            pairs: Vec::new(),
-            settings,
-            table: Vec::new(),
-            published: Vec::new(),
+            manager,
             frames,
             generation: 0,
-            last_clean: None,
-            poses: Vec::new(),
             stats: ContactSlowStats::default(),
+            track,
         })
     }
 
-    /// The first active set at `q` (before the clock starts): the model and
-    /// program the session starts with, its witness table applied.
+    /// The first active set at `q` (before the clock starts): the program
+    /// the session starts with, its witness table applied and q set.
     pub fn initial(&mut self, q: &[f64]) -> anyhow::Result<Program> {
-        let cycle = self.cycle(q);
-        self.note(&cycle);
-        self.last_clean = Some(q.to_vec());
-        let program = self.build_program()?;
+        let clock = MonotonicClock::new();
+        let start = clock.now();
+        let (cycle, program) = self.manager.initial(q)?;
+        self.note(&cycle, (clock.now() - start).0);
+        self.track.offer(0.0, self.manager.poses());
         Ok(program)
     }
 
@@ -138,14 +121,15 @@ impl ContactLoop {
         self.stats
     }
 
-    /// The model of the program last sent (re-projections build on it).
-    pub fn current_model(&self) -> &Arc<Model> {
-        &self.current
+    /// The sampled poses of the shaped bodies.
+    pub fn track(&self) -> &BodyTrack {
+        &self.track
     }
 
-    /// The witness table of the current model (for a program built on it).
-    pub fn table(&self) -> &[Witness] {
-        &self.table
+    /// A program for the model the fast loop runs, with its current witness
+    /// table (a re-projection's hand-over).
+    pub fn program_for_current(&self) -> Option<Program> {
+        self.manager.program_for_current().ok()
     }
 
     /// One slow-loop cycle on a snapshot. Returns true if it sent a program
@@ -154,74 +138,63 @@ impl ContactLoop {
         &mut self,
         q: &[f64],
         snapshot_tick: u64,
+        t_s: f64,
         solved: bool,
         programs: &mut ProgramSender<Handover>,
     ) -> bool {
-        let cycle = self.cycle(q);
-        self.note(&cycle);
-        let penetrating = !cycle.backups.is_empty();
-        if !penetrating && solved {
-            match &mut self.last_clean {
-                Some(v) => v.copy_from_slice(q),
-                None => self.last_clean = Some(q.to_vec()),
-            }
-        }
-        if programs.in_flight() > 0 {
-            return false;
-        }
-        if penetrating && let Some(clean) = self.last_clean.clone() {
-            // Backup (§3.2): revert to the last clean configuration, with the
-            // witnesses of the pairs that penetrated added there, and retry.
-            let again = self.cycle(&clean);
-            self.note_changes_only(&again);
-            self.stats.backups += 1;
-            return self.send(programs, Correction::Reset(clean), snapshot_tick);
-        }
-        if self.active.pairs() != self.pairs {
-            return self.send(programs, Correction::None, snapshot_tick);
-        }
-        self.active.fill(&mut self.table);
-        if self.table != self.published {
-            self.publish(snapshot_tick);
-        }
-        false
-    }
-
-    fn cycle(&mut self, q: &[f64]) -> Cycle {
         let clock = MonotonicClock::new();
         let start = clock.now();
-        self.poses.clear();
-        for (i, _) in self.base.bodies().iter().enumerate() {
-            let id = haptloop_solver::BodyId(i as u32);
-            let r = self.base.body_position(q, id);
-            let rot = self.base.body_rotation(q, id);
-            self.poses.push(match (r, rot) {
-                (Some(r), Some(rot)) => Pose3 { r, rot },
-                _ => Pose3::IDENTITY,
-            });
+        let may_send = programs.in_flight() == 0;
+        let (cycle, update) = self.manager.step(q, solved, may_send);
+        self.note(&cycle, (clock.now() - start).0);
+        self.track.offer(t_s, self.manager.poses());
+        match update {
+            ContactUpdate::None => false,
+            ContactUpdate::Table => {
+                self.publish(snapshot_tick);
+                false
+            }
+            ContactUpdate::Program { program, reset } => {
+                let ns = (clock.now() - start).0;
+                self.stats.build_ns_max = self.stats.build_ns_max.max(ns);
+                self.stats.build_ns_sum += ns;
+                self.stats.structure_changes += 1;
+                let correction = match reset {
+                    Some(q) => {
+                        self.stats.backups += 1;
+                        Correction::Reset(q)
+                    }
+                    None => Correction::None,
+                };
+                programs
+                    .try_send(Box::new(Handover {
+                        program: *program,
+                        correction,
+                        snapshot_tick: Some(snapshot_tick),
+                    }))
+                    .is_ok()
+            }
         }
-        let cycle = self.active.update(&self.poses);
-        let ns = (clock.now() - start).0;
-        self.stats.cycles += 1;
-        self.stats.cycle_ns_max = self.stats.cycle_ns_max.max(ns);
-        self.stats.cycle_ns_sum += ns;
-        cycle
     }
 
-    fn note(&mut self, c: &Cycle) {
-        self.note_changes_only(c);
-        self.stats.max_penetration_m = self.stats.max_penetration_m.max(c.max_penetration_m);
-    }
-
-    fn note_changes_only(&mut self, c: &Cycle) {
-        self.stats.witness_changes += u64::from(c.witness_changes);
-        self.stats.expansions += u64::from(c.expansions);
-        self.stats.max_tracked = self.stats.max_tracked.max(c.tracked);
+    fn note(&mut self, c: &Cycle, ns: u64) {
+        let s = &mut self.stats;
+        s.cycles += 1;
+        s.cycle_ns_max = s.cycle_ns_max.max(ns);
+        s.cycle_ns_sum += ns;
+        s.witness_changes += u64::from(c.witness_changes);
+        s.expansions += u64::from(c.expansions);
+        s.max_tracked = s.max_tracked.max(c.tracked);
+        s.max_penetration_m = s.max_penetration_m.max(c.max_penetration_m);
     }
 
     fn publish(&mut self, snapshot_tick: u64) {
         self.generation += 1;
-        let (id, generation, table) = (self.current.id(), self.generation, &self.table);
+        let (id, generation, table) = (
+            self.manager.current_model().id(),
+            self.generation,
+            self.manager.published(),
+        );
         self.frames.publish_with(|f| {
             f.model_id = id;
             f.generation = generation;
@@ -229,45 +202,7 @@ impl ContactLoop {
             f.table.clear();
             f.table.extend_from_slice(table);
         });
-        self.published.clone_from(&self.table);
         self.stats.frames += 1;
-    }
-
-    /// A program for the active set's pairs, its table applied.
-    fn build_program(&mut self) -> anyhow::Result<Program> {
-        let clock = MonotonicClock::new();
-        let start = clock.now();
-        let pairs = self.active.pairs();
-        let model = Arc::new(self.base.with_contacts(&pairs)?);
-        self.active.fill(&mut self.table);
-        let mut program = Program::new(model.clone(), self.settings)?;
-        program.apply_witnesses(&self.table);
-        let ns = (clock.now() - start).0;
-        self.stats.build_ns_max = self.stats.build_ns_max.max(ns);
-        self.stats.build_ns_sum += ns;
-        self.current = model;
-        self.pairs = pairs;
-        self.published.clone_from(&self.table);
-        Ok(program)
-    }
-
-    fn send(
-        &mut self,
-        programs: &mut ProgramSender<Handover>,
-        correction: Correction,
-        snapshot_tick: u64,
-    ) -> bool {
-        let Ok(program) = self.build_program() else {
-            return false;
-        };
-        self.stats.structure_changes += 1;
-        programs
-            .try_send(Box::new(Handover {
-                program,
-                correction,
-                snapshot_tick: Some(snapshot_tick),
-            }))
-            .is_ok()
     }
 }
 
@@ -304,49 +239,4 @@ impl WitnessInbox {
             None
         }
     }
-}
-
-/// One entry per body of `model`: its collider if it has a shape.
-fn contact_bodies(model: &Model) -> Vec<Option<ContactBody>> {
-    model
-        .bodies()
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let collider = b.shape.as_ref()?.collider().ok()?;
-            let friction = model
-                .fingers()
-                .iter()
-                .find(|f| f.body.index() == i && f.tip.is_some())
-                .and_then(|f| f.tip)
-                .map_or(0.0, |t| t.friction);
-            Some(ContactBody {
-                collider,
-                fixed: b.fixed,
-                fingertip: b.fingertip,
-                friction,
-            })
-        })
-        .collect()
-}
-
-/// Pairs of bodies joined by a joint (they never collide with each other).
-fn jointed_pairs(model: &Model) -> Vec<[u32; 2]> {
-    model
-        .constraints()
-        .iter()
-        .filter(|c| {
-            c.finger.is_none()
-                && !matches!(
-                    c.kind,
-                    ConstraintKind::QuaternionNorm
-                        | ConstraintKind::Contact
-                        | ConstraintKind::ContactFriction
-                )
-        })
-        .filter_map(|c| match c.bodies {
-            [Some(a), Some(b)] => Some([a.0, b.0]),
-            _ => None,
-        })
-        .collect()
 }

@@ -18,6 +18,7 @@ mod recorder;
 mod rig;
 mod slow;
 mod stats;
+mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
@@ -26,6 +27,7 @@ pub use recorder::{Recorder, Series};
 pub use rig::{Rig, SessionDevice};
 pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
 pub use stats::{FingerStats, RunStats};
+pub use track::{BodyTrack, TrackSample};
 
 use crate::scenes::Scene;
 use anyhow::{Context, Result};
@@ -94,6 +96,8 @@ pub struct SessionOutcome {
     /// Wall-clock seconds the run took (the only field that differs between
     /// two deterministic runs).
     pub wall_clock_s: f64,
+    /// Sampled poses of the shaped bodies (scenes with contact).
+    pub track: Option<BodyTrack>,
 }
 
 /// Everything the loops need, built before the clock starts.
@@ -328,7 +332,7 @@ fn finish<C: Clock>(
     wall_start: Nanos,
 ) -> Result<SessionOutcome> {
     recorder.finish()?;
-    let (report, histograms, granted, fast, slow, assembly, trace) = finished;
+    let (report, histograms, granted, fast, slow, assembly, trace, track) = finished;
     let device_events = fast
         .rig()
         .devices
@@ -372,6 +376,7 @@ fn finish<C: Clock>(
         fingers: names,
         device_events,
         wall_clock_s: (MonotonicClock::new().now() - wall_start).0 as f64 / 1e9,
+        track,
     })
 }
 
@@ -383,6 +388,7 @@ type Finished<C> = (
     SlowStats,
     Option<SolveInfo>,
     u64,
+    Option<BodyTrack>,
 );
 
 /// The fast loop and the slow loop on one thread, in lockstep: deterministic.
@@ -455,6 +461,7 @@ fn run_deterministic(
         body.slow.stats(),
         built.assembly,
         dropped,
+        body.slow.track(),
     ))
 }
 
@@ -520,6 +527,7 @@ fn run_real_time(
         slow.stats(),
         assembly,
         dropped,
+        slow.track(),
     ))
 }
 

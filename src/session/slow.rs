@@ -144,7 +144,8 @@ impl SlowLoop {
         let snap = self.snapshots.latest();
         if let Some(c) = &mut self.contact {
             let q = snap.q.clone();
-            if c.step(&q, snap.tick, snap.solved, &mut self.programs) {
+            let t_s = snap.time.as_secs_f64();
+            if c.step(&q, snap.tick, t_s, snap.solved, &mut self.programs) {
                 return;
             }
         }
@@ -235,16 +236,13 @@ impl SlowLoop {
         } else {
             Correction::Shift(q.iter().zip(snapshot_q).map(|(a, b)| a - b).collect())
         };
-        let model = match &self.contact {
-            Some(c) => c.current_model().clone(),
-            None => self.model.clone(),
+        let program = match &self.contact {
+            Some(c) => c.program_for_current(),
+            None => Program::new(self.model.clone(), self.settings).ok(),
         };
-        let Ok(mut program) = Program::new(model, self.settings) else {
+        let Some(program) = program else {
             return;
         };
-        if let Some(c) = &self.contact {
-            program.apply_witnesses(c.table());
-        }
         if self
             .programs
             .try_send(Box::new(Handover {
@@ -256,6 +254,11 @@ impl SlowLoop {
         {
             self.stats.programs_sent += 1;
         }
+    }
+
+    /// The sampled poses of the shaped bodies (scenes with contact).
+    pub fn track(&self) -> Option<super::track::BodyTrack> {
+        self.contact.as_ref().map(|c| c.track().clone())
     }
 
     /// What it saw and did.

@@ -37,7 +37,7 @@ use parry3d_f64::query::{ShapeCastOptions, cast_shapes};
 use super::broad::BroadPhase;
 use super::convert::{Pose3, to_glam};
 use super::narrow::{PairCache, PairQuery, query_pair};
-use super::pair::{PairView, pack};
+use super::pair::PairView;
 use super::polyhedron::Feature;
 use super::primitives::{expand, primitives, select, value_at};
 use super::shape::Collider;
@@ -509,10 +509,8 @@ fn fallback(view: &PairView, q: &PairQuery) -> Witness {
     let n_b = view.pb.local_dir(&-q.normal);
     Witness::Plane(PlaneWitness {
         origin: WitnessType::VertexFace,
-        features: [
-            pack(Feature::Vertex(u32::MAX >> 2)),
-            pack(Feature::Face(u32::MAX >> 2)),
-        ],
+        // No features: a key no vertex or face has (expansions skip it).
+        features: [u32::MAX, u32::MAX],
         point_end: 0,
         point: view.pa.local_point(&q.core_point_a),
         plane_point: view.pb.local_point(&q.core_point_b),

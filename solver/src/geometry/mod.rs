@@ -9,6 +9,7 @@
 //! | `convert.rs` | nalgebra ↔ parry (glam) conversions, [`Pose3`] |
 //! | `broad.rs` | BVH broad phase (no all-pairs scan) |
 //! | `narrow.rs` | warm-started GJK on cores: distance, closest points, nearest features |
+//! | `sat.rs` | the separating-axis test of two polyhedra (touching and overlapping pairs) |
 //! | `pair.rs` | a pair at its poses: frame changes |
 //! | `primitives.rs` | feature pair → witness primitives, pre-emptive expansion, slot choice |
 //! | `active_set.rs` | the slow loop's cycle: add, replace, drop, expand, back up |
@@ -23,6 +24,7 @@ pub mod narrow;
 pub mod pair;
 pub mod polyhedron;
 pub mod primitives;
+pub mod sat;
 pub mod shape;
 
 pub use active_set::{ActiveSet, ContactBody, ContactSettings, Cycle, PairSpec};

@@ -14,6 +14,7 @@ use parry3d_f64::query::{self, gjk::GJKResult, gjk::VoronoiSimplex};
 
 use super::convert::{Pose3, to_glam, to_na};
 use super::polyhedron::Feature;
+use super::sat::best_axis;
 use super::shape::{Collider, Core};
 use parry3d_f64::query::details::closest_points_support_map_support_map_with_params;
 
@@ -34,8 +35,9 @@ pub struct PairQuery {
     pub core_point_b: Vector3<f64>,
     /// Unit separating direction from A to B, world frame.
     pub normal: Vector3<f64>,
-    /// The nearest features of A's and B's cores (`None` when the cores
-    /// overlap: the features of a penetration are not defined).
+    /// The nearest features of A's and B's cores: for overlapping cores,
+    /// the support sets along the penetration normal (`None` only when
+    /// parry gives no usable normal).
     pub features: Option<(Feature, Feature)>,
 }
 
@@ -46,6 +48,12 @@ pub struct PairCache {
     /// Last separating direction, A's frame.
     last_dir: Option<Vector3<f64>>,
 }
+
+/// Cores closer than this fraction of the pair's size (the sum of the core
+/// radii) are touching: GJK's direction is round-off there, and the
+/// separating axis (polyhedra) or the penetration query (curved shapes)
+/// takes over. 1e-6 of a 10 cm pair is 0.1 µm.
+pub const TOUCH_TOLERANCE: f64 = 1e-6;
 
 /// Queries the pair (A at `pa`, B at `pb`). Returns `None` when the surfaces
 /// are farther apart than `max_distance_m`.
@@ -60,6 +68,7 @@ pub fn query_pair(
     let (ppa, ppb) = (pa.to_parry(), pb.to_parry());
     let pos12 = ppa.inv_mul(&ppb);
     let margins = a.margin_m + b.margin_m;
+    let touch = TOUCH_TOLERANCE * (a.radius_m + b.radius_m).max(1e-6);
     let simplex = cache.simplex.get_or_insert_with(VoronoiSimplex::new);
     let init = cache.last_dir.map(|d| to_glam(&d));
     let result = closest_points_support_map_support_map_with_params(
@@ -73,8 +82,12 @@ pub fn query_pair(
     match result {
         GJKResult::ClosestPoints(p1, p2, n) => {
             let (p1, p2, n) = (to_na(p1), to_na(p2), to_na(n));
-            cache.last_dir = Some(n);
             let core_distance = (p2 - p1).dot(&n);
+            if core_distance <= touch {
+                cache.last_dir = None;
+                return touching(a, pa, b, pb, max_distance_m);
+            }
+            cache.last_dir = Some(n);
             let eps_a = PARALLEL_TOLERANCE * a.radius_m.max(1e-6);
             let eps_b = PARALLEL_TOLERANCE * b.radius_m.max(1e-6);
             // B's support toward A: direction −n in B's frame.
@@ -91,22 +104,82 @@ pub fn query_pair(
         }
         GJKResult::Intersection => {
             cache.last_dir = None;
-            let c = query::contact(&ppa, &*a.full, &ppb, &*b.full, max_distance_m)
-                .ok()
-                .flatten()?;
-            Some(PairQuery {
-                distance_m: c.dist,
-                core_point_a: to_na(c.point1),
-                core_point_b: to_na(c.point2),
-                normal: to_na(c.normal1),
-                features: None,
-            })
+            touching(a, pa, b, pb, max_distance_m)
         }
         GJKResult::Proximity(_) | GJKResult::NoIntersection(_) => {
             cache.last_dir = None;
             None
         }
     }
+}
+
+/// Touching or overlapping cores: resting contact, or a penetration the fast
+/// loop let through. Two polyhedra: the separating axis ([`super::sat`]);
+/// otherwise parry's penetration query on the whole shapes. The features are
+/// the support sets along that axis (a box resting on a table is face–face
+/// at depth 0, so its corners become vertex–face rows exactly as when
+/// separated).
+fn touching(
+    a: &Collider,
+    pa: &Pose3,
+    b: &Collider,
+    pb: &Pose3,
+    max_distance_m: f64,
+) -> Option<PairQuery> {
+    let eps_a = PARALLEL_TOLERANCE * a.radius_m.max(1e-6);
+    let eps_b = PARALLEL_TOLERANCE * b.radius_m.max(1e-6);
+    if let (Some(ha), Some(hb)) = (a.polyhedron(), b.polyhedron()) {
+        let rot_ba = pa.rot.tr_mul(&pb.rot);
+        let t_ba = pa.local_point(&pb.r);
+        let s = best_axis(ha, hb, &rot_ba, &t_ba);
+        let n = s.axis;
+        let n_b = rot_ba.tr_mul(&-n);
+        let fa = ha.support_feature(&n, eps_a);
+        let fb = hb.support_feature(&n_b, eps_b);
+        // A point of each support set (their separation is along n).
+        let top = ha
+            .vertices
+            .iter()
+            .copied()
+            .max_by(|x, y| x.dot(&n).total_cmp(&y.dot(&n)))
+            .unwrap_or_default();
+        let bottom = hb
+            .vertices
+            .iter()
+            .copied()
+            .max_by(|x, y| x.dot(&n_b).total_cmp(&y.dot(&n_b)))
+            .unwrap_or_default();
+        return Some(PairQuery {
+            distance_m: s.separation_m,
+            core_point_a: pa.point(&top),
+            core_point_b: pb.point(&bottom),
+            normal: pa.dir(&n),
+            features: Some((fa, fb)),
+        });
+    }
+    let c = query::contact(
+        &pa.to_parry(),
+        &*a.full,
+        &pb.to_parry(),
+        &*b.full,
+        max_distance_m,
+    )
+    .ok()
+    .flatten()?;
+    let n = to_na(c.normal1);
+    let features = n.iter().all(|x| x.is_finite()).then(|| {
+        (
+            core_feature(&a.core, &pa.local_dir(&n), eps_a),
+            core_feature(&b.core, &pb.local_dir(&-n), eps_b),
+        )
+    });
+    Some(PairQuery {
+        distance_m: c.dist,
+        core_point_a: to_na(c.point1) - n * a.margin_m,
+        core_point_b: to_na(c.point2) + n * b.margin_m,
+        normal: n,
+        features,
+    })
 }
 
 /// The feature of `core` supporting it along `dir` (body frame).
@@ -235,7 +308,11 @@ mod tests {
         )
         .unwrap();
         assert!((q.distance_m + 0.01).abs() < 1e-9, "{}", q.distance_m);
-        assert!(q.features.is_none());
+        // The support sets along the penetration normal: face on face.
+        assert!(matches!(
+            q.features,
+            Some((Feature::Face(_), Feature::Face(_)))
+        ));
         // Far apart: nothing.
         assert!(
             query_pair(

@@ -54,6 +54,9 @@ pub struct Polyhedron {
     pub vertex_faces: Vec<Vec<u32>>,
     /// Largest vertex distance from the origin, metres.
     pub radius_m: f64,
+    /// The distinct edge directions (unit, up to sign): the edge factors of
+    /// the separating-axis test (a box has three).
+    pub edge_directions: Vec<Vector3<f64>>,
 }
 
 /// Why a point set has no usable hull.
@@ -158,7 +161,17 @@ impl Polyhedron {
             }
         }
         let radius_m = vertices.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let mut edge_directions: Vec<Vector3<f64>> = Vec::new();
+        for e in &edges {
+            let d = (vertices[e.vertices[1] as usize] - vertices[e.vertices[0] as usize])
+                .try_normalize(1e-15)
+                .unwrap_or_else(Vector3::x);
+            if !edge_directions.iter().any(|u| u.cross(&d).norm() < 1e-9) {
+                edge_directions.push(d);
+            }
+        }
         Ok(Self {
+            edge_directions,
             hull,
             vertices,
             faces,

@@ -59,3 +59,82 @@ pub fn at(r: [f64; 3]) -> Pose3 {
         rot: Matrix3::identity(),
     }
 }
+
+use haptloop_solver::contact::{ContactManager, ContactUpdate};
+use haptloop_solver::geometry::ContactSettings;
+use haptloop_solver::{FingerTarget, Program, SolverSettings, TickReport};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// The fast loop and the slow loop's contact cycle in lockstep, as the
+/// session's deterministic mode runs them: a tick every `dt`, a contact
+/// cycle every `every` ticks whose update is taken over at once.
+pub struct Lockstep {
+    pub program: Program,
+    pub manager: ContactManager,
+    pub every: u64,
+    pub dt: Duration,
+    pub ticks: u64,
+    pub programs: u64,
+    pub tables: u64,
+    pub backups: u64,
+    pub max_penetration_m: f64,
+}
+
+impl Lockstep {
+    /// Builds the manager and the first program at the model's q0.
+    pub fn new(model: Model, settings: SolverSettings, contact: ContactSettings) -> Self {
+        let model = Arc::new(model);
+        let mut manager = ContactManager::new(model.clone(), settings, contact).expect("shapes");
+        let (_, program) = manager.initial(model.q0()).expect("initial program");
+        Self {
+            program,
+            manager,
+            every: 5,
+            dt: Duration::from_millis(1),
+            ticks: 0,
+            programs: 0,
+            tables: 0,
+            backups: 0,
+            max_penetration_m: 0.0,
+        }
+    }
+
+    /// One tick, then a contact cycle when due.
+    pub fn tick(&mut self, targets: &[FingerTarget]) -> TickReport {
+        let r = self.program.tick(targets, self.dt);
+        self.ticks += 1;
+        if self.ticks.is_multiple_of(self.every) {
+            let (cycle, update) = self.manager.step(
+                self.program.q(),
+                r.status == haptloop_solver::TickOutcome::Ok,
+                true,
+            );
+            self.max_penetration_m = self.max_penetration_m.max(cycle.max_penetration_m);
+            match update {
+                ContactUpdate::None => {}
+                ContactUpdate::Table => {
+                    assert!(self.program.apply_witnesses(self.manager.published()));
+                    self.tables += 1;
+                }
+                ContactUpdate::Program { mut program, reset } => {
+                    program.adopt_state(&self.program);
+                    if let Some(q) = reset {
+                        program.set_q(&q).expect("reset");
+                        self.backups += 1;
+                    }
+                    self.program = *program;
+                    self.programs += 1;
+                }
+            }
+        }
+        r
+    }
+
+    /// World position of body `name`.
+    pub fn position(&self, name: &str) -> Vector3<f64> {
+        let m = self.program.model();
+        let id = m.body_id(name).expect("body");
+        m.body_position(self.program.q(), id).expect("position")
+    }
+}

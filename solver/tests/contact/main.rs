@@ -6,4 +6,5 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod common;
+mod rest;
 mod witness_fd;

@@ -1,0 +1,52 @@
+//! Which bodies of a model take part in contact, and which pairs never do.
+
+use crate::geometry::ContactBody;
+use crate::{ConstraintKind, Model};
+
+/// One entry per body of `model`: its collider if it has a shape (`None`
+/// otherwise, or if the shape cannot be compiled, which the scene loader has
+/// already refused). A contact finger's fingertip carries its friction.
+pub fn contact_bodies(model: &Model) -> Vec<Option<ContactBody>> {
+    model
+        .bodies()
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let collider = b.shape.as_ref()?.collider().ok()?;
+            let friction = model
+                .fingers()
+                .iter()
+                .find(|f| f.body.index() == i && f.tip.is_some())
+                .and_then(|f| f.tip)
+                .map_or(0.0, |t| t.friction);
+            Some(ContactBody {
+                collider,
+                fixed: b.fixed,
+                fingertip: b.fingertip,
+                friction,
+            })
+        })
+        .collect()
+}
+
+/// Pairs of bodies joined by a joint: they never collide with each other
+/// (a hinge's two links overlap at the hinge by construction).
+pub fn jointed_pairs(model: &Model) -> Vec<[u32; 2]> {
+    model
+        .constraints()
+        .iter()
+        .filter(|c| {
+            c.finger.is_none()
+                && !matches!(
+                    c.kind,
+                    ConstraintKind::QuaternionNorm
+                        | ConstraintKind::Contact
+                        | ConstraintKind::ContactFriction
+                )
+        })
+        .filter_map(|c| match c.bodies {
+            [Some(a), Some(b)] => Some([a.0, b.0]),
+            _ => None,
+        })
+        .collect()
+}

@@ -1,0 +1,234 @@
+//! [`ContactManager`]: the slow loop's contact cycle (see the module docs of
+//! [`crate::contact`]).
+//!
+//! ```text
+//!  q (a snapshot of the fast loop) ─► poses ─► ActiveSet::update (broad, narrow, witnesses)
+//!     penetration beyond the tolerance ─► backup: the cycle again at the last clean q,
+//!                                         a program for its pairs, q reset there
+//!     set of pairs changed            ─► Model::with_contacts + Program::new (symbolic here)
+//!     features changed                ─► a witness table for the running program
+//! ```
+
+use std::sync::Arc;
+
+use super::bodies::{contact_bodies, jointed_pairs};
+use crate::constraint::witness::Witness;
+use crate::geometry::{ActiveSet, ContactSettings, Cycle, PairSpec, Pose3};
+use crate::{BodyId, BuildError, Model, Program, ProgramError, SolverSettings};
+
+/// What the fast loop should be given after a cycle.
+#[derive(Debug)]
+pub enum ContactUpdate {
+    /// Nothing changed that the fast loop needs.
+    None,
+    /// Witness features changed inside tracked pairs: [`ContactManager::table`]
+    /// holds the new table for [`ContactManager::current_model`].
+    Table,
+    /// The set of tracked pairs changed (or a penetration was backed up):
+    /// run `program` from now on. With `reset`, its q replaces the running
+    /// one (the backup to the last clean configuration); without, the running
+    /// state carries over.
+    Program {
+        /// The program, its witness table applied.
+        program: Box<Program>,
+        /// The configuration to restart from (a backup), if any.
+        reset: Option<Vec<f64>>,
+    },
+}
+
+/// Why a contact program could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum ContactError {
+    /// The model with the contact rows could not be built.
+    #[error("contact rows: {0}")]
+    Build(#[from] BuildError),
+    /// Its program could not be built.
+    #[error("contact program: {0}")]
+    Program(#[from] ProgramError),
+}
+
+/// The slow loop's contact state (see the module docs).
+#[derive(Debug)]
+pub struct ContactManager {
+    active: ActiveSet,
+    /// The mechanism without contact rows.
+    base: Arc<Model>,
+    /// The model of the program the fast loop was last given.
+    current: Arc<Model>,
+    /// The pairs of `current`.
+    pairs: Vec<PairSpec>,
+    settings: SolverSettings,
+    table: Vec<Witness>,
+    /// The table the fast loop last received (with `current`'s program or
+    /// as a table).
+    published: Vec<Witness>,
+    /// q of the last snapshot without a penetration beyond the tolerance.
+    last_clean: Option<Vec<f64>>,
+    poses: Vec<Pose3>,
+}
+
+impl ContactManager {
+    /// The contact manager of `base` (`None` when fewer than two bodies have
+    /// a shape: such scenes compile without any contact machinery).
+    pub fn new(
+        base: Arc<Model>,
+        settings: SolverSettings,
+        contact: ContactSettings,
+    ) -> Option<Self> {
+        let bodies = contact_bodies(&base);
+        if bodies.iter().flatten().count() < 2 {
+            return None;
+        }
+        let active = ActiveSet::new(bodies, jointed_pairs(&base), contact);
+        Some(Self {
+            active,
+            current: base.clone(),
+            base,
+            pairs: Vec::new(),
+            settings,
+            table: Vec::new(),
+            published: Vec::new(),
+            last_clean: None,
+            poses: Vec::new(),
+        })
+    }
+
+    /// The first cycle, at `q` (before the clock starts): the program the
+    /// session starts with, its witness table applied and q set. Allocates.
+    pub fn initial(&mut self, q: &[f64]) -> Result<(Cycle, Program), ContactError> {
+        let cycle = self.cycle(q);
+        self.last_clean = Some(q.to_vec());
+        let mut program = self.build_program()?;
+        program.set_q(q)?;
+        Ok((cycle, program))
+    }
+
+    /// One cycle on a snapshot `q` of the fast loop (`solved`: its tick
+    /// succeeded). `may_send_program`: the caller can hand a program over now
+    /// (none is in flight); otherwise a structure change waits for a later
+    /// cycle and only tables are produced. Allocates (slow thread).
+    pub fn step(
+        &mut self,
+        q: &[f64],
+        solved: bool,
+        may_send_program: bool,
+    ) -> (Cycle, ContactUpdate) {
+        let cycle = self.cycle(q);
+        let penetrating = !cycle.backups.is_empty();
+        if !penetrating && solved {
+            match &mut self.last_clean {
+                Some(v) if v.len() == q.len() => v.copy_from_slice(q),
+                _ => self.last_clean = Some(q.to_vec()),
+            }
+        }
+        if !may_send_program {
+            return (cycle, self.table_update());
+        }
+        if penetrating && let Some(clean) = self.last_clean.clone() {
+            // Backup (§3.2): revert to the last clean configuration, where the
+            // pairs that penetrated are tracked (they were seen moving that
+            // far), and retry from there.
+            let again = self.cycle(&clean);
+            let mut cycle = cycle;
+            cycle.witness_changes += again.witness_changes;
+            cycle.expansions += again.expansions;
+            cycle.structure_changed |= again.structure_changed;
+            return match self.build_program() {
+                Ok(program) => (
+                    cycle,
+                    ContactUpdate::Program {
+                        program: Box::new(program),
+                        reset: Some(clean),
+                    },
+                ),
+                Err(_) => (cycle, ContactUpdate::None),
+            };
+        }
+        if self.active.pairs() != self.pairs {
+            return match self.build_program() {
+                Ok(program) => (
+                    cycle,
+                    ContactUpdate::Program {
+                        program: Box::new(program),
+                        reset: None,
+                    },
+                ),
+                Err(_) => (cycle, ContactUpdate::None),
+            };
+        }
+        (cycle, self.table_update())
+    }
+
+    /// A table for the running program if its witnesses changed.
+    fn table_update(&mut self) -> ContactUpdate {
+        if self.active.pairs() != self.pairs {
+            // The running program has other pairs: its table cannot hold
+            // these; wait until the structure change can be sent.
+            return ContactUpdate::None;
+        }
+        self.active.fill(&mut self.table);
+        if self.table == self.published {
+            return ContactUpdate::None;
+        }
+        self.published.clone_from(&self.table);
+        ContactUpdate::Table
+    }
+
+    /// The poses of the last cycle, one per model body.
+    pub fn poses(&self) -> &[Pose3] {
+        &self.poses
+    }
+
+    /// The model of the program last built (re-projections build on it).
+    pub fn current_model(&self) -> &Arc<Model> {
+        &self.current
+    }
+
+    /// The witness table of [`current_model`](Self::current_model), as last
+    /// published.
+    pub fn published(&self) -> &[Witness] {
+        &self.published
+    }
+
+    /// The active set (tracked pairs, their witnesses).
+    pub fn active_set(&self) -> &ActiveSet {
+        &self.active
+    }
+
+    /// A program for the current model with the published table (for a
+    /// re-projection sent by the caller). Allocates.
+    pub fn program_for_current(&self) -> Result<Program, ProgramError> {
+        let mut program = Program::new(self.current.clone(), self.settings)?;
+        program.apply_witnesses(&self.published);
+        Ok(program)
+    }
+
+    fn cycle(&mut self, q: &[f64]) -> Cycle {
+        self.poses.clear();
+        for i in 0..self.base.bodies().len() {
+            let id = BodyId(i as u32);
+            let pose = match (
+                self.base.body_position(q, id),
+                self.base.body_rotation(q, id),
+            ) {
+                (Some(r), Some(rot)) => Pose3 { r, rot },
+                _ => Pose3::IDENTITY,
+            };
+            self.poses.push(pose);
+        }
+        self.active.update(&self.poses)
+    }
+
+    /// A program for the active set's pairs, its table applied.
+    fn build_program(&mut self) -> Result<Program, ContactError> {
+        let pairs = self.active.pairs();
+        let model = Arc::new(self.base.with_contacts(&pairs)?);
+        self.active.fill(&mut self.table);
+        let mut program = Program::new(model.clone(), self.settings)?;
+        program.apply_witnesses(&self.table);
+        self.current = model;
+        self.pairs = pairs;
+        self.published.clone_from(&self.table);
+        Ok(program)
+    }
+}
