@@ -105,6 +105,11 @@ pub fn summary(scene: &Scene) -> String {
             HandPath::Still => "still".to_string(),
             HandPath::Circle { radius_m, hz, .. } => format!("circle r = {radius_m} m at {hz} Hz"),
             HandPath::Line { to_m, seconds } => format!("line to {to_m:?} m over {seconds} s"),
+            HandPath::Waypoints { points } => format!(
+                "{} waypoints over {} s",
+                points.len(),
+                points.last().map_or(0.0, |p| p[0])
+            ),
             HandPath::Trace { path, .. } => format!("trace {}", path.display()),
         };
         out += &format!(

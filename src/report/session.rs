@@ -128,6 +128,37 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     for e in &s.safety.device_events {
         let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
     }
+    if let Some(c) = &s.contact {
+        let _ = writeln!(
+            out,
+            "contact: max penetration {:.3} mm (exact, per slow-loop snapshot: {:.3} mm; witness rows, per tick: {:.3} mm); \
+             up to {} rows active, {} pairs tracked",
+            c.max_penetration_m * 1e3,
+            c.max_penetration_exact_m * 1e3,
+            c.max_penetration_rows_m * 1e3,
+            c.max_active,
+            c.max_tracked_pairs
+        );
+        let _ = writeln!(
+            out,
+            "  {} witness changes, {} tables, {} new programs (build mean {:.0} µs, max {:.0} µs), {} backups, \
+             {} expansions, {} in-tick activations ({} ticks at the limit)",
+            c.witness_changes,
+            c.witness_tables,
+            c.structure_changes,
+            c.build_us_mean,
+            c.build_us_max,
+            c.backups,
+            c.expansions,
+            c.activations,
+            c.activation_limit_ticks
+        );
+        let _ = writeln!(
+            out,
+            "  witness → fast loop: {} updates, latency mean {:.1} ticks, max {} ticks; slow-loop contact cycle mean {:.0} µs, max {:.0} µs",
+            c.updates, c.latency_ticks_mean, c.latency_ticks_max, c.cycle_us_mean, c.cycle_us_max
+        );
+    }
     match &s.slow_loop.reference_missing {
         None => {
             let _ = writeln!(

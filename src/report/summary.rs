@@ -148,6 +148,67 @@ pub struct SlowLoop {
     pub reference_force_error_n: f64,
 }
 
+/// What the contact machinery saw and did (scenes whose shaped bodies can
+/// touch; absent otherwise).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Contact {
+    /// Deepest penetration seen, m: the larger of the two below.
+    #[serde(with = "super::figure")]
+    pub max_penetration_m: f64,
+    /// Deepest penetration measured exactly (parry, separating axis) in the
+    /// fast loop's snapshots, every slow-loop cycle, m.
+    #[serde(with = "super::figure")]
+    pub max_penetration_exact_m: f64,
+    /// Deepest violation of a witness row in use at the end of a tick that
+    /// succeeded, every tick, m.
+    #[serde(with = "super::figure")]
+    pub max_penetration_rows_m: f64,
+    /// Most witness rows active (pushing) in one tick.
+    pub max_active: u32,
+    /// Primitive witnesses whose features changed inside tracked pairs.
+    pub witness_changes: u64,
+    /// Backups: a penetration beyond the tolerance (or a tunnel) seen in a
+    /// snapshot, answered by reverting to the last clean configuration.
+    pub backups: u64,
+    /// Witnesses expanded to a higher-dimensional feature on penetration.
+    pub expansions: u64,
+    /// New programs because the set of tracked pairs changed.
+    pub structure_changes: u64,
+    /// Witness tables published for the running program.
+    pub witness_tables: u64,
+    /// Most pairs tracked at once.
+    pub max_tracked_pairs: u32,
+    /// In-tick activations (refactorisations for a contact a step would
+    /// have violated).
+    pub activations: u64,
+    /// Ticks that ran out of activations.
+    pub activation_limit_ticks: u64,
+    /// Most fingertip contacts sticking (friction) at once.
+    pub max_sticking: u32,
+    /// Witness updates (tables and programs) the fast loop took over.
+    pub updates: u64,
+    /// Ticks from the snapshot an update was computed from to the tick that
+    /// used it: mean.
+    #[serde(with = "super::figure")]
+    pub latency_ticks_mean: f64,
+    /// Same, largest.
+    pub latency_ticks_max: u64,
+    /// One slow-loop contact cycle (broad + narrow phase, witnesses), µs:
+    /// mean and largest.
+    #[serde(with = "super::figure")]
+    pub cycle_us_mean: f64,
+    /// Same, largest.
+    #[serde(with = "super::figure")]
+    pub cycle_us_max: f64,
+    /// Building a program for a new set of pairs (symbolic analysis
+    /// included), µs: mean and largest.
+    #[serde(with = "super::figure")]
+    pub build_us_mean: f64,
+    /// Same, largest.
+    #[serde(with = "super::figure")]
+    pub build_us_max: f64,
+}
+
 /// The whole summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -191,6 +252,9 @@ pub struct Summary {
     pub slow_loop: SlowLoop,
     /// Programs the slow loop handed over.
     pub programs_swapped: u64,
+    /// Contact figures (absent for scenes without contact).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<Contact>,
     /// Trace samples dropped (queue full).
     pub trace_dropped: u64,
     /// What the OS granted the fast thread (real-time mode).
@@ -308,6 +372,38 @@ impl Summary {
                 reference_force_error_n: o.slow.reference_force_error_n,
             },
             programs_swapped: s.programs_swapped,
+            contact: o.slow.contact.map(|c| {
+                let f = &s.contact;
+                let mean = |sum: u64, n: u64| {
+                    if n == 0 {
+                        f64::NAN
+                    } else {
+                        sum as f64 / n as f64
+                    }
+                };
+                Contact {
+                    max_penetration_m: c.max_penetration_m.max(f.max_penetration_m),
+                    max_penetration_exact_m: c.max_penetration_m,
+                    max_penetration_rows_m: f.max_penetration_m,
+                    max_active: f.max_active,
+                    witness_changes: c.witness_changes,
+                    backups: c.backups,
+                    expansions: c.expansions,
+                    structure_changes: c.structure_changes,
+                    witness_tables: c.frames,
+                    max_tracked_pairs: c.max_tracked,
+                    activations: f.activations,
+                    activation_limit_ticks: f.activation_limit_ticks,
+                    max_sticking: f.max_sticking,
+                    updates: f.updates,
+                    latency_ticks_mean: mean(f.latency_sum_ticks, f.updates),
+                    latency_ticks_max: f.latency_max_ticks,
+                    cycle_us_mean: mean(c.cycle_ns_sum, c.cycles) / 1e3,
+                    cycle_us_max: c.cycle_ns_max as f64 / 1e3,
+                    build_us_mean: mean(c.build_ns_sum, c.structure_changes) / 1e3,
+                    build_us_max: c.build_ns_max as f64 / 1e3,
+                }
+            }),
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,

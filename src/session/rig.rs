@@ -118,6 +118,16 @@ fn scene_to_device_trajectory(
             to_m: v(*to_m),
             duration: Duration::from_secs_f64(*seconds),
         },
+        HandPath::Waypoints { points } => {
+            let pts: Vec<(Duration, Vector3<f64>)> = points
+                .iter()
+                .map(|p| (Duration::from_secs_f64(p[0]), v([p[1], p[2], p[3]])))
+                .collect();
+            Trajectory::Trace(
+                haptloop_devices::HandTrace::from_points(&pts)
+                    .expect("waypoints are checked when the scene loads"),
+            )
+        }
         HandPath::Trace { .. } => {
             Trajectory::Trace(trace.cloned().expect("traces are loaded with the scene"))
         }

@@ -81,23 +81,62 @@ pub(crate) struct Projected {
     y: Vec<f64>,
     g: Vec<f64>,
     mg: Vec<f64>,
-    /// 1 / (K w m̄) per finger row, F order.
+    /// 1 / (K w m̄) per finger row, F order; coupling rows (contact-finger
+    /// proxies) are set per step from the tick's dt.
     k_inv: Vec<f64>,
-    /// First row and row count of each finger constraint.
-    fingers: Vec<(usize, usize)>,
+    /// First row and row count of each finger constraint (model finger
+    /// order), and whether it is a coupling (proxy).
+    fingers: Vec<(usize, usize, bool)>,
+    /// F index of each finger's first row (model finger order).
+    f_first: Vec<usize>,
+}
+
+/// The virtual coupling of contact-finger proxies, as the projected step
+/// needs it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CouplingStep<'a> {
+    /// The tick's period, s.
+    pub dt_s: f64,
+    /// Spring k, N/m.
+    pub stiffness_n_per_m: f64,
+    /// Damper c, N·s/m.
+    pub damping_n_s_per_m: f64,
+    /// p − t of each finger at the end of the previous tick (model finger
+    /// order), m.
+    pub prev_error: &'a [nalgebra::Vector3<f64>],
 }
 
 impl Projected {
     /// Buffers for `model`. Allocates.
-    pub fn new(model: &Model, gain: f64, finger_weight: f64, mean_mass_kg: f64) -> Self {
-        let fingers: Vec<(usize, usize)> = model
+    pub fn new(
+        model: &Model,
+        s: &Scaling,
+        gain: f64,
+        finger_weight: f64,
+        mean_mass_kg: f64,
+    ) -> Self {
+        let fingers: Vec<(usize, usize, bool)> = model
             .fingers()
             .iter()
             .map(|f| {
                 let rows = &model.constraints()[f.constraint.index()].rows;
-                (rows.start, rows.len())
+                (
+                    rows.start,
+                    rows.len(),
+                    s.role.get(rows.start) == Some(&Role::Coupling),
+                )
             })
             .collect();
+        // F order is model row order over the finger rows (as in the Gram
+        // matrix).
+        let mut order: Vec<usize> = (0..fingers.len()).collect();
+        order.sort_by_key(|&k| fingers[k].0);
+        let mut f_first = vec![0; fingers.len()];
+        let mut next = 0;
+        for &k in &order {
+            f_first[k] = next;
+            next += fingers[k].1;
+        }
         let m_f = fingers.iter().map(|f| f.1).sum();
         let (n, m) = (model.n_coords(), model.n_rows());
         Self {
@@ -110,6 +149,7 @@ impl Projected {
             mg: vec![0.0; n],
             k_inv: vec![1.0 / (gain * finger_weight * mean_mass_kg); m_f],
             fingers,
+            f_first,
         }
     }
 
@@ -135,6 +175,7 @@ impl Projected {
         targets: &[FingerTarget],
         step: f64,
         max_size_m: f64,
+        coupling: &CouplingStep,
         lambda: &mut [f64],
     ) -> Result<Step, TickOutcome> {
         ev.evaluate_values(model, q, targets)
@@ -149,8 +190,27 @@ impl Projected {
         for i in 0..c.len() {
             self.r[i] = scale[i] * (c[i] - self.jd[i]);
         }
+        // Proxies: the implicit spring-damper over one tick, weight
+        // w = k dt² + c dt toward t + (c dt / w) (p_prev − t_prev).
+        let w = coupling.stiffness_n_per_m * coupling.dt_s * coupling.dt_s
+            + coupling.damping_n_s_per_m * coupling.dt_s;
+        let w = w.max(1e-15);
+        let damp = coupling.damping_n_s_per_m * coupling.dt_s / w;
+        for (k, &(r0, n, proxy)) in self.fingers.iter().enumerate() {
+            if !proxy {
+                continue;
+            }
+            let e = coupling.prev_error.get(k).copied().unwrap_or_default();
+            for (c3, i) in (r0..r0 + n.min(3)).enumerate() {
+                self.r[i] = scale[i] * (c[i] - damp * e[c3] - self.jd[i]);
+                self.k_inv[self.f_first[k] + c3] = 1.0 / w;
+            }
+        }
         // The pull limit: a finger group farther than d pulls as if d away.
-        for &(r0, n) in &self.fingers {
+        for &(r0, n, proxy) in &self.fingers {
+            if proxy {
+                continue;
+            }
             for g0 in (r0..r0 + n).step_by(3) {
                 let norm = (g0..g0 + 3)
                     .map(|i| (s.ell[i] * c[i]).powi(2))
@@ -206,7 +266,7 @@ impl Projected {
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
                 Role::Equality | Role::Friction => y,
-                Role::Finger | Role::Redundant => 0.0,
+                Role::Finger | Role::Coupling | Role::Redundant => 0.0,
                 Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }

@@ -37,6 +37,13 @@ pub(crate) enum Role {
     Equality,
     /// A finger row: penalty only (a weighted objective term, no multiplier).
     Finger,
+    /// A contact finger's row with inertial motion on: the virtual coupling
+    /// (spring k, damper c) between the fingertip proxy and the device
+    /// target. The projected step weighs it by k dt² + c dt (the implicit
+    /// spring over one tick, not a stiff penalty), and the force solve takes
+    /// its force as known: k (p − t) + c (ṗ − ṫ), felt by the user and
+    /// pushing the fingertip, so the contact multipliers come out physical.
+    Coupling,
     /// C ≥ 0 with a projected multiplier ν ≥ 0 (joint limits).
     Inequality,
     /// A contact witness row: C ≥ 0 like [`Role::Inequality`], but its
@@ -83,7 +90,13 @@ impl Scaling {
         let (mut penalty, mut integral) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for row in model.rows() {
             let info = &model.constraints()[row.constraint.index()];
+            let proxy = s.dynamics
+                && s.update == crate::UpdateRule::Projected
+                && info
+                    .finger
+                    .is_some_and(|f| model.fingers()[f.index()].tip.is_some());
             let r = match (info.finger.is_some(), row.sense) {
+                (true, _) if proxy => Role::Coupling,
                 (true, _) => Role::Finger,
                 (false, Sense::Equality) => Role::Equality,
                 (false, Sense::Inequality) if info.kind == ConstraintKind::Contact => Role::Contact,
@@ -94,7 +107,7 @@ impl Scaling {
                 RowUnit::Length => 1.0,
                 RowUnit::Angle | RowUnit::Dimensionless => l,
             };
-            let w = if r == Role::Finger {
+            let w = if matches!(r, Role::Finger | Role::Coupling) {
                 s.finger_weight
             } else {
                 1.0
@@ -103,7 +116,7 @@ impl Scaling {
             ell.push(e);
             let frozen = r == Role::Friction;
             penalty.push(if frozen { 0.0 } else { s.gain * w * e * e });
-            integral.push(if r == Role::Finger || frozen {
+            integral.push(if matches!(r, Role::Finger | Role::Coupling) || frozen {
                 0.0
             } else {
                 s.multiplier_gain * e * e

@@ -35,7 +35,7 @@ pub(crate) fn row_weight(s: &Scaling, i: usize, c: f64, lambda: &mut f64) -> f64
             *lambda += s.integral[i] * c;
             *lambda + s.penalty[i] * c
         }
-        Role::Finger => s.penalty[i] * c,
+        Role::Finger | Role::Coupling => s.penalty[i] * c,
         Role::Inequality | Role::Contact => {
             *lambda = (*lambda - s.integral[i] * c).max(0.0);
             -(*lambda - s.penalty[i] * c).max(0.0)
@@ -113,7 +113,8 @@ impl Violation {
         let (mut sum, mut count) = (0.0, 0usize);
         for (i, (&ci, row)) in c.iter().zip(model.rows()).enumerate() {
             let e = match (s.role[i], row.sense) {
-                (Role::Finger | Role::Friction, _) | (Role::Redundant, Sense::Friction) => continue,
+                (Role::Finger | Role::Coupling | Role::Friction, _)
+                | (Role::Redundant, Sense::Friction) => continue,
                 (Role::Contact, _) => {
                     v.max_penetration_m = v.max_penetration_m.max(-ci);
                     continue;

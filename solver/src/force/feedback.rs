@@ -27,6 +27,9 @@ struct FingerRows {
     offset: usize,
     point: Vector3<f64>,
     rigid: bool,
+    /// A contact finger's proxy under inertial motion (its rows have
+    /// [`Role::Coupling`]): the coupling force is known, not solved for.
+    proxy: bool,
 }
 
 /// Buffers and factor of the force computation.
@@ -55,6 +58,13 @@ pub(crate) struct Feedback {
     pub friction: Vec<FrictionPair>,
     /// Ticks on which a sticking pair left the Coulomb cone (slipped).
     slips: u64,
+    /// Per finger: p − t and its rate at this compute (the coupling).
+    coupling: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// F order: finger multipliers known in advance (proxies).
+    known: Vec<Option<f64>>,
+    /// The largest pulling force of an active contact row in the last solve,
+    /// N (0 when every contact pushes or none is active).
+    pub max_pull_n: f64,
 }
 
 impl Feedback {
@@ -74,6 +84,7 @@ impl Feedback {
             ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
         };
         let solve = MultiplierSolve::new(&gram, cg)?;
+        let m_f = gram.m_f;
         let fingers = model
             .fingers()
             .iter()
@@ -88,7 +99,11 @@ impl Feedback {
                         .find(|&p| jac.col_idx()[p] == offset)
                         .unwrap_or(span.start);
                 }
+                let proxy = settings.dynamics
+                    && settings.update == UpdateRule::Projected
+                    && f.tip.is_some();
                 FingerRows {
+                    proxy,
                     rigid: rows.len() == 6,
                     rows,
                     pos,
@@ -109,6 +124,9 @@ impl Feedback {
             forced: vec![false; model.n_rows()],
             friction: super::friction::pairs_of(model),
             slips: 0,
+            coupling: vec![(Vector3::zeros(), Vector3::zeros()); fingers.len()],
+            known: vec![None; m_f],
+            max_pull_n: 0.0,
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -164,6 +182,11 @@ impl Feedback {
     /// Mean mass of the moving bodies, kilograms.
     pub fn mean_mass_kg(&self) -> f64 {
         self.masses.iter().map(|m| m.mass).sum::<f64>() / self.masses.len().max(1) as f64
+    }
+
+    /// Each finger's p − t at the last force solve (model finger order).
+    pub fn prev_errors_snapshot(&self) -> &[Vector3<f64>] {
+        &self.prev_error
     }
 
     /// Carries finger `from` of `old`'s coupling history into finger `to`.
@@ -255,6 +278,7 @@ impl Feedback {
                 &mut self.b[o..o + 7],
             );
         }
+        self.couplings(s, settings, q, targets, dt_s)?;
         self.activate(s, ev.values(), lambda);
         self.solve_multipliers(ev, settings)?;
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
@@ -283,14 +307,27 @@ impl Feedback {
                     lt2 += (s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).powi(2);
                 }
             }
-            let grip = super::friction::grip(
-                model,
-                q,
-                ev.witnesses(),
-                targets,
-                settings.coupling_stiffness_n_per_m,
-                &p,
-            );
+            let grip = if self.fingers[p.finger].proxy {
+                // The contact's own normal force (Eq. 7, physical).
+                (p.normal_rows[0]..p.normal_rows[1])
+                    .filter(|&row| self.scale[row] != 0.0)
+                    .filter_map(|row| match self.gram.slot[row] {
+                        super::gram::Slot::J(j) => Some(
+                            (-s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).max(0.0),
+                        ),
+                        _ => None,
+                    })
+                    .sum()
+            } else {
+                super::friction::grip(
+                    model,
+                    q,
+                    ev.witnesses(),
+                    targets,
+                    settings.coupling_stiffness_n_per_m,
+                    &p,
+                )
+            };
             if lt2.sqrt() > p.mu * grip {
                 for &row in &p.rows {
                     self.stick[row] = false;
@@ -301,11 +338,13 @@ impl Feedback {
             }
         }
         if !released {
-            return self.wrenches(s, settings, q, ev, targets, dt_s, out);
+            self.max_pull_n = self.contact_pull(s);
+            return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
         self.solve_multipliers(ev, settings)?;
-        self.wrenches(s, settings, q, ev, targets, dt_s, out)?;
+        self.max_pull_n = self.contact_pull(s);
+        self.wrenches(s, settings, q, ev, targets, out)?;
         if settings.update == UpdateRule::Projected {
             // The projected update steps with this factor and must keep the
             // kinematic active set: whether a limit stops the motion the user
@@ -318,6 +357,18 @@ impl Feedback {
         Ok(())
     }
 
+    /// The largest pull (physical λ > 0, N) of an active contact row in the
+    /// last solve.
+    fn contact_pull(&self, s: &Scaling) -> f64 {
+        let mut pull: f64 = 0.0;
+        for (j, &row) in self.gram.j_rows.iter().enumerate() {
+            if s.role[row] == Role::Contact && self.scale[row] != 0.0 {
+                pull = pull.max(s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j));
+            }
+        }
+        pull
+    }
+
     /// Row scales: ℓ_i for equality and finger rows and for inequality rows
     /// with ν > 0 or C < −band; 0 for the other inequality rows and for
     /// redundant (masked) rows, which the assembly then decouples (unit
@@ -328,7 +379,7 @@ impl Feedback {
                 Role::Inequality | Role::Contact => {
                     lambda[i] > 0.0 || c[i] < -INEQUALITY_ACTIVE_BAND || self.forced[i]
                 }
-                Role::Equality | Role::Finger => true,
+                Role::Equality | Role::Finger | Role::Coupling => true,
                 Role::Friction => self.stick.get(i).copied().unwrap_or(false),
                 Role::Redundant => false,
             };
@@ -369,7 +420,40 @@ impl Feedback {
         for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
             *v *= sc;
         }
-        self.solve.solve(&self.gram, &self.cy)
+        self.solve.solve(&self.gram, &self.cy, &self.known)
+    }
+
+    /// Each finger's coupling error p − t and its rate, and the known
+    /// multipliers of proxies: λ_F = k (p − t) + c (ṗ − ṫ) (the coupling's
+    /// force on the fingertip is −λ_F).
+    fn couplings(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        targets: &[FingerTarget],
+        dt_s: f64,
+    ) -> Result<(), FactorError> {
+        for (k, fr) in self.fingers.iter().enumerate() {
+            let f = frame(q, fr.offset).ok_or(FactorError)?;
+            let err = f.point(&fr.point) - targets[k].position_m;
+            let rate = if self.motion.ticks > 1 && dt_s > 0.0 {
+                (err - self.prev_error[k]) / dt_s
+            } else {
+                Vector3::zeros()
+            };
+            self.coupling[k] = (err, rate);
+            if fr.proxy {
+                let force = err * settings.coupling_stiffness_n_per_m
+                    + rate * settings.coupling_damping_n_s_per_m;
+                for (c, r) in fr.rows.clone().take(3).enumerate() {
+                    if let Slot::F(fi) = self.gram.slot[r] {
+                        self.known[fi] = Some(force[c] / s.ell[r]);
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -380,7 +464,6 @@ impl Feedback {
         q: &[f64],
         ev: &Evaluation,
         targets: &[FingerTarget],
-        dt_s: f64,
         out: &mut [FingerOutput],
     ) -> Result<(), FactorError> {
         let vals = ev.jacobian().values();
@@ -388,6 +471,9 @@ impl Feedback {
             let f = frame(q, fr.offset).ok_or(FactorError)?;
             let mut w_c = [0.0; 7];
             for (n, r) in fr.rows.clone().enumerate() {
+                if fr.proxy {
+                    break;
+                }
                 let Slot::F(fi) = self.gram.slot[r] else {
                     continue;
                 };
@@ -399,12 +485,7 @@ impl Feedback {
             let p = f.point(&fr.point);
             let (force, torque) = on_finger(&f, &p, &w_c);
             let t = &targets[k];
-            let err = p - t.position_m;
-            let rate = if self.motion.ticks > 1 {
-                (err - self.prev_error[k]) / dt_s
-            } else {
-                Vector3::zeros()
-            };
+            let (err, rate) = self.coupling[k];
             self.prev_error[k] = err;
             let coupling = err * settings.coupling_stiffness_n_per_m
                 + rate * settings.coupling_damping_n_s_per_m;

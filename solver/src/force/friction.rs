@@ -31,6 +31,8 @@ pub const STICK_SPEED_M_S: f64 = 2e-3;
 pub(crate) struct FrictionPair {
     /// The two stick rows (model row indices).
     pub rows: [usize; 2],
+    /// The pair's witness (normal) rows: first, one past the last.
+    pub normal_rows: [usize; 2],
     /// Their witness-table slots.
     pub slots: [usize; 2],
     /// The fingertip's finger.
@@ -53,6 +55,10 @@ pub(crate) fn pairs_of(model: &Model) -> Vec<FrictionPair> {
             let n_normal = model.constraints()[p.normal.index()].rows.len();
             let s0 = p.first_slot + n_normal;
             Some(FrictionPair {
+                normal_rows: {
+                    let r = &model.constraints()[p.normal.index()].rows;
+                    [r.start, r.end]
+                },
                 rows: [rows.start, rows.start + 1],
                 slots: [s0, s0 + 1],
                 finger: p.finger?.index(),

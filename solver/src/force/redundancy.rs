@@ -253,7 +253,7 @@ pub(crate) fn detect(
     let mut scale: Vec<f64> = (0..model.n_rows())
         .map(|i| match s.role[i] {
             Role::Inequality | Role::Redundant | Role::Contact | Role::Friction => 0.0,
-            Role::Equality | Role::Finger => s.ell[i],
+            Role::Equality | Role::Finger | Role::Coupling => s.ell[i],
         })
         .collect();
     let ratio = if f.factor(&scale) {

@@ -109,13 +109,20 @@ impl MultiplierSolve {
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
-    /// λ̃_F given the scaled right-hand side `r` (one entry per row of C).
+    /// λ̃_F given the scaled right-hand side `r` (one entry per row of C);
+    /// `known` (F order): finger multipliers fixed in advance (proxies'
+    /// coupling forces), the others solved for.
     ///
     /// # Real-time
     /// No allocation (faer runs in the preallocated `MemBuffer`), no locks;
     /// time bounded by the symbolic factor: one numeric LLᵀ, 1 + m_f
     /// triangular solve pairs, and an m_f × m_f Jacobi eigensolve.
-    pub fn solve(&mut self, gram: &Gram, r: &[f64]) -> Result<(), FactorError> {
+    pub fn solve(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        known: &[Option<f64>],
+    ) -> Result<(), FactorError> {
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
         let a_fj = &gram.values[nnz..nnz + m * n];
         let a_ff = &gram.values[nnz + m * n..];
@@ -153,6 +160,19 @@ impl MultiplierSolve {
             }
         }
         self.schur_keep.copy_from_slice(&self.schur);
+        // Rows whose multiplier is known (a proxy's coupling force): move
+        // their part to the right-hand side and take them out of S.
+        for (f, k) in known.iter().enumerate() {
+            let Some(v) = *k else { continue };
+            for (g, kg) in known.iter().enumerate() {
+                if kg.is_none() {
+                    self.schur_rhs[g] -= self.schur[g * m + f] * v;
+                }
+                self.schur[g * m + f] = 0.0;
+                self.schur[f * m + g] = 0.0;
+            }
+            self.schur_rhs[f] = 0.0;
+        }
         let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
         self.rank = min_norm_solve(
             &mut self.schur,
@@ -161,6 +181,11 @@ impl MultiplierSolve {
             &mut self.eig,
             reference,
         );
+        for (f, k) in known.iter().enumerate() {
+            if let Some(v) = *k {
+                self.lambda_f[f] = v;
+            }
+        }
         if self.lambda_f.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {

@@ -57,6 +57,13 @@ impl Program {
         self.ev.witnesses()
     }
 
+    /// The largest pulling force of an active contact row in the last
+    /// tick's force solve, N: 0 when every contact pushes. (A contact that
+    /// would pull is released and the solve repeated; this is what remains.)
+    pub fn contact_pull_n(&self) -> f64 {
+        self.feedback.max_pull_n
+    }
+
     /// Friction pairs that left the Coulomb cone (slipped) since the program
     /// was built.
     pub fn slips(&self) -> u64 {
@@ -73,10 +80,14 @@ impl Program {
         let keep = (1.0 - DYNAMIC_DAMPING_PER_S * dt_s).max(0.0);
         let mo = &self.feedback.motion;
         for (k, m) in self.feedback.masses.iter().enumerate() {
-            if !m.weighs {
-                continue;
-            }
             let o = m.offset;
+            // A fingertip keeps its momentum too (a proxy on its coupling
+            // spring); the hand carries its weight.
+            let g = if m.weighs {
+                g
+            } else {
+                nalgebra::Vector3::zeros()
+            };
             let dr = mo.v[k] * (keep * dt_s) + g * (dt_s * dt_s);
             for c in 0..3 {
                 self.q_goal[o + c] += dr[c];

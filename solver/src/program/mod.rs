@@ -97,6 +97,11 @@ pub struct Program {
     q_goal: Vec<f64>,
     /// Refactorisations for in-tick activation this tick.
     activations: u32,
+    /// The period of the last tick, s (the coupling of contact-finger
+    /// proxies integrates over it; 1 ms before the first tick).
+    last_dt_s: f64,
+    /// Scratch: each finger's coupling error at the last force solve.
+    prev_error_buf: Vec<nalgebra::Vector3<f64>>,
     /// Per witness-table slot: a friction stick row (its anchor is the fast
     /// loop's own while the contact persists).
     friction_slot: Vec<bool>,
@@ -152,6 +157,7 @@ impl Program {
         let limits = divergence_limits(&scaling, &settings, feedback.mean_mass_kg());
         let projected = Projected::new(
             &model,
+            &scaling,
             settings.gain,
             settings.finger_weight,
             feedback.mean_mass_kg(),
@@ -172,6 +178,8 @@ impl Program {
             q_ref: model.q0().to_vec(),
             q_goal: model.q0().to_vec(),
             activations: 0,
+            last_dt_s: 1e-3,
+            prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
             friction_slot,
             friction_pair,
             lambda: vec![0.0; m],

@@ -137,14 +137,46 @@ impl Program {
                 self.last_targets[k] = old.last_targets[j];
             }
         }
-        let _ = self.refresh();
+        // Coupling histories before the refresh: a proxy's coupling rate is
+        // a difference with them.
         for k in 0..nf.len() {
             if let Some(j) = match_index(k, of.len(), |a, b| nf[a].name == of[b].name) {
                 self.feedback.copy_finger(k, &old.feedback, j);
                 self.outputs[k] = old.outputs[j];
             }
         }
+        self.adopt_friction(old);
+        let _ = self.refresh();
         self.report = old.report;
+    }
+
+    /// Friction contacts that survive a hand-over (same fingertip, same
+    /// touched body) keep their stick state and anchors: a new set of pairs
+    /// elsewhere in the scene must not make a held object slip.
+    ///
+    /// # Real-time
+    /// No allocation; O(friction pairs²) name comparisons.
+    fn adopt_friction(&mut self, old: &Program) {
+        let (nm, om) = (&*self.model, &*old.model);
+        fn name(m: &crate::Model, b: crate::BodyId) -> &str {
+            m.bodies()[b.index()].name.as_str()
+        }
+        for k in 0..self.feedback.friction.len() {
+            let np = &nm.contact().pairs[self.friction_pair[k]];
+            let Some(j) = (0..old.feedback.friction.len()).find(|&j| {
+                let op = &om.contact().pairs[old.friction_pair[j]];
+                name(nm, np.bodies[0]) == name(om, op.bodies[0])
+                    && name(nm, np.bodies[1]) == name(om, op.bodies[1])
+            }) else {
+                continue;
+            };
+            let (n, o) = (self.feedback.friction[k], old.feedback.friction[j]);
+            for c in 0..2 {
+                self.feedback.stick[n.rows[c]] = old.feedback.stick[o.rows[c]];
+                let w = old.ev.witnesses()[o.slots[c]];
+                self.ev.witnesses_mut()[n.slots[c]] = w;
+            }
+        }
     }
 }
 

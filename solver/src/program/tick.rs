@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use super::report::max_tracking;
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
-use crate::al::projected::Step;
+use crate::al::projected::{CouplingStep, Step};
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
@@ -233,6 +233,7 @@ impl Program {
     }
 
     fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
+        self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
@@ -403,6 +404,14 @@ impl Program {
         step: f64,
         allowed: f64,
     ) -> Result<Step, TickOutcome> {
+        let prev = self.feedback.prev_errors_snapshot();
+        self.prev_error_buf.copy_from_slice(prev);
+        let coupling = CouplingStep {
+            dt_s: self.last_dt_s,
+            stiffness_n_per_m: self.settings.coupling_stiffness_n_per_m,
+            damping_n_s_per_m: self.settings.coupling_damping_n_s_per_m,
+            prev_error: &self.prev_error_buf,
+        };
         self.projected.step(
             &self.model,
             &self.scaling,
@@ -413,6 +422,7 @@ impl Program {
             targets,
             step,
             allowed,
+            &coupling,
             &mut self.lambda,
         )
     }

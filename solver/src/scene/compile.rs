@@ -80,6 +80,12 @@ pub enum HandPath {
         /// s.
         seconds: f64,
     },
+    /// Offsets at given times, linearly interpolated (an inline trace):
+    /// `[t_s, dx_m, dy_m, dz_m]`, times strictly increasing.
+    Waypoints {
+        /// The points.
+        points: Vec<[f64; 4]>,
+    },
     /// A CSV trace, path resolved relative to the scene file.
     Trace {
         /// Resolved path.
@@ -368,6 +374,10 @@ impl LoadedScene {
             HandPath::Line {
                 to_m: l.get_ref().to.get(),
                 seconds: l.get_ref().seconds,
+            }
+        } else if let Some(w) = &h.waypoints {
+            HandPath::Waypoints {
+                points: w.get_ref().iter().map(|p| p.get()).collect(),
             }
         } else if let Some(t) = &h.trace {
             let rel = PathBuf::from(t.get_ref());

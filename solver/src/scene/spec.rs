@@ -304,6 +304,9 @@ pub struct HandSection {
     /// CSV `t,dx,dy,dz`, relative to the scene file.
     #[serde(default)]
     pub trace: Option<Spanned<String>>,
+    /// Extra: an inline trace, `[t, dx, dy, dz]` per point.
+    #[serde(default)]
+    pub waypoints: Option<Spanned<Vec<Arr<f64, 4>>>>,
     /// Grip stiffness, N/m.
     #[serde(default)]
     pub stiffness: Option<Spanned<f64>>,

@@ -320,12 +320,46 @@ impl Checker<'_> {
             hs.circle.is_some(),
             hs.line.is_some(),
             hs.trace.is_some(),
+            hs.waypoints.is_some(),
         ];
         if kinds.iter().filter(|&&k| k).count() != 1 {
             return Err(self.err(
                 h.span(),
-                "hand needs exactly one of `still`, `circle`, `line` or `trace`",
+                "hand needs exactly one of `still`, `circle`, `line`, `waypoints` or `trace`",
             ));
+        }
+        if let Some(w) = &hs.waypoints {
+            const MAX_OFFSET_M: f64 = 10.0;
+            let pts = w.get_ref();
+            if pts.is_empty() {
+                return Err(self.err(w.span(), "waypoints needs at least one `[t, dx, dy, dz]`"));
+            }
+            let mut last = f64::NEG_INFINITY;
+            for (k, p) in pts.iter().enumerate() {
+                let [t, dx, dy, dz] = p.get();
+                if !(t.is_finite() && (0.0..=MAX_HAND_SECONDS).contains(&t)) {
+                    return Err(self.err(
+                        w.span(),
+                        format!("waypoint {k}: time {t} s must be in [0, {MAX_HAND_SECONDS}]"),
+                    ));
+                }
+                if t <= last {
+                    return Err(self.err(
+                        w.span(),
+                        format!("waypoint {k}: time {t} s is not after the one before ({last} s); times must increase"),
+                    ));
+                }
+                last = t;
+                if ![dx, dy, dz]
+                    .iter()
+                    .all(|x| x.is_finite() && x.abs() <= MAX_OFFSET_M)
+                {
+                    return Err(self.err(
+                        w.span(),
+                        format!("waypoint {k}: offset [{dx}, {dy}, {dz}] must be finite and within ±{MAX_OFFSET_M} m"),
+                    ));
+                }
+            }
         }
         if let Some(still) = &hs.still
             && !*still.get_ref()

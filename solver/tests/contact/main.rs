@@ -6,5 +6,6 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod common;
+mod pinch;
 mod rest;
 mod witness_fd;
