@@ -5,8 +5,10 @@ use crate::{ConstraintKind, Model};
 
 /// One entry per body of `model`: its collider if it has a shape (`None`
 /// otherwise, or if the shape cannot be compiled, which the scene loader has
-/// already refused). A contact finger's fingertip carries its friction.
-pub fn contact_bodies(model: &Model) -> Vec<Option<ContactBody>> {
+/// already refused). A contact finger's fingertip carries its friction;
+/// other bodies theirs when `body_friction` (inertial motion: friction
+/// between bodies is a force, and forces move bodies only then), else 0.
+pub fn contact_bodies(model: &Model, body_friction: bool) -> Vec<Option<ContactBody>> {
     model
         .bodies()
         .iter()
@@ -18,7 +20,7 @@ pub fn contact_bodies(model: &Model) -> Vec<Option<ContactBody>> {
                 .iter()
                 .find(|f| f.body.index() == i && f.tip.is_some())
                 .and_then(|f| f.tip)
-                .map_or(0.0, |t| t.friction);
+                .map_or(if body_friction { b.friction } else { 0.0 }, |t| t.friction);
             Some(ContactBody {
                 collider,
                 fixed: b.fixed,

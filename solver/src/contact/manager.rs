@@ -75,7 +75,7 @@ impl ContactManager {
         settings: SolverSettings,
         contact: ContactSettings,
     ) -> Option<Self> {
-        let bodies = contact_bodies(&base);
+        let bodies = contact_bodies(&base, settings.dynamics);
         if bodies.iter().flatten().count() < 2 {
             return None;
         }

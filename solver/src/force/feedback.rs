@@ -65,6 +65,9 @@ pub(crate) struct Feedback {
     /// The largest pulling force of an active contact row in the last solve,
     /// N (0 when every contact pushes or none is active).
     pub max_pull_n: f64,
+    /// Per friction pair: its normal force in the last solve, N (Eq. 7,
+    /// physical; kinetic friction of a slipping pair is μ times it).
+    pub normal_force_n: Vec<f64>,
 }
 
 impl Feedback {
@@ -85,6 +88,7 @@ impl Feedback {
         };
         let solve = MultiplierSolve::new(&gram, cg)?;
         let m_f = gram.m_f;
+        let friction = super::friction::pairs_of(model);
         let fingers = model
             .fingers()
             .iter()
@@ -122,7 +126,8 @@ impl Feedback {
             releases: 0,
             stick: vec![false; model.n_rows()],
             forced: vec![false; model.n_rows()],
-            friction: super::friction::pairs_of(model),
+            normal_force_n: vec![0.0; friction.len()],
+            friction,
             slips: 0,
             coupling: vec![(Vector3::zeros(), Vector3::zeros()); fingers.len()],
             known: vec![None; m_f],
@@ -307,7 +312,8 @@ impl Feedback {
                     lt2 += (s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).powi(2);
                 }
             }
-            let grip = if self.fingers[p.finger].proxy {
+            let proxy = p.finger.is_none_or(|f| self.fingers[f].proxy);
+            let grip = if proxy {
                 // The contact's own normal force (Eq. 7, physical).
                 (p.normal_rows[0]..p.normal_rows[1])
                     .filter(|&row| self.scale[row] != 0.0)
@@ -339,11 +345,13 @@ impl Feedback {
         }
         if !released {
             self.max_pull_n = self.contact_pull(s);
+            self.pair_normal_forces(s);
             return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
         self.solve_multipliers(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
+        self.pair_normal_forces(s);
         self.wrenches(s, settings, q, ev, targets, out)?;
         if settings.update == UpdateRule::Projected {
             // The projected update steps with this factor and must keep the
@@ -355,6 +363,21 @@ impl Feedback {
             self.solve_multipliers(ev, settings)?;
         }
         Ok(())
+    }
+
+    /// Each friction pair's normal force in the last solve, N.
+    fn pair_normal_forces(&mut self, s: &Scaling) {
+        for (k, p) in self.friction.iter().enumerate() {
+            self.normal_force_n[k] = (p.normal_rows[0]..p.normal_rows[1])
+                .filter(|&row| self.scale[row] != 0.0)
+                .filter_map(|row| match self.gram.slot[row] {
+                    Slot::J(j) => {
+                        Some((-s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).max(0.0))
+                    }
+                    _ => None,
+                })
+                .sum();
+        }
     }
 
     /// The largest pull (physical λ > 0, N) of an active contact row in the

@@ -1,4 +1,4 @@
-//! Coulomb friction at fingertip contacts, as the force solve sees it.
+//! Coulomb friction at contacts, as the force solve sees it.
 //!
 //! A fingertip pair with friction has two stick rows (see
 //! `constraint/witness/friction.rs`). While they **stick** they are joint
@@ -35,8 +35,8 @@ pub(crate) struct FrictionPair {
     pub normal_rows: [usize; 2],
     /// Their witness-table slots.
     pub slots: [usize; 2],
-    /// The fingertip's finger.
-    pub finger: usize,
+    /// The fingertip's finger (`None`: two bodies).
+    pub finger: Option<usize>,
     /// Coulomb μ.
     pub mu: f64,
     /// The touched body (end 1).
@@ -61,7 +61,7 @@ pub(crate) fn pairs_of(model: &Model) -> Vec<FrictionPair> {
                 },
                 rows: [rows.start, rows.start + 1],
                 slots: [s0, s0 + 1],
-                finger: p.finger?.index(),
+                finger: p.finger.map(|f| f.index()),
                 mu: p.mu,
                 body: p.bodies[1],
             })
@@ -95,10 +95,13 @@ pub(crate) fn grip(
     stiffness_n_per_m: f64,
     p: &FrictionPair,
 ) -> f64 {
+    let Some(finger) = p.finger else {
+        return 0.0;
+    };
     let (Some(n), Some(tip), Some(t)) = (
         normal(model, q, witnesses, p),
-        model.finger_point(q, crate::FingerId(p.finger as u32)),
-        targets.get(p.finger),
+        model.finger_point(q, crate::FingerId(finger as u32)),
+        targets.get(finger),
     ) else {
         return 0.0;
     };

@@ -65,7 +65,7 @@ impl Default for ContactSettings {
             contact_distance_m: 0.005,
             release_distance_m: 0.02,
             penetration_tolerance_m: 1e-4,
-            slots_per_pair: 4,
+            slots_per_pair: 8,
             finger_slots: 2,
         }
     }
@@ -81,8 +81,20 @@ pub struct ContactBody {
     /// A contact finger's fingertip: always end 0 of its pairs; two
     /// fingertips do not collide.
     pub fingertip: bool,
-    /// Coulomb μ of a fingertip's contacts (0: frictionless).
+    /// Coulomb μ of its contacts (0: frictionless). A fingertip's governs
+    /// its pairs; two other bodies use the geometric mean of theirs.
     pub friction: f64,
+}
+
+impl ContactBody {
+    /// Coulomb μ of the pair `a`–`b` (`a` the fingertip when there is one).
+    pub fn pair_friction(a: &ContactBody, b: &ContactBody) -> f64 {
+        if a.fingertip {
+            a.friction
+        } else {
+            (a.friction * b.friction).sqrt()
+        }
+    }
 }
 
 /// One tracked pair's state.
@@ -175,7 +187,12 @@ impl ActiveSet {
             .keys()
             .map(|&k| {
                 let a = self.bodies[k[0] as usize].as_ref();
+                let b = self.bodies[k[1] as usize].as_ref();
                 let fingertip = a.is_some_and(|b| b.fingertip);
+                let mu = match (a, b) {
+                    (Some(a), Some(b)) => ContactBody::pair_friction(a, b),
+                    _ => 0.0,
+                };
                 PairSpec {
                     bodies: k,
                     slots: if fingertip {
@@ -183,7 +200,7 @@ impl ActiveSet {
                     } else {
                         self.settings.slots_per_pair
                     } as u32,
-                    friction: a.is_some_and(|b| b.fingertip && b.friction > 0.0),
+                    friction: mu > 0.0,
                 }
             })
             .collect()
@@ -357,9 +374,9 @@ impl ActiveSet {
         if let Some(prev) = &was {
             cycle.witness_changes += changes(&prev.witnesses, &out);
         }
-        let friction = if a.fingertip && a.friction > 0.0 {
+        let friction = if ContactBody::pair_friction(a, b) > 0.0 {
             let carried = was.as_ref().and_then(|t| t.friction);
-            Some(carried.unwrap_or_else(|| friction_rows(&view, &q)))
+            Some(carried.unwrap_or_else(|| friction_rows(&view, &q, a.fingertip, &out)))
         } else {
             None
         };
@@ -519,11 +536,36 @@ fn fallback(view: &PairView, q: &PairQuery) -> Witness {
     })
 }
 
-/// The two stick rows of a fingertip (A) touching B, anchored at B's
-/// closest point with B's outward contact normal.
-fn friction_rows(view: &PairView, q: &PairQuery) -> [PlaneWitness; 2] {
+/// The two stick rows of A touching B, tangential to B's outward contact
+/// normal. A fingertip's centre is held over B's closest point (rolling
+/// the ball does not move it); two bodies are held together at the centre
+/// of their contact patch (the mean of the points the witness primitives
+/// hold), the same world point on both.
+fn friction_rows(
+    view: &PairView,
+    q: &PairQuery,
+    fingertip: bool,
+    primitives: &[Witness],
+) -> [PlaneWitness; 2] {
     let n_b = view.pb.local_dir(&-q.normal);
-    stick_rows(view.pb.local_point(&q.core_point_b), n_b)
+    if fingertip {
+        return stick_rows(
+            view.pa.local_point(&q.core_point_a),
+            view.pb.local_point(&q.core_point_b),
+            n_b,
+        );
+    }
+    let held = held_points(primitives, &view.pa, &view.pb);
+    let centre = if held.is_empty() {
+        (q.core_point_a + q.core_point_b) * 0.5
+    } else {
+        held.iter().sum::<Vector3<f64>>() / held.len() as f64
+    };
+    stick_rows(
+        view.pa.local_point(&centre),
+        view.pb.local_point(&centre),
+        n_b,
+    )
 }
 
 /// The angle of a rotation matrix, radians.

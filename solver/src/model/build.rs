@@ -373,6 +373,12 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             inertia_kg_m2: inertia,
         });
     }
+    if !(s.friction.is_finite() && s.friction >= 0.0) {
+        return Err(BuildError::BadFriction {
+            owner: owner(),
+            value: s.friction,
+        });
+    }
     let [w, x, y, z] = s.orientation_wxyz;
     let q = Quaternion::new(w, x, y, z);
     let n2 = q.norm_squared();
@@ -388,5 +394,6 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         inertia_kg_m2: Vector3::from(inertia),
         shape: s.shape.clone(),
         fingertip: false,
+        friction: s.friction,
     })
 }

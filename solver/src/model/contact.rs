@@ -116,7 +116,10 @@ impl Model {
                 .map(|k| FingerId(k as u32));
             let mu = finger
                 .and_then(|f| self.fingers[f.index()].tip)
-                .map_or(0.0, |t| t.friction);
+                .map_or_else(
+                    || (self.bodies[a].friction * self.bodies[b].friction).sqrt(),
+                    |t| t.friction,
+                );
             let first_slot = layout.slots;
             let normal = ConstraintId(out.infos.len() as u32);
             out.push(

@@ -255,6 +255,14 @@ pub enum BuildError {
         /// The valid range.
         why: &'static str,
     },
+    /// A body's Coulomb μ is negative or not finite.
+    #[error("{owner}: `friction` = {value} must be finite and ≥ 0")]
+    BadFriction {
+        /// The body.
+        owner: Owner,
+        /// The value given.
+        value: f64,
+    },
 }
 
 impl BuildError {
@@ -286,7 +294,8 @@ impl BuildError {
             | DuplicateFree { owner, .. }
             | FingerOnFixedBody { owner, .. }
             | Shape { owner, .. }
-            | BadFingertip { owner, .. } => owner,
+            | BadFingertip { owner, .. }
+            | BadFriction { owner, .. } => owner,
         }
     }
 }

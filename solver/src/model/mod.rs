@@ -50,6 +50,9 @@ pub struct Body {
     pub shape: Option<Shape>,
     /// A contact finger's fingertip: driven by its finger, feels no gravity.
     pub fingertip: bool,
+    /// Coulomb μ of its contacts with other bodies (see
+    /// [`BodySpec::friction`](crate::BodySpec::friction)).
+    pub friction: f64,
 }
 
 /// One finger: a point (or rigid) grasp of a moving body.

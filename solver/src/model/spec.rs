@@ -41,6 +41,10 @@ pub struct BodySpec {
     /// kg/m³: mass and inertia from the shape when `mass_kg` is `None`
     /// (default [`DEFAULT_DENSITY_KG_M3`]).
     pub density_kg_m3: Option<f64>,
+    /// Coulomb μ of this body's contacts with other bodies (a pair uses the
+    /// geometric mean of its two bodies'; 0: frictionless, the default).
+    /// Acts with inertial motion only (`SolverSettings::dynamics`).
+    pub friction: f64,
 }
 
 impl BodySpec {
@@ -55,6 +59,7 @@ impl BodySpec {
             inertia_kg_m2: None,
             shape: None,
             density_kg_m3: None,
+            friction: 0.0,
         }
     }
 
@@ -99,6 +104,12 @@ impl BodySpec {
     /// Sets the density, kg/m³.
     pub fn density(mut self, density_kg_m3: f64) -> Self {
         self.density_kg_m3 = Some(density_kg_m3);
+        self
+    }
+
+    /// Sets the Coulomb μ of the body's contacts.
+    pub fn friction(mut self, mu: f64) -> Self {
+        self.friction = mu;
         self
     }
 }

@@ -97,6 +97,52 @@ impl Program {
             let e = turn.quaternion() * e;
             self.q_goal[o + 3..o + 7].copy_from_slice(&[e.w, e.i, e.j, e.k]);
         }
+        self.kinetic_friction(dt_s);
+    }
+
+    /// Kinetic friction of the slipping pairs (Coulomb: μ N against the
+    /// relative tangential velocity), applied to the inertial prediction as
+    /// an impulse on both bodies' centres of mass, N from the last force
+    /// solve. The impulse never exceeds what stops the relative slip (then
+    /// the pair sticks again), so it only ever removes energy.
+    ///
+    /// # Real-time
+    /// No allocation; O(friction pairs).
+    fn kinetic_friction(&mut self, dt_s: f64) {
+        for k in 0..self.feedback.friction.len() {
+            let p = self.feedback.friction[k];
+            let n_force = self.feedback.normal_force_n[k];
+            if self.feedback.stick[p.rows[0]] || n_force <= 0.0 || p.mu <= 0.0 {
+                continue;
+            }
+            let Some(normal) =
+                crate::force::friction::normal(&self.model, &self.q, self.ev.witnesses(), &p)
+            else {
+                continue;
+            };
+            let [ka, kb] = self.friction_bodies[k];
+            let mo = &self.feedback.motion;
+            let vel = |kk: Option<usize>| kk.map_or(Vector3::zeros(), |i| mo.v[i]);
+            let inv_m = |kk: Option<usize>| kk.map_or(0.0, |i| 1.0 / self.feedback.masses[i].mass);
+            let v = vel(ka) - vel(kb);
+            let v_t = v - normal * normal.dot(&v);
+            let speed = v_t.norm();
+            let w = inv_m(ka) + inv_m(kb);
+            if speed <= 0.0 || w <= 0.0 {
+                continue;
+            }
+            let impulse = (p.mu * n_force * dt_s).min(speed / w);
+            let dir = v_t / speed;
+            for (kk, sign) in [(ka, -1.0), (kb, 1.0)] {
+                if let Some(i) = kk {
+                    let o = self.feedback.masses[i].offset;
+                    let dv = dir * (sign * impulse / self.feedback.masses[i].mass);
+                    for c in 0..3 {
+                        self.q_goal[o + c] += dv[c] * dt_s;
+                    }
+                }
+            }
+        }
     }
 
     /// Friction anchors after a tick's steps, with C evaluated at the final q:
@@ -121,13 +167,19 @@ impl Program {
                 continue;
             }
             let slip = c[p.rows[0]].hypot(c[p.rows[1]]);
-            let (Some(tip), Some(body)) = (
+            let (Some(a), Some(b)) = (
                 self.model.body_frame(&self.q, pair.bodies[0]),
                 self.model.body_frame(&self.q, pair.bodies[1]),
             ) else {
                 continue;
             };
-            let local: Vector3<f64> = body.rot.tr_mul(&(tip.r - body.r));
+            // A's anchor (a fingertip's centre, a body's contact point) where
+            // it is now, in B's frame.
+            let anchor_a = match self.ev.witnesses()[p.slots[0]] {
+                Witness::Plane(w) => w.point,
+                _ => Vector3::zeros(),
+            };
+            let local: Vector3<f64> = b.rot.tr_mul(&(a.point(&anchor_a) - b.r));
             let table = self.ev.witnesses_mut();
             for s in p.slots {
                 if let Witness::Plane(w) = &mut table[s] {

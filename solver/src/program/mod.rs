@@ -107,6 +107,9 @@ pub struct Program {
     friction_slot: Vec<bool>,
     /// For each of `feedback.friction`, its index in the model's contact pairs.
     friction_pair: Vec<usize>,
+    /// For each of `feedback.friction`, the indices in `feedback.masses` of
+    /// its two bodies (`None`: fixed).
+    friction_bodies: Vec<[Option<usize>; 2]>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -173,7 +176,17 @@ impl Program {
                 friction_pair.push(k);
             }
         }
+        let friction_bodies = friction_pair
+            .iter()
+            .map(|&k| {
+                model.contact().pairs[k].bodies.map(|b| {
+                    let o = model.layout().body_offset(b)?;
+                    feedback.masses.iter().position(|m| m.offset == o)
+                })
+            })
+            .collect();
         let mut p = Program {
+            friction_bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
             q_goal: model.q0().to_vec(),

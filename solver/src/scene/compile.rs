@@ -208,6 +208,7 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.inertia_kg_m2 = b.inertia.as_ref().map(|i| i.get_ref().get());
     spec.shape = b.shape.as_ref().map(|s| shape(s.get_ref()));
     spec.density_kg_m3 = b.density.as_ref().map(|d| *d.get_ref());
+    spec.friction = b.friction.as_ref().map_or(0.0, |m| *m.get_ref());
     spec
 }
 
@@ -542,6 +543,7 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
             field: "density", ..
         } => or_name(b.density.as_ref().map(Spanned::span)),
         BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
+        BuildError::BadFriction { .. } => or_name(b.friction.as_ref().map(Spanned::span)),
         _ => b.name.span(),
     }
 }

@@ -168,6 +168,9 @@ pub struct BodySection {
     /// kg/m³: mass and inertia from the shape when `mass` is absent.
     #[serde(default)]
     pub density: Option<Spanned<f64>>,
+    /// Coulomb μ of the body's contacts with other bodies.
+    #[serde(default)]
+    pub friction: Option<Spanned<f64>>,
     /// `[[body.offer]]` semantic areas.
     #[serde(default)]
     pub offer: Vec<AreaSection>,

@@ -34,6 +34,9 @@ fn body(out: &mut String, b: &BodySpec) {
     if let Some(d) = b.density_kg_m3 {
         let _ = writeln!(out, "density = {}", num(d));
     }
+    if b.friction != 0.0 {
+        let _ = writeln!(out, "friction = {}", num(b.friction));
+    }
     match &b.shape {
         None => {}
         Some(Shape::Box { half_extents_m: h }) => {

@@ -6,6 +6,7 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod common;
+mod friction;
 mod pinch;
 mod rest;
 mod witness_fd;

@@ -17,9 +17,14 @@ use nalgebra::Vector3;
 
 use super::{PlaneWitness, WitnessType};
 
-/// The two stick rows of a contact with normal `normal` (B's frame) at
-/// `contact_b` (B's frame); the fingertip centre is end 0's origin.
-pub fn stick_rows(contact_b: Vector3<f64>, normal: Vector3<f64>) -> [PlaneWitness; 2] {
+/// The two stick rows of a contact with normal `normal` (B's frame) holding
+/// A's point `anchor_a` (A's frame; a fingertip's centre is its origin) at
+/// `contact_b` (B's frame).
+pub fn stick_rows(
+    anchor_a: Vector3<f64>,
+    contact_b: Vector3<f64>,
+    normal: Vector3<f64>,
+) -> [PlaneWitness; 2] {
     let n = normal.normalize();
     let seed = if n.x.abs() < 0.9 {
         Vector3::x()
@@ -32,7 +37,7 @@ pub fn stick_rows(contact_b: Vector3<f64>, normal: Vector3<f64>) -> [PlaneWitnes
         origin: WitnessType::Friction,
         features: [0, 0],
         point_end: 0,
-        point: Vector3::zeros(),
+        point: anchor_a,
         plane_point: contact_b,
         normal: t,
         margin: 0.0,
