@@ -12,7 +12,7 @@ fn main() {
     let (name, device) = match args.as_slice() {
         [n, d] => (n.as_str(), d.clone()),
         _ => {
-            eprintln!("usage: scene_tables <four-bar|stewart|sphere-toy> <device-name>");
+            eprintln!("usage: scene_tables <four-bar|stewart|sphere-toy|cluttered> <device-name>");
             std::process::exit(2);
         }
     };
@@ -20,8 +20,11 @@ fn main() {
         "four-bar" => mechanisms::four_bar_builder(),
         "stewart" => mechanisms::stewart_builder(),
         "sphere-toy" => mechanisms::sphere_toy_builder(),
+        "cluttered" => mechanisms::cluttered_builder(100),
         other => {
-            eprintln!("unknown mechanism `{other}`; expected four-bar, stewart or sphere-toy");
+            eprintln!(
+                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy or cluttered"
+            );
             std::process::exit(2);
         }
     };

@@ -120,9 +120,20 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             f.mean, f.max, f.commanded_max
         );
     }
+    let kinds = if s.safety.failure_kinds.is_empty() {
+        String::new()
+    } else {
+        let k: Vec<String> = s
+            .safety
+            .failure_kinds
+            .iter()
+            .map(|(k, n)| format!("{k} × {n}"))
+            .collect();
+        format!(" ({})", k.join(", "))
+    };
     let _ = writeln!(
         out,
-        "safety: {} force cuts, {} miss streaks, {} solver failures; faults: {}",
+        "safety: {} force cuts, {} miss streaks, {} solver failures{kinds}; faults: {}",
         s.safety.force_cuts, s.safety.miss_streaks, s.safety.solver_failures, s.faults
     );
     for e in &s.safety.device_events {

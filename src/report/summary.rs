@@ -104,6 +104,9 @@ pub struct Safety {
     pub miss_streaks: u64,
     /// Ticks whose solve failed (zero force written).
     pub solver_failures: u64,
+    /// The failed ticks by why they failed (kinds that happened only).
+    #[serde(default)]
+    pub failure_kinds: BTreeMap<String, u64>,
     /// Per-device safety-layer events.
     pub device_events: Vec<DeviceEvent>,
 }
@@ -334,6 +337,12 @@ impl Summary {
                 force_cuts: s.force_cuts,
                 miss_streaks: s.miss_streaks,
                 solver_failures: s.solver_failures,
+                failure_kinds: crate::session::FailureKind::ALL
+                    .iter()
+                    .zip(&s.failure_kinds)
+                    .filter(|(_, n)| **n > 0)
+                    .map(|(k, n)| (k.as_str().to_string(), *n))
+                    .collect(),
                 device_events: o
                     .device_events
                     .iter()

@@ -26,7 +26,7 @@ pub use plan::{Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
 pub use rig::{Rig, SessionDevice};
 pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
-pub use stats::{FingerStats, RunStats};
+pub use stats::{FailureKind, FingerStats, RunStats};
 pub use track::{BodyTrack, TrackSample};
 
 use crate::scenes::Scene;

@@ -5,7 +5,7 @@
 //! preallocated fields: no allocation, no lock.
 
 use haptloop_rt::hist::LatencyHistogram;
-use haptloop_solver::TickReport;
+use haptloop_solver::{Divergence, TickOutcome, TickReport};
 use nalgebra::Vector3;
 
 /// Per-finger accumulators.
@@ -91,6 +91,58 @@ pub struct RunStats {
     pub programs_swapped: u64,
     /// Contact figures of the fast loop.
     pub contact: ContactStats,
+    /// Failed ticks by why they failed ([`FailureKind`] order).
+    pub failure_kinds: [u64; FailureKind::ALL.len()],
+}
+
+/// Why a tick counted as failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FailureKind {
+    /// The solve succeeded but the mechanism came apart (violation beyond the
+    /// session's broken threshold).
+    ViolationBeyondBroken,
+    /// A NaN or infinity.
+    NonFinite,
+    /// The targets or q could not be evaluated.
+    Eval,
+    /// The Eq. 7 multiplier solve failed.
+    ForceSolve,
+    /// A zero period.
+    ZeroDt,
+    /// A step beyond the divergence limit.
+    DivergedStep,
+    /// A multiplier beyond the divergence limit.
+    DivergedMultiplier,
+    /// A violation beyond the model's length scale.
+    DivergedViolation,
+}
+
+impl FailureKind {
+    /// Every kind, in counting order.
+    pub const ALL: [FailureKind; 8] = [
+        FailureKind::ViolationBeyondBroken,
+        FailureKind::NonFinite,
+        FailureKind::Eval,
+        FailureKind::ForceSolve,
+        FailureKind::ZeroDt,
+        FailureKind::DivergedStep,
+        FailureKind::DivergedMultiplier,
+        FailureKind::DivergedViolation,
+    ];
+
+    /// Name in reports and `summary.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FailureKind::ViolationBeyondBroken => "violation_beyond_broken",
+            FailureKind::NonFinite => "non_finite",
+            FailureKind::Eval => "eval",
+            FailureKind::ForceSolve => "force_solve",
+            FailureKind::ZeroDt => "zero_dt",
+            FailureKind::DivergedStep => "diverged_step",
+            FailureKind::DivergedMultiplier => "diverged_multiplier",
+            FailureKind::DivergedViolation => "diverged_violation",
+        }
+    }
 }
 
 /// What the fast loop saw of contact.
@@ -156,6 +208,7 @@ impl RunStats {
             force_cuts: 0,
             programs_swapped: 0,
             contact: ContactStats::default(),
+            failure_kinds: [0; FailureKind::ALL.len()],
         }
     }
 
@@ -171,6 +224,17 @@ impl RunStats {
             self.contact.record(r);
         } else {
             self.solver_failures += 1;
+            let k = match r.status {
+                TickOutcome::Ok => FailureKind::ViolationBeyondBroken,
+                TickOutcome::NonFinite => FailureKind::NonFinite,
+                TickOutcome::Eval(_) => FailureKind::Eval,
+                TickOutcome::ForceSolve => FailureKind::ForceSolve,
+                TickOutcome::ZeroDt => FailureKind::ZeroDt,
+                TickOutcome::Diverged(Divergence::Step) => FailureKind::DivergedStep,
+                TickOutcome::Diverged(Divergence::Multiplier) => FailureKind::DivergedMultiplier,
+                TickOutcome::Diverged(Divergence::Violation) => FailureKind::DivergedViolation,
+            };
+            self.failure_kinds[k as usize] += 1;
         }
     }
 

@@ -68,7 +68,21 @@ pub(crate) struct Feedback {
     /// Per friction pair: its normal force in the last solve, N (Eq. 7,
     /// physical; kinetic friction of a slipping pair is μ times it).
     pub normal_force_n: Vec<f64>,
+    /// Per row: a contact or friction row, solved with a small relative
+    /// compliance ([`CONTACT_COMPLIANCE`]).
+    compliant: Vec<bool>,
 }
+
+/// Relative compliance of contact and friction rows in A: their diagonal is
+/// scaled by 1 + this. Four corners of a face resting on another are four
+/// rows of rank three (a plane contact holds three motions), so A_JJ is
+/// singular whenever they all push; the faer regularisation then turns the
+/// null direction into 1e10-sized entries of A_JJ⁻¹ and the finger's Schur
+/// complement into noise (measured: diagonal entries of −414 where the
+/// true S is positive semidefinite). With the compliance the redundant
+/// rows share the load (the minimum-norm split, as a stiff contact patch
+/// does) and every row holds to 1e-6 of its own scale.
+pub(crate) const CONTACT_COMPLIANCE: f64 = 1e-6;
 
 impl Feedback {
     /// Pattern, symbolic factor and buffers for `model` (whose Jacobian
@@ -127,6 +141,16 @@ impl Feedback {
             stick: vec![false; model.n_rows()],
             forced: vec![false; model.n_rows()],
             normal_force_n: vec![0.0; friction.len()],
+            compliant: model
+                .rows()
+                .iter()
+                .map(|r| {
+                    matches!(
+                        model.constraints()[r.constraint.index()].kind,
+                        crate::ConstraintKind::Contact | crate::ConstraintKind::ContactFriction
+                    )
+                })
+                .collect(),
             friction,
             slips: 0,
             coupling: vec![(Vector3::zeros(), Vector3::zeros()); fingers.len()],
@@ -434,6 +458,8 @@ impl Feedback {
             let (d, row) = (self.gram.diag[j], self.gram.j_rows[j]);
             self.gram.values[d] = if self.scale[row] == 0.0 {
                 1.0
+            } else if self.compliant[row] {
+                self.gram.values[d] * (1.0 + CONTACT_COMPLIANCE) + mu
             } else {
                 self.gram.values[d] + mu
             };

@@ -6,15 +6,18 @@
 //! | [`four_bar`] | 3 (+ ground) | R, S, U, R | point on the coupler | 1 |
 //! | [`stewart`] | 13 (+ base) | 6 × (U, P, S) | rigid on the platform | 6 |
 //! | [`sphere_toy`] | 132 | 120 U + 72 S | point on a top bead | see [`sphere_toy`] |
+//! | [`cluttered_builder`] | n + 1 (+ table) | none: contact only | rigid on the dragged box | 6 (n + 1) |
 //!
 //! All are written in world coordinates first (joint points and axes) and
 //! converted to body-frame anchors and axes by a private `Assembly` helper, which makes
 //! the initial configuration exact.
 
+mod cluttered;
 mod four_bar;
 mod sphere_toy;
 mod stewart;
 
+pub use cluttered::{CLUTTER_SPACING_M, DRAGGED_HALF_M, clutter_side, cluttered_builder};
 pub use four_bar::{four_bar, four_bar_builder};
 pub use sphere_toy::{SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder};
 pub use stewart::{STROKE_M as STEWART_STROKE_M, stewart, stewart_builder};

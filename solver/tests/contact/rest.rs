@@ -45,8 +45,9 @@ fn a_box_rests_on_a_table() {
         worst = worst.max((p - nalgebra::Vector3::new(0.0, 0.0, 0.03)).norm());
     }
     // The pair stays tracked with the same features: no new program, no
-    // backup, no penetration.
+    // backup, and no penetration beyond the contact rows' compliance (1e-6
+    // of their scale: picometres under a 108 g box).
     assert_eq!((l.programs, l.backups), (0, 0));
-    assert!(l.max_penetration_m < 1e-12, "{}", l.max_penetration_m);
-    assert!(worst < 1e-12, "the box moved {worst} m");
+    assert!(l.max_penetration_m < 1e-9, "{}", l.max_penetration_m);
+    assert!(worst < 1e-9, "the box moved {worst} m");
 }
