@@ -39,6 +39,34 @@ pub const BUILTIN: &[Builtin] = &[
         name: "grasp-3",
         text: include_str!("../scenes/grasp-3.toml"),
     },
+    Builtin {
+        name: "pyramid-tilt",
+        text: include_str!("../scenes/pyramid-tilt.toml"),
+    },
+    Builtin {
+        name: "box-slide",
+        text: include_str!("../scenes/box-slide.toml"),
+    },
+    Builtin {
+        name: "stack",
+        text: include_str!("../scenes/stack.toml"),
+    },
+    Builtin {
+        name: "peg-in-hole",
+        text: include_str!("../scenes/peg-in-hole.toml"),
+    },
+    Builtin {
+        name: "pinch-lift",
+        text: include_str!("../scenes/pinch-lift.toml"),
+    },
+    Builtin {
+        name: "grasp-3-contact",
+        text: include_str!("../scenes/grasp-3-contact.toml"),
+    },
+    Builtin {
+        name: "cluttered",
+        text: include_str!("../scenes/cluttered.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

@@ -83,7 +83,7 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.misses.skipped
     );
     let v = &s.violation;
-    if v.ticks_measured == 0 {
+    if v.ticks_measured == 0 || v.rows == 0 {
         let _ = writeln!(out, "constraint violation: {}", v.verdict);
     } else {
         let tol = v.tolerance.map_or(String::new(), |t| {
@@ -142,11 +142,13 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     if let Some(c) = &s.contact {
         let _ = writeln!(
             out,
-            "contact: max penetration {:.3} mm (exact, per slow-loop snapshot: {:.3} mm; witness rows, per tick: {:.3} mm); \
-             up to {} rows active, {} pairs tracked",
+            "contact: max penetration {:.3} mm (exact, per slow-loop snapshot: {:.3} mm; witness rows, per tick: {:.3} mm; \
+             scene tolerance {:.3} mm: {}); up to {} rows active, {} pairs tracked",
             c.max_penetration_m * 1e3,
             c.max_penetration_exact_m * 1e3,
             c.max_penetration_rows_m * 1e3,
+            c.tolerance_m * 1e3,
+            c.verdict,
             c.max_active,
             c.max_tracked_pairs
         );

@@ -36,6 +36,9 @@ pub struct Violation {
     pub max_rad: f64,
     /// The scene's stated tolerance, m, if it states one.
     pub tolerance: Option<f64>,
+    /// Translational joint rows measured (0: the scene has no joints; the
+    /// figures are then `"NaN"`).
+    pub rows: usize,
     /// Ticks the figures cover: those whose solve succeeded.
     pub ticks_measured: u64,
     /// Ticks whose solve failed (zero force written); not covered.
@@ -47,7 +50,16 @@ pub struct Violation {
 }
 
 impl Violation {
-    fn verdict(max: f64, tolerance: Option<f64>, measured: u64, failed: u64) -> String {
+    fn verdict(
+        max: f64,
+        tolerance: Option<f64>,
+        measured: u64,
+        failed: u64,
+        rows: usize,
+    ) -> String {
+        if rows == 0 {
+            return "none: the scene has no joint rows to violate".into();
+        }
         if measured == 0 {
             return if failed == 0 {
                 "not measured: no tick ran".into()
@@ -158,6 +170,11 @@ pub struct Contact {
     /// Deepest penetration seen, m: the larger of the two below.
     #[serde(with = "super::figure")]
     pub max_penetration_m: f64,
+    /// The penetration the scene tolerates (`penetration_tolerance`), m.
+    pub tolerance_m: f64,
+    /// `kept`, `EXCEEDED`, with the failed ticks counted as for the
+    /// violation.
+    pub verdict: String,
     /// Deepest penetration measured exactly (parry, separating axis) in the
     /// fast loop's snapshots, every slow-loop cycle, m.
     #[serde(with = "super::figure")]
@@ -283,7 +300,7 @@ impl Summary {
             )
         };
         let measured = s.solved_ticks();
-        let (v_max, v_rad) = if measured == 0 {
+        let (v_max, v_rad) = if measured == 0 || o.joint_rows == 0 {
             (f64::NAN, f64::NAN)
         } else {
             (s.violation_max_m, s.violation_max_rad)
@@ -303,9 +320,14 @@ impl Summary {
             read_to_write_ns: s.read_to_write.summary().into(),
             violation: Violation {
                 max: v_max,
-                rms: s.violation_rms_m(),
+                rms: if o.joint_rows == 0 {
+                    f64::NAN
+                } else {
+                    s.violation_rms_m()
+                },
                 max_rad: v_rad,
                 tolerance: o.plan.violation_tolerance_m,
+                rows: o.joint_rows,
                 ticks_measured: measured,
                 ticks_failed: s.solver_failures,
                 verdict: Violation::verdict(
@@ -313,6 +335,7 @@ impl Summary {
                     o.plan.violation_tolerance_m,
                     measured,
                     s.solver_failures,
+                    o.joint_rows,
                 ),
             },
             tracking_m: MaxRms {
@@ -390,8 +413,26 @@ impl Summary {
                         sum as f64 / n as f64
                     }
                 };
+                let max_pen = c.max_penetration_m.max(f.max_penetration_m);
+                let tol = o.plan.contact.penetration_tolerance_m;
+                let covered = if s.solver_failures == 0 {
+                    String::new()
+                } else {
+                    format!(
+                        " over the {measured} ticks that succeeded only ({} failed and are not covered)",
+                        s.solver_failures
+                    )
+                };
                 Contact {
-                    max_penetration_m: c.max_penetration_m.max(f.max_penetration_m),
+                    max_penetration_m: max_pen,
+                    tolerance_m: tol,
+                    verdict: if measured == 0 {
+                        "not measured: no tick succeeded".into()
+                    } else if max_pen <= tol {
+                        format!("kept{covered}")
+                    } else {
+                        format!("EXCEEDED{covered}")
+                    },
                     max_penetration_exact_m: c.max_penetration_m,
                     max_penetration_rows_m: f.max_penetration_m,
                     max_active: f.max_active,

@@ -98,6 +98,9 @@ pub struct SessionOutcome {
     pub wall_clock_s: f64,
     /// Sampled poses of the shaped bodies (scenes with contact).
     pub track: Option<BodyTrack>,
+    /// Translational joint rows of the model (0: a scene of free bodies,
+    /// whose joint violation cannot be measured).
+    pub joint_rows: usize,
 }
 
 /// Everything the loops need, built before the clock starts.
@@ -377,7 +380,27 @@ fn finish<C: Clock>(
         device_events,
         wall_clock_s: (MonotonicClock::new().now() - wall_start).0 as f64 / 1e9,
         track,
+        joint_rows: joint_length_rows(&scene.compiled.model),
     })
+}
+
+/// Length rows of joints (not fingers, contacts or quaternion norms): what
+/// the violation figures measure.
+fn joint_length_rows(model: &haptloop_solver::Model) -> usize {
+    use haptloop_solver::{ConstraintKind, RowUnit};
+    model
+        .rows()
+        .iter()
+        .filter(|r| {
+            let c = &model.constraints()[r.constraint.index()];
+            r.unit == RowUnit::Length
+                && c.finger.is_none()
+                && !matches!(
+                    c.kind,
+                    ConstraintKind::Contact | ConstraintKind::ContactFriction
+                )
+        })
+        .count()
 }
 
 type Finished<C> = (

@@ -69,6 +69,10 @@ fn mechanism_scenes_are_exactly_the_solver_builders() {
         ("four-bar", mechanisms::four_bar()),
         ("stewart", mechanisms::stewart()),
         ("sphere-toy", mechanisms::sphere_toy()),
+        (
+            "cluttered",
+            mechanisms::cluttered_builder(100).build().unwrap(),
+        ),
     ] {
         let scene = resolve(name).unwrap();
         let m = &scene.compiled.model;
@@ -90,6 +94,14 @@ fn mechanism_scenes_are_exactly_the_solver_builders() {
             name != "stewart",
             "only the Stewart scene turns gravity off"
         );
+        for (a, b) in m.bodies().iter().zip(model.bodies()) {
+            assert_eq!(
+                (&a.shape, a.friction),
+                (&b.shape, b.friction),
+                "{name}: {}",
+                a.name
+            );
+        }
         let (mut a, mut b) = (m.evaluation(), model.evaluation());
         a.evaluate(m, m.q0(), &m.initial_targets()).unwrap();
         b.evaluate(&model, model.q0(), &model.initial_targets())

@@ -25,29 +25,52 @@ fn run(scene: &Scene, options: &SessionOptions) -> SessionOutcome {
 }
 
 /// Every built-in scene runs 2 s deterministically, keeps its violation under
-/// the tolerance it states, and renders finite forces within its devices'
-/// peak force.
+/// the tolerance it states (a scene of free bodies has no joint rows and
+/// reports "none", with no figure), keeps its penetration under its
+/// tolerance if it has contact, and renders finite forces within its
+/// devices' peak force.
 #[test]
 fn every_builtin_scene_runs_within_its_stated_tolerance() {
     for b in BUILTIN {
         let scene = resolve(b.name).unwrap();
         let o = run(&scene, &deterministic(2.0));
         let s = Summary::of(&o);
-        let tol = s
-            .violation
-            .tolerance
-            .unwrap_or_else(|| panic!("{} states no violation_tolerance", b.name));
+        if s.violation.rows == 0 {
+            assert!(
+                s.violation.tolerance.is_none(),
+                "{}: states a violation tolerance but has no joint rows",
+                b.name
+            );
+            assert!(s.violation.max.is_nan(), "{}: {}", b.name, s.violation.max);
+            assert!(s.violation.verdict.starts_with("none"), "{}", b.name);
+        } else {
+            let tol = s
+                .violation
+                .tolerance
+                .unwrap_or_else(|| panic!("{} states no violation_tolerance", b.name));
+            assert!(
+                s.violation.max.is_finite() && s.violation.max <= tol,
+                "{}: violation {:e} > {tol:e}",
+                b.name,
+                s.violation.max
+            );
+        }
+        if let Some(c) = &s.contact {
+            assert!(
+                c.max_penetration_m <= c.tolerance_m,
+                "{}: penetration {:e} > {:e}",
+                b.name,
+                c.max_penetration_m,
+                c.tolerance_m
+            );
+            assert_eq!(c.verdict, "kept", "{}", b.name);
+            assert_eq!(c.backups, 0, "{}", b.name);
+        }
         // Every slot of 2 s at the scene's own rate (sphere-toy: 500 Hz).
         assert_eq!(s.ticks, 2 * u64::from(s.rate_hz), "{}", b.name);
         assert!(s.rate_hz >= 500, "{}", b.name);
         let assembly = s.assembly.as_ref().expect("assembled");
         assert!(assembly.converged, "{}: assembly {assembly:?}", b.name);
-        assert!(
-            s.violation.max.is_finite() && s.violation.max <= tol,
-            "{}: violation {:e} > {tol:e}",
-            b.name,
-            s.violation.max
-        );
         assert_eq!(s.safety.solver_failures, 0, "{}", b.name);
         for (i, (finger, f)) in s.force_n.iter().enumerate() {
             let peak = PhantomModel::by_name(&o.finger_devices[i])
