@@ -153,6 +153,13 @@ impl Plan {
         if let Some(d) = s.penetration_tolerance {
             contact.penetration_tolerance_m = d;
         }
+        // The contact speed limit, in scenes where things can touch: no body
+        // moves farther in one slow-loop cycle than the contact distance (see
+        // SolverSettings::contact_step_m).
+        if scene.compiled.shaped_bodies >= 2 {
+            let cycle_ticks = (super::SLOW_PERIOD.as_secs_f64() * f64::from(rate_hz)).max(1.0);
+            solver.contact_step_m = contact.contact_distance_m / cycle_ticks;
+        }
         if contact.release_distance_m < contact.contact_distance_m {
             bail!(
                 "[solver] release_distance ({} m) must not be below contact_distance ({} m)",

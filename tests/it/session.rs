@@ -551,3 +551,61 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
     );
     assert!(releases > 0, "the release-and-re-solve branch never ran");
 }
+
+/// Contact scenes on the fast thread allocate nothing either, with the slow
+/// loop running beside it: witness tables copied in, whole contact programs
+/// swapped in as pairs enter and leave the set, in-tick activations,
+/// friction sticking and slipping, proxies on their couplings.
+#[test]
+fn the_fast_loop_tick_allocates_nothing_with_contacts_switching() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let (mut tables, mut swapped, mut activations, mut sticking) = (0, 0, 0, 0);
+    for (name, seconds) in [("pinch-lift", 6.0), ("box-slide", 6.0)] {
+        let scene = resolve(name).unwrap();
+        let plan = Plan::new(&scene, &deterministic(seconds)).unwrap();
+        let clock = MockClock::new(Nanos(0));
+        let session::Built {
+            mut fast,
+            mut slow,
+            trace,
+            ..
+        } = session::build(&scene, &plan, clock.clone()).unwrap();
+        let done = Arc::new(AtomicBool::new(false));
+        let flag = done.clone();
+        let slow_thread = std::thread::spawn(move || {
+            while !flag.load(Ordering::Acquire) {
+                slow.step();
+                std::thread::yield_now();
+            }
+        });
+        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
+        let stop = StopFlag::new();
+        periodic.run(&mut fast, RunLimit::slots(50), &stop);
+        let chunks = (plan.ticks() - 50) / 50;
+        let (_, stats) = count(|| {
+            for _ in 0..chunks {
+                periodic.run(&mut fast, RunLimit::slots(50), &stop);
+                while trace.pop().is_some() {}
+                // Give the slow thread its turn, as a real 1 kHz period does.
+                std::thread::yield_now();
+            }
+        });
+        done.store(true, Ordering::Release);
+        slow_thread.join().unwrap();
+        assert_eq!(
+            stats.total(),
+            0,
+            "{name}: the fast loop allocated: {stats:?}"
+        );
+        let c = fast.stats().contact;
+        tables += c.updates;
+        swapped += fast.stats().programs_swapped;
+        activations += c.activations;
+        sticking = sticking.max(c.max_sticking);
+    }
+    assert!(tables > 0, "no witness update reached the fast loop");
+    assert!(swapped > 0, "no contact program was handed over");
+    assert!(activations > 0, "no in-tick activation ran");
+    assert!(sticking > 0, "no friction contact stuck");
+}

@@ -89,6 +89,11 @@ pub(crate) struct Projected {
     fingers: Vec<(usize, usize, bool)>,
     /// F index of each finger's first row (model finger order).
     f_first: Vec<usize>,
+    /// Per moving body with a shape: its first column and bounding radius,
+    /// metres (the contact speed limit measures how far its points move).
+    reach: Vec<(usize, f64)>,
+    /// How far the last taken step moved a shaped body's points, metres.
+    moved_m: f64,
 }
 
 /// The virtual coupling of contact-finger proxies, as the projected step
@@ -150,7 +155,22 @@ impl Projected {
             k_inv: vec![1.0 / (gain * finger_weight * mean_mass_kg); m_f],
             fingers,
             f_first,
+            reach: model
+                .layout()
+                .moving_bodies()
+                .filter_map(|(id, o)| {
+                    let shape = model.bodies()[id.index()].shape.as_ref()?;
+                    Some((o, shape.collider().ok()?.radius_m))
+                })
+                .collect(),
+            moved_m: 0.0,
         }
+    }
+
+    /// How far the last step moved any point of a shaped body, metres (0
+    /// without a contact speed limit).
+    pub fn last_moved_m(&self) -> f64 {
+        self.moved_m
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -175,6 +195,7 @@ impl Projected {
         targets: &[FingerTarget],
         step: f64,
         max_size_m: f64,
+        contact_step_m: f64,
         coupling: &CouplingStep,
         lambda: &mut [f64],
     ) -> Result<Step, TickOutcome> {
@@ -233,7 +254,8 @@ impl Projected {
         jac.mul_t_vec(&self.y, &mut self.g)
             .map_err(|_| TickOutcome::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
-        let size = self
+        let mut step = step;
+        let mut size = self
             .d
             .iter()
             .zip(&self.mg)
@@ -242,6 +264,31 @@ impl Projected {
             .fold(0.0, f64::max);
         if size > max_size_m {
             return Ok(Step::Refused);
+        }
+        // The contact speed limit (SolverSettings::contact_step_m): how far
+        // any point of a shaped body would move, |Δr| + R |Δθ| with
+        // |Δθ| ≈ 2 |Δe| (unit e); shorten the step, keeping its direction.
+        if contact_step_m.is_finite() {
+            let mut moved: f64 = 0.0;
+            for &(o, radius) in &self.reach {
+                let dr = (0..3)
+                    .map(|c| (self.d[o + c] + self.mg[o + c]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                let de = (3..7)
+                    .map(|c| (self.d[o + c] + self.mg[o + c]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                moved = moved.max(step * (dr + 2.0 * radius * de));
+            }
+            if moved > contact_step_m {
+                step *= contact_step_m / moved;
+                size *= contact_step_m / moved;
+                moved = contact_step_m;
+            }
+            self.moved_m = moved;
+        } else {
+            self.moved_m = 0.0;
         }
         // Predicted values of the inactive inequality rows after the step.
         jac.mul_vec(&self.mg, &mut self.jm)

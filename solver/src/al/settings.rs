@@ -111,6 +111,18 @@ pub struct SolverSettings {
     /// nothing, while 1 mm (clamping the reachable part of the error too)
     /// multiplied the lag by 100. `f64::INFINITY` switches it off.
     pub finger_pull_limit_m: f64,
+    /// Largest motion of any body per tick in a model with contact rows,
+    /// metres (a projected step that would move a body's points farther is
+    /// shortened to this, keeping its direction). The witness rows the fast
+    /// loop runs on were built by the slow loop at most one cycle ago, for
+    /// the features nearest then; a pair enters the active set below the
+    /// contact distance plus twice what its bodies moved in the last cycle.
+    /// Bounding the motion per tick bounds both: the session sets it to
+    /// `contact_distance` over the slow cycle's ticks (5 mm over 5 ms: a
+    /// contact speed limit of 1 m/s), which is what keeps a cube shoved into
+    /// a corner from tumbling 40° between two witness updates and through
+    /// the table. Infinite (the default): scenes without contact.
+    pub contact_step_m: f64,
     /// Weight of finger rows relative to K (fingers are penalty rows with no
     /// multiplier, see the module docs). Dimensionless, > 0. Default 1: the
     /// finger pulls as hard as a joint holds.
@@ -190,6 +202,7 @@ impl Default for SolverSettings {
             gain: 1000.0,
             multiplier_gain: 1000.0,
             finger_pull_limit_m: 1e-2,
+            contact_step_m: f64::INFINITY,
             finger_weight: 1.0,
             length_scale_m: None,
             coupling_stiffness_n_per_m: 400.0,
@@ -243,6 +256,13 @@ impl SolverSettings {
             return bad(
                 "finger_pull_limit_m",
                 self.finger_pull_limit_m,
+                "> 0 (infinity: no limit)",
+            );
+        }
+        if self.contact_step_m.is_nan() || self.contact_step_m <= 0.0 {
+            return bad(
+                "contact_step_m",
+                self.contact_step_m,
                 "> 0 (infinity: no limit)",
             );
         }

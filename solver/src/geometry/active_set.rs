@@ -333,12 +333,14 @@ impl ActiveSet {
         };
         let window = s.release_distance_m.max(s.contact_distance_m + reach);
         let was = self.tracked.get(&pair).cloned();
+        // A pair that had no rows during the last cycle may have passed
+        // through itself in it (it is then on the wrong side, where new rows
+        // would hold it): that asks for a backup whatever it looks like now.
+        if was.is_none() && self.tunnelled(pair, poses) {
+            cycle.backups.push(pair);
+        }
         let mut cache = was.as_ref().map(|t| t.cache.clone()).unwrap_or_default();
         let Some(q) = query_pair(view.a, &view.pa, view.b, &view.pb, window, &mut cache) else {
-            // Far now. Did it pass through since the last cycle?
-            if was.is_none() && self.tunnelled(pair, poses) {
-                cycle.backups.push(pair);
-            }
             self.tracked.remove(&pair);
             return;
         };
@@ -351,9 +353,6 @@ impl ActiveSet {
             None => q.distance_m < s.contact_distance_m + reach,
         };
         if !track {
-            if was.is_none() && self.tunnelled(pair, poses) {
-                cycle.backups.push(pair);
-            }
             self.tracked.remove(&pair);
             return;
         }
@@ -366,7 +365,7 @@ impl ActiveSet {
         if out.is_empty() {
             out.push(fallback(&view, &q));
         }
-        expand(&view, reach, &mut out);
+        expand(&view, reach, (-q.distance_m).max(0.0), &mut out);
         select(&view, slots, &mut out);
         if depth > s.penetration_tolerance_m {
             cycle.backups.push(pair);

@@ -323,66 +323,164 @@ fn frame(p: &Pose3) -> BodyFrame {
 }
 
 /// Pre-emptive expansion (§3.2, §3.2.1 without waiting for penetration):
-/// for every vertex–face primitive of a polyhedron's vertex, the vertices
-/// joined to that vertex by an edge that are within `reach` metres of the
-/// face's plane and inside its prism get vertex–face primitives too — the
-/// tilting pyramid's base corners before they touch the table. One ring of
-/// the adjacency, both directions (A's vertices on B's faces and B's on A's).
-pub fn expand(view: &PairView, reach: f64, out: &mut Vec<Witness>) {
-    let n0 = out.len();
-    for k in 0..n0 {
-        let Witness::Plane(p) = out[k] else { continue };
-        if !matches!(
-            p.origin,
-            WitnessType::VertexFace | WitnessType::EdgeFace | WitnessType::FaceFace
-        ) {
-            continue;
-        }
-        let (pe, se) = (p.point_end as usize, 1 - p.point_end as usize);
-        let (vkey, fkey) = (p.features[pe], p.features[se]);
-        if vkey >= 1 << 30 || fkey >> 30 != 2 {
-            continue;
-        }
-        let face = fkey & ((1 << 30) - 1);
-        let (point_side, plane_side) = if pe == 0 {
-            (view.a, view.b)
+/// every vertex of either polyhedron within `reach` metres of a face of the
+/// other, over that face, gets a vertex–face primitive against it (for a
+/// convex body, being outside any one face's plane is being outside the
+/// body). That covers the tilting pyramid's base corners before they
+/// touch the table, a tilting cube's diagonal corner two edges from the
+/// contact, and the end vertices of an edge–edge witness that a rotation
+/// about the crossing would swing into a face — all before the next cycle.
+/// Duplicates of primitives already in `out` are skipped; `select` keeps
+/// the most critical within the slot budget. `depth_m` is how deep the two
+/// bodies overlap now (0 when apart).
+pub fn expand(view: &PairView, reach: f64, depth_m: f64, out: &mut Vec<Witness>) {
+    let (Some(pa), Some(pb)) = (view.a.polyhedron(), view.b.polyhedron()) else {
+        return;
+    };
+    let m = view.margin();
+    for point_end in [0u8, 1u8] {
+        let (pp, ps, pose_p, pose_s) = if point_end == 0 {
+            (pa, pb, view.pa, view.pb)
         } else {
-            (view.b, view.a)
+            (pb, pa, view.pb, view.pa)
         };
-        let (Some(pp), Some(ps)) = (point_side.polyhedron(), plane_side.polyhedron()) else {
-            continue;
-        };
-        let (pose_p, pose_s) = if pe == 0 {
-            (view.pa, view.pb)
-        } else {
-            (view.pb, view.pa)
-        };
-        let f = &ps.faces[face as usize];
-        let fp = ps.face_point(face);
-        for &e in &pp.vertex_edges[vkey as usize] {
-            let nb = pp.other_end(e, vkey);
-            let local = pose_s.local_point(&pose_p.point(&pp.vertices[nb as usize]));
-            let h = (local - fp).dot(&f.normal) - view.margin();
-            if h >= reach || !ps.in_face_region(face, &local, 1e-9) {
+        for (v, vertex) in pp.vertices.iter().enumerate() {
+            let local = pose_s.local_point(&pose_p.point(vertex));
+            // Among the faces whose prism holds the vertex (a face it could
+            // land on), the one it is farthest outside; a vertex over no face
+            // (beyond an edge) is left to the edge guards. Two equal boxes
+            // stacked corner on corner sit on three planes at once: only the
+            // face under the corner is the right one to hold it against.
+            // Strictly over the face (by a millionth of the body's size): a
+            // corner exactly on a face's boundary, as where two equal boxes
+            // stand corner on corner, lies over two faces at once, and which
+            // one should hold it is the reduction's business, not a guard's.
+            let inside = -1e-6 * ps.radius_m;
+            let (mut best, mut face) = (f64::NEG_INFINITY, u32::MAX);
+            for (f, fc) in ps.faces.iter().enumerate() {
+                let d = (local - ps.face_point(f as u32)).dot(&fc.normal);
+                if d > best && ps.in_face_region(f as u32, &local, inside) {
+                    (best, face) = (d, f as u32);
+                }
+            }
+            if face == u32::MAX {
                 continue;
             }
-            let features = if pe == 0 { [nb, fkey] } else { [fkey, nb] };
+            if best - m >= reach {
+                continue;
+            }
+            let fkey = pack(Feature::Face(face));
+            let features = if point_end == 0 {
+                [v as u32, fkey]
+            } else {
+                [fkey, v as u32]
+            };
             let dup = out.iter().any(|w| match w {
-                Witness::Plane(q) => q.features == features && q.point_end == p.point_end,
+                Witness::Plane(q) => q.features == features && q.point_end == point_end,
                 _ => false,
             });
             if !dup {
                 out.push(Witness::Plane(PlaneWitness::vertex_face(
-                    p.point_end,
-                    pp.vertices[nb as usize],
-                    fp,
-                    f.normal,
-                    view.margin(),
+                    point_end,
+                    *vertex,
+                    ps.face_point(face),
+                    ps.faces[face as usize].normal,
+                    m,
                     features,
                 )));
             }
         }
     }
+    edge_guards(view, pa, pb, reach, depth_m, out);
+}
+
+/// Edge–edge guards: every edge of A whose closest approach to an edge of B
+/// is within `reach` and falls inside both edges (two edges that could cross
+/// before the next cycle; near their ends the vertex guards hold) gets the
+/// Eq. 2–3 primitive of that edge pair. A rotation of up to the speed limit
+/// between two cycles can sweep an edge across an edge without any vertex
+/// coming near a face.
+fn edge_guards(
+    view: &PairView,
+    pa: &super::polyhedron::Polyhedron,
+    pb: &super::polyhedron::Polyhedron,
+    reach: f64,
+    depth_m: f64,
+    out: &mut Vec<Witness>,
+) {
+    let m = view.margin();
+    let a_to_b = view.a_to_b();
+    for (ea, e) in pa.edges.iter().enumerate() {
+        let a = [
+            pa.vertices[e.vertices[0] as usize],
+            pa.vertices[e.vertices[1] as usize],
+        ];
+        let (a0, a1) = (view.a_in_b(&a[0]), view.a_in_b(&a[1]));
+        for (eb, f) in pb.edges.iter().enumerate() {
+            let b = [
+                pb.vertices[f.vertices[0] as usize],
+                pb.vertices[f.vertices[1] as usize],
+            ];
+            let Some((s, t, d)) = segment_closest(a0, a1, b[0], b[1]) else {
+                continue;
+            };
+            if d - m >= reach || !(0.05..=0.95).contains(&s) || !(0.05..=0.95).contains(&t) {
+                continue;
+            }
+            let key = [
+                pack(Feature::Edge(ea as u32)),
+                pack(Feature::Edge(eb as u32)),
+            ];
+            if out.iter().any(|w| match w {
+                Witness::EdgeEdge(x) => x.features == key,
+                _ => false,
+            }) {
+                continue;
+            }
+            let faces = [
+                pb.faces[f.faces[0] as usize].normal,
+                pb.faces[f.faces[1] as usize].normal,
+            ];
+            let Some(w) =
+                EdgeWitness::build(0, a, b, faces, pb.edge_normal(eb as u32), &a_to_b, m, key)
+            else {
+                continue;
+            };
+            // Eq. 3 holds only where this pair of edges is the one that would
+            // collide: a guard whose row reads deeper than the bodies overlap
+            // (`depth_m`, 0 when they are apart) sees the crossing from the
+            // wrong side of the separating plane and would push the bodies
+            // for nothing.
+            let w = Witness::EdgeEdge(w);
+            let (value, _) = value_at(&w, &view.pa, &view.pb);
+            if value >= -depth_m - 1e-9 && value - m < reach {
+                out.push(w);
+            }
+        }
+    }
+}
+
+/// Closest points of segments p0p1 and q0q1: parameters (s, t) and
+/// distance; `None` for (nearly) parallel segments, whose crossing is not a
+/// point.
+fn segment_closest(
+    p0: Vector3<f64>,
+    p1: Vector3<f64>,
+    q0: Vector3<f64>,
+    q1: Vector3<f64>,
+) -> Option<(f64, f64, f64)> {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.dot(&d1), d2.dot(&d2), d2.dot(&r));
+    let (b, c) = (d1.dot(&d2), d1.dot(&r));
+    let denom = a * e - b * b;
+    if denom <= 1e-12 * a * e {
+        return None;
+    }
+    let s = ((b * f - c * e) / denom).clamp(0.0, 1.0);
+    let t = ((b * s + f) / e).clamp(0.0, 1.0);
+    let s = ((b * t - c) / a).clamp(0.0, 1.0);
+    let d = ((p0 + d1 * s) - (q0 + d2 * t)).norm();
+    Some((s, t, d))
 }
 
 /// Keeps at most `slots` of `out`: the one nearest to violation first, then

@@ -100,6 +100,10 @@ pub struct Program {
     /// The period of the last tick, s (the coupling of contact-finger
     /// proxies integrates over it; 1 ms before the first tick).
     last_dt_s: f64,
+    /// The largest motion per tick (settings' `contact_step_m`).
+    contact_step_m: f64,
+    /// What is left of it in the current tick.
+    step_budget_m: f64,
     /// Scratch: each finger's coupling error at the last force solve.
     prev_error_buf: Vec<nalgebra::Vector3<f64>>,
     /// Per witness-table slot: a friction stick row (its anchor is the fast
@@ -192,6 +196,8 @@ impl Program {
             q_goal: model.q0().to_vec(),
             activations: 0,
             last_dt_s: 1e-3,
+            step_budget_m: f64::INFINITY,
+            contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
             friction_slot,
             friction_pair,

@@ -165,6 +165,8 @@ impl Program {
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
         let mut allowed = f64::INFINITY;
         self.activations = 0;
+        // The contact speed limit is a budget for the whole tick.
+        self.step_budget_m = self.contact_step_m;
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
@@ -175,6 +177,10 @@ impl Program {
                 Ok(Step::Taken(size)) => {
                     allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
                     k += 1;
+                    self.step_budget_m -= self.projected.last_moved_m();
+                    if self.step_budget_m <= 0.0 {
+                        return Ok(k);
+                    }
                 }
                 Ok(Step::Activate) if self.activations < MAX_ACTIVATIONS => {
                     self.activations += 1;
@@ -422,6 +428,7 @@ impl Program {
             targets,
             step,
             allowed,
+            self.step_budget_m,
             &coupling,
             &mut self.lambda,
         )
@@ -438,6 +445,8 @@ impl Program {
                     TickOutcome::Ok => {}
                     status => return Err(status),
                 }
+                // Assembly is not a motion: no speed limit.
+                self.step_budget_m = f64::INFINITY;
                 for _ in 0..=MAX_ACTIVATIONS {
                     match self.projected_step(targets, 1.0, f64::INFINITY)? {
                         Step::Activate => {

@@ -79,11 +79,26 @@ pub struct Lockstep {
     pub tables: u64,
     pub backups: u64,
     pub max_penetration_m: f64,
+    /// The last contact cycle's report.
+    pub last_cycle: haptloop_solver::geometry::Cycle,
+    /// The configuration the last cycle saw.
+    pub last_snapshot_q: Vec<f64>,
 }
 
 impl Lockstep {
     /// Builds the manager and the first program at the model's q0.
     pub fn new(model: Model, settings: SolverSettings, contact: ContactSettings) -> Self {
+        // As the session sets it: the contact distance per 5-tick cycle.
+        let settings = SolverSettings {
+            contact_step_m: contact.contact_distance_m / 5.0,
+            ..settings
+        };
+        Self::with_settings(model, settings, contact)
+    }
+
+    /// As [`new`](Self::new), with `settings` exactly as given (no contact
+    /// speed limit unless it sets one).
+    pub fn with_settings(model: Model, settings: SolverSettings, contact: ContactSettings) -> Self {
         let model = Arc::new(model);
         let mut manager = ContactManager::new(model.clone(), settings, contact).expect("shapes");
         let (_, program) = manager.initial(model.q0()).expect("initial program");
@@ -97,6 +112,8 @@ impl Lockstep {
             tables: 0,
             backups: 0,
             max_penetration_m: 0.0,
+            last_cycle: Default::default(),
+            last_snapshot_q: Vec::new(),
         }
     }
 
@@ -105,12 +122,14 @@ impl Lockstep {
         let r = self.program.tick(targets, self.dt);
         self.ticks += 1;
         if self.ticks.is_multiple_of(self.every) {
+            self.last_snapshot_q = self.program.q().to_vec();
             let (cycle, update) = self.manager.step(
                 self.program.q(),
                 r.status == haptloop_solver::TickOutcome::Ok,
                 true,
             );
             self.max_penetration_m = self.max_penetration_m.max(cycle.max_penetration_m);
+            self.last_cycle = cycle.clone();
             match update {
                 ContactUpdate::None => {}
                 ContactUpdate::Table => {

@@ -6,7 +6,9 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod common;
+mod drags;
 mod friction;
 mod pinch;
 mod rest;
 mod witness_fd;
+mod witness_kinds;
