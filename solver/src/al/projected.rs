@@ -206,7 +206,7 @@ impl Projected {
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
                 Role::Equality | Role::Friction => y,
-                Role::Finger | Role::Redundant => 0.0,
+                Role::Finger | Role::Redundant | Role::DesignBound | Role::DesignPin => 0.0,
                 Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }

@@ -45,6 +45,15 @@ pub(crate) enum Role {
     /// A friction stick row: C = 0 while its contact sticks, else free. Only
     /// the projected rule and the force solve use it (its gains are 0).
     Friction,
+    /// A design-variable bound (C ≥ 0) on one design column, touching no
+    /// body: the gradient rule treats it like [`Role::Inequality`]; Eq. 7
+    /// never sees it and the projected rule enforces it as a box on its
+    /// design step.
+    DesignBound,
+    /// A design-variable component held at lo = hi (C = 0), touching no
+    /// body: the gradient rule treats it like [`Role::Equality`]; the
+    /// projected rule keeps the component where it is.
+    DesignPin,
     /// A row found linearly dependent on the kept rows at `Program::new`
     /// (`force::redundancy`): evaluated and its violation reported, but it
     /// takes part in no update and no force solve (gain 0, multiplier 0).
@@ -84,6 +93,8 @@ impl Scaling {
         for row in model.rows() {
             let info = &model.constraints()[row.constraint.index()];
             let r = match (info.finger.is_some(), row.sense) {
+                _ if info.kind == ConstraintKind::DesignBound => Role::DesignBound,
+                _ if info.kind == ConstraintKind::DesignPin => Role::DesignPin,
                 (true, _) => Role::Finger,
                 (false, Sense::Equality) => Role::Equality,
                 (false, Sense::Inequality) if info.kind == ConstraintKind::Contact => Role::Contact,

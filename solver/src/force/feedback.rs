@@ -330,7 +330,8 @@ impl Feedback {
                 }
                 Role::Equality | Role::Finger => true,
                 Role::Friction => self.stick.get(i).copied().unwrap_or(false),
-                Role::Redundant => false,
+                // Design rows touch no body: never part of the solve.
+                Role::Redundant | Role::DesignBound | Role::DesignPin => false,
             };
             *sc = if active { s.ell[i] } else { 0.0 };
         }
