@@ -26,7 +26,9 @@
 //! sparse solve with the existing factor and an m_f × m_f Cholesky of its
 //! Schur complement per iteration, no new factorisation. The least-astonishment
 //! metric becomes the mass matrix (Gauss's least constraint); design variables,
-//! which have no inertia, stay fixed (only the gradient update moves them).
+//! which have no inertia, get a metric of their own and move through a
+//! low-rank (Woodbury) correction on the same factor, their bounds a box
+//! (`design`). Objectives act through q₀ (`program::objective`).
 //! Inequalities follow the force solve's active set (a released row is free
 //! from the next tick on). The y are the step's multipliers: stored as λ
 //! (equalities) and ν = max(0, −y) (inequalities).
@@ -49,6 +51,7 @@
 //! that costs a few ticks of up to 0.7 mm violation, and the linkage folds
 //! into its other branch instead of flying apart.
 
+use super::design::DesignStep;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
 use crate::program::TickOutcome;
@@ -85,6 +88,8 @@ pub(crate) struct Projected {
     k_inv: Vec<f64>,
     /// First row and row count of each finger constraint.
     fingers: Vec<(usize, usize)>,
+    /// The design columns' correction (models with design variables).
+    design: Option<DesignStep>,
 }
 
 impl Projected {
@@ -110,7 +115,15 @@ impl Projected {
             mg: vec![0.0; n],
             k_inv: vec![1.0 / (gain * finger_weight * mean_mass_kg); m_f],
             fingers,
+            design: None,
         }
+    }
+
+    /// Lets the design columns of `model` move, with metric `w_kg` each (see
+    /// `design`). Allocates.
+    pub fn with_design(mut self, model: &Model, w_kg: f64) -> Self {
+        self.design = DesignStep::new(model, w_kg);
+        self
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -166,6 +179,12 @@ impl Projected {
         }
         fb.project(&self.r, &self.k_inv, &mut self.y)
             .map_err(|_| TickOutcome::ForceSolve)?;
+        let mut d_changed = false;
+        if let Some(design) = &mut self.design {
+            d_changed = design
+                .correct(ev, fb, &self.k_inv, q, &mut self.d, &mut self.y, step)
+                .map_err(|()| TickOutcome::ForceSolve)?;
+        }
         let scale = fb.row_scale();
         for (y, sc) in self.y.iter_mut().zip(scale) {
             *y *= sc;
@@ -173,6 +192,15 @@ impl Projected {
         jac.mul_t_vec(&self.y, &mut self.g)
             .map_err(|_| TickOutcome::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
+        if let Some(design) = &self.design {
+            for (&c, &mg) in design.cols.iter().zip(&design.mg) {
+                self.mg[c] = mg;
+            }
+            if d_changed {
+                jac.mul_vec(&self.d, &mut self.jd)
+                    .map_err(|_| TickOutcome::NonFinite)?;
+            }
+        }
         let size = self
             .d
             .iter()

@@ -55,6 +55,9 @@ pub(crate) struct Feedback {
     pub friction: Vec<FrictionPair>,
     /// Ticks on which a sticking pair left the Coulomb cone (slipped).
     slips: u64,
+    /// Counts the factorisations: whatever caches products with the factor
+    /// (the projected update's design columns) recomputes when it changes.
+    pub generation: u64,
 }
 
 impl Feedback {
@@ -109,6 +112,7 @@ impl Feedback {
             forced: vec![false; model.n_rows()],
             friction: super::friction::pairs_of(model),
             slips: 0,
+            generation: 0,
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -344,6 +348,7 @@ impl Feedback {
         ev: &Evaluation,
         settings: &SolverSettings,
     ) -> Result<(), FactorError> {
+        self.generation = self.generation.wrapping_add(1);
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
         let q = &self.motion.q_prev;

@@ -260,6 +260,12 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
                 if std::mem::replace(&mut seen.0, true) {
                     return Err(BuildError::DuplicateName { owner: owner() });
                 }
+                if w <= 0.0 {
+                    return Err(bad(
+                        "weight",
+                        "> 0 for finger (a finger that does not pull holds nothing)",
+                    ));
+                }
                 out.finger_weight = w;
                 continue;
             }
