@@ -215,9 +215,14 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
     produce_atomic(&dir.join("latency.svg"), |p| plots::latency(p, o))?;
     produce_atomic(&dir.join("force.svg"), |p| plots::force(p, o))?;
     produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
+    let design = !o.recorder.design_names.is_empty();
+    if design {
+        produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
+    }
     println!(
-        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg",
-        dir.display()
+        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg{}",
+        dir.display(),
+        if design { ", design.svg" } else { "" }
     );
     Ok(())
 }
