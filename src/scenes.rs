@@ -39,6 +39,26 @@ pub const BUILTIN: &[Builtin] = &[
         name: "grasp-3",
         text: include_str!("../scenes/grasp-3.toml"),
     },
+    Builtin {
+        name: "four-bar-design",
+        text: include_str!("../scenes/four-bar-design.toml"),
+    },
+    Builtin {
+        name: "peaucellier-design",
+        text: include_str!("../scenes/peaucellier-design.toml"),
+    },
+    Builtin {
+        name: "stewart-feet",
+        text: include_str!("../scenes/stewart-feet.toml"),
+    },
+    Builtin {
+        name: "dexterity-arm",
+        text: include_str!("../scenes/dexterity-arm.toml"),
+    },
+    Builtin {
+        name: "dodge",
+        text: include_str!("../scenes/dodge.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

@@ -11,7 +11,8 @@
 //! each joint's distance to its nearer limit is h (1 − |s − m|/h), and
 //! minimising F pushes every joint away from both limits at once, smoothly
 //! (a max-of-distances form would have no gradient where two joints tie).
-//! Reported value: max_j |s_j − m_j| / h_j (0 at the middle, 1 at a limit).
+//! Reported value: the RMS over the joints of |s_j − m_j| / h_j (0: every
+//! joint at its middle; 1: every joint at a limit), √(2F / (L² n)).
 
 use super::grad::BodyGrad;
 use crate::constraint::block::{Ctx, RowGrad};
@@ -50,11 +51,14 @@ impl Centred {
             * self.scale_m2
     }
 
-    /// max_j |s_j − m_j| / h_j.
+    /// RMS_j |s_j − m_j| / h_j.
     pub fn report(&self, q: &[f64], g: &BodyGrad) -> f64 {
-        (0..self.limits.len())
-            .map(|k| self.offset(q, g, k).0.abs())
-            .fold(0.0, f64::max)
+        let n = self.limits.len().max(1) as f64;
+        ((0..self.limits.len())
+            .map(|k| self.offset(q, g, k).0.powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt()
     }
 
     /// F, and `w` × ∂F into `g` (free anchors straight into `out`).

@@ -6,7 +6,7 @@
 //! | `dexterity.rs` | `dexterity`, Eq. 12–14 | −½ R² ln(det J̃J̃ᵀ + ε) | Eq. 14's f |
 //! | `obstacle.rs` | `obstacle`, Eq. 15 | D² ‖½ (D/d − 1)²‖₄ | nearest distance, m |
 //! | `straight_line.rs` | `straight_line`, Fig. 10 | ½ \|P(x − a)\|² | distance from the line, m |
-//! | `joint_limit.rs` | `joint_limit_distance`, App. D | L² ½ Σ ((s − m)/h)² | max \|s − m\|/h |
+//! | `joint_limit.rs` | `joint_limit_distance`, App. D | L² ½ Σ ((s − m)/h)² | RMS \|s − m\|/h |
 //!
 //! `grad.rs` holds the shared algebra (frames at q; point and direction
 //! gradients per body, mapped once into q's columns); `spec.rs` the

@@ -130,8 +130,23 @@ fn straight_line_and_joint_limit_values() {
     let u = nalgebra::Vector3::new(1.0, 0.5, 0.0).normalize();
     let expected = (d - u * u.dot(&d)).norm();
     assert!((reports(&m, m.q0())[0] - expected).abs() < 1e-15);
-    // Joint coordinates at q0: hinge angle 0 in [-1, 0.5] → |0 + 0.25|/0.75.
+    // The joints' coordinates from their limit rows (x − lo ≥ 0, hi − x ≥ 0):
+    // the report is the RMS of |x − mid| / half over the three joints.
     let m = common::joint_limits();
+    let mut ev = m.evaluation();
+    ev.evaluate(&m, m.q0(), &m.initial_targets()).unwrap();
+    let t: Vec<f64> = m
+        .constraints()
+        .iter()
+        .filter(|c| c.limits.is_some())
+        .map(|c| {
+            let (a, b) = (ev.values()[c.rows.start], ev.values()[c.rows.start + 1]);
+            // a = x − lo, b = hi − x: (x − mid) / half = (a − b) / (a + b).
+            (a - b) / (a + b)
+        })
+        .collect();
+    assert_eq!(t.len(), 3);
+    let rms = (t.iter().map(|x| x * x).sum::<f64>() / 3.0).sqrt();
     let r = reports(&m, m.q0())[0];
-    assert!(r >= 0.25 / 0.75 - 1e-12, "{r}");
+    assert!((r - rms).abs() < 1e-12, "{r} vs {rms}");
 }
