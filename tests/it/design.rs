@@ -232,3 +232,158 @@ fn dodge_keeps_the_chain_away_from_the_bullet() {
         with.tracking_m
     );
 }
+
+fn haptloop() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+}
+
+/// `--free` and `--objective` free a variable and add an objective without
+/// editing the scene: summary.json, trace.csv and design.svg show them.
+#[test]
+fn design_flags_add_variables_and_objectives_to_any_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let r = haptloop()
+        .args([
+            "run",
+            "four-bar",
+            "--deterministic",
+            "--seconds",
+            "0.5",
+            "--quiet",
+        ])
+        .args([
+            "--free",
+            "coupler-rocker.anchor_j",
+            "--free",
+            "ground.position",
+        ])
+        .args([
+            "--objective",
+            "dexterity:chain=[ground,crank,coupler],weight=0.01",
+            "--objective",
+            "joint_limit_distance:joints=[],weight=0",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    // joint_limit_distance on a model without limits is refused, naming the flag.
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("--objective:1:1: objective `joint_limit_distance`"),
+        "{err}"
+    );
+    let r = haptloop()
+        .args([
+            "run",
+            "four-bar",
+            "--deterministic",
+            "--seconds",
+            "0.5",
+            "--quiet",
+        ])
+        .args([
+            "--free",
+            "coupler-rocker.anchor_j",
+            "--free",
+            "ground.position",
+        ])
+        .args([
+            "--objective",
+            "dexterity:chain=[ground,crank,coupler],weight=0.01",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let s: Summary =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let keys: Vec<&String> = s.design.keys().collect();
+    assert_eq!(
+        keys,
+        [
+            "coupler-rocker.anchor_j.x",
+            "coupler-rocker.anchor_j.y",
+            "coupler-rocker.anchor_j.z",
+            "ground.position.x",
+            "ground.position.y",
+            "ground.position.z",
+        ]
+    );
+    let d = &s.objectives["dexterity"];
+    assert_eq!((d.kind.as_str(), d.weight), ("dexterity", 0.01));
+    assert!(d.value.start.is_finite() && d.value.end.is_finite());
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let header = trace.lines().next().unwrap();
+    assert!(
+        header.ends_with(",ground.position.x_m,ground.position.y_m,ground.position.z_m,coupler-rocker.anchor_j.x_m,coupler-rocker.anchor_j.y_m,coupler-rocker.anchor_j.z_m,objective_dexterity"),
+        "{header}"
+    );
+    // Every row has the columns filled (500 ticks, one finger).
+    let rows: Vec<&str> = trace.lines().skip(1).collect();
+    assert_eq!(rows.len(), 500);
+    assert!(
+        rows.iter()
+            .all(|r| r.split(',').count() == 19 && !r.ends_with(','))
+    );
+    assert!(out.join("design.svg").exists());
+}
+
+/// A bad `--free` or `--objective` is a usage error (status 2) that names
+/// the flag and what is wrong, and runs nothing.
+#[test]
+fn bad_design_flags_are_usage_errors_naming_the_flag() {
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["--free", "crank-pivot.lenght"],
+            "--free:1:13: unknown design variable `lenght`",
+        ),
+        (
+            &["--free", "crank-pivot.length"],
+            "--free:1:13: joint `crank-pivot` (revolute) has no design variable `length`",
+        ),
+        (
+            &["--free", "crank.position"],
+            "--free:1:1: body `crank` is not fixed",
+        ),
+        (
+            &["--free", "nodot"],
+            "--free:1:1: expected <joint>.<variable>",
+        ),
+        (
+            &["--objective", "dexterity:chain=[ground,crank,cuopler]"],
+            "--objective:1:1: objective `dexterity`: names unknown body `cuopler`",
+        ),
+        (
+            &[
+                "--objective",
+                "obstacle:points=[{body=crank}],distance=0.01",
+            ],
+            "--objective:1:1: an obstacle objective needs `obstacle",
+        ),
+    ];
+    for (flags, expected) in cases {
+        let r = haptloop()
+            .args([
+                "run",
+                "four-bar",
+                "--deterministic",
+                "--seconds",
+                "0.1",
+                "--no-files",
+            ])
+            .args(flags)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{flags:?}: {err}");
+        assert!(err.starts_with(expected), "{flags:?}: {err}");
+        assert!(
+            !String::from_utf8_lossy(&r.stdout).contains("ticks:"),
+            "{flags:?} ran"
+        );
+    }
+}
