@@ -138,6 +138,7 @@ impl Program {
             }
         }
         let _ = self.refresh();
+        self.measure_objectives();
         for k in 0..nf.len() {
             if let Some(j) = match_index(k, of.len(), |a, b| nf[a].name == of[b].name) {
                 self.feedback.copy_finger(k, &old.feedback, j);
