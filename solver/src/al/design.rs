@@ -27,9 +27,10 @@
 //! bound (its d becomes q_c − b so that Δ_c = b − q_c, and it leaves the
 //! Woodbury set; ŷ₀ follows as ŷ₀ − Z_c δd_c, no new solve); a frozen column
 //! whose free step would point back inside is released. At most n_d + 2
-//! rounds; pinned components (lo = hi) are frozen for good. The result
-//! satisfies the linearised joints exactly, so bounds never fight the
-//! joints.
+//! rounds. Pinned components (lo = hi) never enter: their d is set before
+//! the right-hand side is formed ([`DesignStep::pin`]), so they cost no
+//! solve. The result satisfies the linearised joints exactly, so bounds
+//! never fight the joints.
 //!
 //! # Real-time
 //! No allocation: every buffer is sized by `new`.
@@ -46,6 +47,8 @@ const BOX_SLACK_M: f64 = 1e-12;
 pub(crate) struct DesignStep {
     /// Design columns of q, ascending.
     pub cols: Vec<usize>,
+    /// Indices (into `cols`) of the components that may move (not pinned).
+    moving: Vec<usize>,
     /// w_c, kg.
     w: Vec<f64>,
     /// [lo, hi] per column (±∞ when unbounded).
@@ -93,7 +96,9 @@ impl DesignStep {
             }
         }
         let m = model.n_rows();
+        let moving = (0..n).filter(|&k| lo[k] != hi[k]).collect();
         Some(Self {
+            moving,
             w: vec![w_kg; n],
             lo,
             hi,
@@ -132,20 +137,20 @@ impl DesignStep {
                 col[rows[p]] = scale[rows[p]] * jac.values()[vals[p]];
             }
         }
-        for k in 0..n {
+        for &k in &self.moving {
             let (u, z) = (&self.u[k * m..(k + 1) * m], &mut self.z[k * m..(k + 1) * m]);
             z.fill(0.0);
             fb.project(u, k_inv, z).map_err(|_| ())?;
         }
-        for a in 0..n {
-            for b in 0..n {
+        for &a in &self.moving {
+            for &b in &self.moving {
                 let v = dot(&self.u[a * m..(a + 1) * m], &self.z[b * m..(b + 1) * m]);
                 self.s[a * n + b] = v + if a == b { self.w[a] } else { 0.0 };
             }
         }
         // Symmetrise round-off.
-        for a in 0..n {
-            for b in 0..a {
+        for &a in &self.moving {
+            for &b in self.moving.iter().filter(|&&b| b < a) {
                 let v = 0.5 * (self.s[a * n + b] + self.s[b * n + a]);
                 self.s[a * n + b] = v;
                 self.s[b * n + a] = v;
@@ -153,6 +158,19 @@ impl DesignStep {
         }
         self.generation = Some(fb.generation);
         Ok(())
+    }
+
+    /// Sets d on the pinned components so that their step lands on the pin
+    /// (Δ_c = lo − q_c): call before the step's right-hand side is formed.
+    ///
+    /// # Real-time
+    /// No allocation; O(n_d).
+    pub fn pin(&self, q: &[f64], d: &mut [f64]) {
+        for (k, &c) in self.cols.iter().enumerate() {
+            if self.lo[k] == self.hi[k] {
+                d[c] = q[c] - self.lo[k];
+            }
+        }
     }
 
     /// Corrects the plain step's ŷ₀ (in `y`, scaled, one per row) for the
@@ -193,7 +211,7 @@ impl DesignStep {
         for _round in 0..n + 2 {
             // ŷ₀ with the frozen columns' d moved to their bounds.
             self.y0[..m].copy_from_slice(&y[..m]);
-            for k in 0..n {
+            for &k in &self.moving {
                 if self.frozen[k] {
                     let dd = (q[self.cols[k]] - self.at[k]) - self.d0[k];
                     if dd != 0.0 {
@@ -206,7 +224,8 @@ impl DesignStep {
             }
             // Woodbury over the free columns.
             self.free.clear();
-            self.free.extend((0..n).filter(|&k| !self.frozen[k]));
+            self.free
+                .extend(self.moving.iter().copied().filter(|&k| !self.frozen[k]));
             let nf = self.free.len();
             for (i, &a) in self.free.iter().enumerate() {
                 self.rhs[i] = dot(&self.u[a * m..(a + 1) * m], &self.y0);
@@ -259,7 +278,7 @@ impl DesignStep {
             }
         }
         y[..m].copy_from_slice(&self.y0[..m]);
-        for k in 0..n {
+        for &k in &self.moving {
             let c = self.cols[k];
             if self.frozen[k] {
                 let target = q[c] - self.at[k];

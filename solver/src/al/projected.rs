@@ -155,6 +155,9 @@ impl Projected {
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
             *d = a - b;
         }
+        if let Some(design) = &self.design {
+            design.pin(q, &mut self.d);
+        }
         let jac = ev.jacobian();
         jac.mul_vec(&self.d, &mut self.jd)
             .map_err(|_| TickOutcome::NonFinite)?;
