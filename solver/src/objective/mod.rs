@@ -10,7 +10,7 @@
 //!
 //! `grad.rs` holds the shared algebra (frames at q; point and direction
 //! gradients per body, mapped once into q's columns); `spec.rs` the
-//! builder's vocabulary and its compilation against a built model.
+//! builder's vocabulary, `compile.rs` its compilation against a built model.
 //!
 //! Two more objectives exist already in the fast update and are made
 //! explicit here as weights, not terms: `finger` (the finger rows' penalty,
@@ -30,6 +30,7 @@
 //! random states (`solver/tests/objective/`). [`ObjectiveEval`] evaluates
 //! values and gradients with zero allocation.
 
+mod compile;
 mod dexterity;
 mod grad;
 mod joint_limit;
@@ -37,10 +38,10 @@ mod obstacle;
 mod spec;
 mod straight_line;
 
+pub(crate) use compile::{compile, display_name};
 pub use dexterity::DET_FLOOR;
 pub use obstacle::MIN_DISTANCE_FRACTION;
 pub use spec::{ObjectiveKind, ObjectiveSpec, ObstacleSpec};
-pub(crate) use spec::{compile, display_name};
 
 use nalgebra::Vector3;
 
