@@ -67,6 +67,26 @@ pub const BUILTIN: &[Builtin] = &[
         name: "cluttered",
         text: include_str!("../scenes/cluttered.toml"),
     },
+    Builtin {
+        name: "four-bar-design",
+        text: include_str!("../scenes/four-bar-design.toml"),
+    },
+    Builtin {
+        name: "peaucellier-design",
+        text: include_str!("../scenes/peaucellier-design.toml"),
+    },
+    Builtin {
+        name: "stewart-feet",
+        text: include_str!("../scenes/stewart-feet.toml"),
+    },
+    Builtin {
+        name: "dexterity-arm",
+        text: include_str!("../scenes/dexterity-arm.toml"),
+    },
+    Builtin {
+        name: "dodge",
+        text: include_str!("../scenes/dodge.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

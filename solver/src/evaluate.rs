@@ -179,6 +179,11 @@ impl Evaluation {
             self.frames[body.index()] =
                 BodyFrame::new(r, e).ok_or(EvalError::DegenerateQuaternion { body })?;
         }
+        for (b, o) in model.layout.origin_cols.iter().enumerate() {
+            if let Some(o) = *o {
+                self.frames[b].r = Vector3::new(q[o], q[o + 1], q[o + 2]);
+            }
+        }
         let Self {
             frames,
             values,

@@ -87,9 +87,9 @@ impl Jacobian {
         let mut col_idx = Vec::new();
         let mut blocks = Vec::with_capacity(model.geometry.len());
         row_ptr.push(0);
-        for g in &model.geometry {
-            let mut groups: Vec<(usize, usize, usize)> = g
-                .groups()
+        for (k, g) in model.geometry.iter().enumerate() {
+            let mut groups: Vec<(usize, usize, usize)> = model
+                .constraint_groups(k)
                 .iter()
                 .enumerate()
                 .filter_map(|(slot, grp)| grp.map(|(c, w)| (c, w, slot)))

@@ -89,6 +89,7 @@ mod ids;
 mod jacobian;
 pub mod mechanisms;
 mod model;
+pub mod objective;
 pub mod placement;
 pub mod program;
 pub mod rotation;
@@ -101,10 +102,13 @@ pub use force::{FingerWrench, Redundancy, ReferenceError, reference_finger_wrenc
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
 pub use model::{
-    Body, BodySpec, BuildError, ContactLayout, ContactPair, DEFAULT_FINGERTIP_RADIUS_M,
-    DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam, DesignVar, FINGERTIP_MASS_KG, Finger,
-    FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model, ModelBuilder, Owner,
-    PlaneOwner, PointPlaneSpec, Shape, UnknownName,
+    Body, BodySpec, Bounds, BuildError, ContactLayout, ContactPair, DEFAULT_FINGERTIP_RADIUS_M,
+    DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignOwner, DesignParam, DesignVar,
+    FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model,
+    ModelBuilder, Owner, PlaneOwner, PointPlaneSpec, Shape, UnknownName,
+};
+pub use objective::{
+    Objective, ObjectiveEval, ObjectiveKind, ObjectiveSpec, Objectives, ObstacleSpec,
 };
 pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,

@@ -90,6 +90,27 @@ pub fn summary(scene: &Scene) -> String {
         if design == 1 { "" } else { "s" }
     );
     out += &format!("  constraints  {}\n", kinds.join(", "));
+    for d in m.layout().design_vars() {
+        let bounds = d.bounds.map_or("unbounded".to_string(), |b| {
+            let r: Vec<String> = b[..d.width]
+                .iter()
+                .map(|[lo, hi]| format!("[{lo}, {hi}]"))
+                .collect();
+            format!("bounds {}", r.join(" "))
+        });
+        let parts = if d.width == 1 {
+            "1 component".to_string()
+        } else {
+            format!("{} components", d.width)
+        };
+        out += &format!("  design       {} ({parts}, m; {bounds})\n", d.name);
+    }
+    for o in &m.objectives().terms {
+        out += &format!(
+            "  objective    {} ({}, weight {})\n",
+            o.name, o.kind, o.weight
+        );
+    }
     out += &format!(
         "  rows         {} ({} equality, {ineq} inequality; {angle_rows} angular)\n",
         m.n_rows(),

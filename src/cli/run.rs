@@ -4,7 +4,7 @@ use super::output::{RunDir, produce_atomic, write_atomic};
 use super::rt_args::RtArgs;
 use super::values;
 use crate::report::{plots, scene_plot, session as text, summary::Summary};
-use crate::scenes::{DEFAULT_SCENE, resolve};
+use crate::scenes::{DEFAULT_SCENE, Scene, check_loaded, resolve};
 use crate::session::{self, Plan, SessionOptions};
 use anyhow::Result;
 use clap::Args;
@@ -68,6 +68,16 @@ pub struct RunArgs {
     /// No live status line.
     #[arg(long)]
     pub quiet: bool,
+    /// Frees a design variable without editing the scene (repeatable):
+    /// `<joint>.length`, `<joint>.anchor_i`, `<joint>.anchor_j` or
+    /// `<fixed body>.position`.
+    #[arg(long, value_name = "OWNER.VAR")]
+    pub free: Vec<String>,
+    /// Adds an objective (repeatable): `KIND` or `KIND:key=value,…` with the
+    /// keys of `[[objective]]` (docs/scene-format.md); names need no quotes,
+    /// e.g. `dexterity:chain=[base,upper,fore],point=[0.1,0,0],weight=0.01`.
+    #[arg(long, value_name = "KIND:KEY=VALUE,…")]
+    pub objective: Vec<String>,
 }
 
 impl Default for RunArgs {
@@ -87,6 +97,8 @@ impl Default for RunArgs {
             replay: None,
             rt: RtArgs::default(),
             quiet: false,
+            free: Vec::new(),
+            objective: Vec::new(),
         }
     }
 }
@@ -122,6 +134,13 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         Err(e) => {
             eprintln!("{e}");
             return Ok(ExitCode::from(1));
+        }
+    };
+    let scene = match with_design_flags(scene, &args.free, &args.objective) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::from(2));
         }
     };
     // Claimed before anything runs: a non-empty --out is refused, and the
@@ -194,6 +213,20 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The scene with `--free` and `--objective` applied (unchanged without
+/// them). An error about a flag names the flag (exit status 2).
+fn with_design_flags(
+    scene: Scene,
+    free: &[String],
+    objectives: &[String],
+) -> Result<Scene, haptloop_solver::scene::SceneError> {
+    if free.is_empty() && objectives.is_empty() {
+        return Ok(scene);
+    }
+    let flagged = scene.loaded.with_flags(free, objectives)?;
+    check_loaded(flagged.loaded.clone()).map_err(|e| flagged.attribute(e))
+}
+
 fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Result<()> {
     let write = |name: &str, text: String| write_atomic(&dir.join(name), text.as_bytes());
     write(
@@ -222,6 +255,10 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
             scene_plot::contact(p, &o.plan.scene, track)
         })?;
         extra += ", bodies.csv, contact.svg";
+    }
+    if !o.recorder.design_names.is_empty() {
+        produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
+        extra += ", design.svg";
     }
     println!(
         "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg{extra}",

@@ -1,5 +1,6 @@
 //! SVG plots of a session (plotters): the latency percentile distribution, and
-//! force and constraint violation over time.
+//! force, constraint violation and (scenes with any) design variables and
+//! objectives over time.
 
 use crate::session::{Series, SessionOutcome};
 use anyhow::{Result, anyhow};
@@ -221,4 +222,101 @@ pub fn violation(path: &Path, o: &SessionOutcome) -> Result<()> {
         &[("max |C| (length rows)", &o.recorder.violation)],
         true,
     )
+}
+
+/// The design variables (top, m) and the objectives' values (bottom) over
+/// time: the force plot's companion in scenes with design variables or
+/// objectives. Each series is drawn on its own, so each panel's axis fits
+/// all of its series.
+pub fn design(path: &Path, o: &SessionOutcome) -> Result<()> {
+    let r = &o.recorder;
+    let (vars, objs) = r
+        .design_series
+        .split_at(r.design_variables.min(r.design_series.len()));
+    let names = |from: usize, n: usize| -> Vec<&str> {
+        r.design_names[from..from + n]
+            .iter()
+            .map(|s| s.trim_end_matches("_m").trim_start_matches("objective_"))
+            .collect()
+    };
+    let root = SVGBackend::new(path, (SIZE.0, SIZE.1 * 2)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (top, bottom) = root.split_vertically(SIZE.1);
+    for (area, series, labels, title, y) in [
+        (
+            &top,
+            vars,
+            names(0, vars.len()),
+            format!("{}: design variables", o.plan.scene),
+            "m",
+        ),
+        (
+            &bottom,
+            objs,
+            names(vars.len(), objs.len()),
+            format!("{}: objectives (reported values)", o.plan.scene),
+            "value",
+        ),
+    ] {
+        panel(area, series, &labels, &title, y)?;
+    }
+    root.present().map_err(err)
+}
+
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    series: &[Series],
+    labels: &[&str],
+    title: &str,
+    y_desc: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let finite = || {
+        series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.1.is_finite())
+    };
+    let tmax = finite().map(|p| p.0).fold(1e-3, f64::max);
+    let (lo, hi) = finite().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+        (a.min(p.1), b.max(p.1))
+    });
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) };
+    let pad = ((hi - lo) * 0.05).max(1e-9 * (1.0 + hi.abs()));
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..tmax, (lo - pad)..(hi + pad))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("session time, s")
+        .y_desc(y_desc)
+        .y_label_formatter(&|v| format!("{v:.4}"))
+        .draw()
+        .map_err(err)?;
+    for (k, (s, name)) in series.iter().zip(labels).enumerate() {
+        let c = COLOURS[k % COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(
+                s.points.iter().copied().filter(|p| p.1.is_finite()),
+                c.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(name.to_string())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+    }
+    if !series.is_empty() {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
 }

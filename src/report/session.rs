@@ -120,6 +120,7 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             f.mean, f.max, f.commanded_max
         );
     }
+    design_lines(&mut out, s);
     let kinds = if s.safety.failure_kinds.is_empty() {
         String::new()
     } else {
@@ -199,4 +200,29 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.wall_clock_s
     );
     out
+}
+
+/// How the design variables and objectives moved, one line each.
+fn design_lines(out: &mut String, s: &Summary) {
+    if !s.design.is_empty() {
+        let _ = writeln!(out, "design variables (m): start → end [min, max]");
+        for (name, d) in &s.design {
+            let _ = writeln!(
+                out,
+                "  {name:<24} {:>10.5} → {:>10.5}  [{:.5}, {:.5}]",
+                d.start, d.end, d.min, d.max
+            );
+        }
+    }
+    if !s.objectives.is_empty() {
+        let _ = writeln!(out, "objectives: start → end [min, max]");
+        for (name, o) in &s.objectives {
+            let v = &o.value;
+            let _ = writeln!(
+                out,
+                "  {name:<24} {:>10.4e} → {:>10.4e}  [{:.4e}, {:.4e}]  ({}, weight {})",
+                v.start, v.end, v.min, v.max, o.kind, o.weight
+            );
+        }
+    }
 }

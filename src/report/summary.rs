@@ -229,6 +229,49 @@ pub struct Contact {
     pub build_us_max: f64,
 }
 
+/// How one design-variable component (m) or objective value moved over the
+/// run: at the start (after assembly), at the end, and its extremes over the
+/// ticks that succeeded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DesignFigure {
+    /// At the start.
+    #[serde(with = "super::figure")]
+    pub start: f64,
+    /// After the last tick that succeeded.
+    #[serde(with = "super::figure")]
+    pub end: f64,
+    /// Smallest.
+    #[serde(with = "super::figure")]
+    pub min: f64,
+    /// Largest.
+    #[serde(with = "super::figure")]
+    pub max: f64,
+}
+
+impl From<crate::session::Range4> for DesignFigure {
+    fn from(r: crate::session::Range4) -> Self {
+        Self {
+            start: r.start,
+            end: r.end,
+            min: r.min,
+            max: r.max,
+        }
+    }
+}
+
+/// One objective's reported value over the run (its unit depends on the
+/// kind: see `docs/scene-format.md`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectiveFigure {
+    /// The objective's kind.
+    pub kind: String,
+    /// Its weight.
+    pub weight: f64,
+    /// Start, end, min and max of its reported value.
+    #[serde(flatten)]
+    pub value: DesignFigure,
+}
+
 /// The whole summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -283,6 +326,14 @@ pub struct Summary {
     pub stopped_early: bool,
     /// Wall-clock seconds (not deterministic).
     pub wall_clock_s: f64,
+    /// How each design-variable component moved, m: `"<joint>.<var>"` or
+    /// `"<body>.position.x"` (absent without design variables).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub design: BTreeMap<String, DesignFigure>,
+    /// Each objective's reported value over the run (absent without
+    /// objectives).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub objectives: BTreeMap<String, ObjectiveFigure>,
 }
 
 impl Summary {
@@ -458,6 +509,27 @@ impl Summary {
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,
             wall_clock_s: o.wall_clock_s,
+            design: o
+                .design
+                .variables
+                .iter()
+                .map(|(n, r)| (n.clone(), (*r).into()))
+                .collect(),
+            objectives: o
+                .design
+                .objectives
+                .iter()
+                .map(|(n, kind, weight, r)| {
+                    (
+                        n.clone(),
+                        ObjectiveFigure {
+                            kind: kind.clone(),
+                            weight: *weight,
+                            value: (*r).into(),
+                        },
+                    )
+                })
+                .collect(),
         }
     }
 }

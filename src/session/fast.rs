@@ -109,6 +109,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) recorders: Vec<TraceRecorder>,
     /// Witness tables from the slow loop (scenes with contact).
     pub(super) inbox: Option<super::contact::WitnessInbox>,
+    /// Design variables' and objectives' figures and trace (scenes with any).
+    pub(super) design: Option<super::design::DesignTracker>,
 }
 
 impl<C: Clock> FastLoop<C> {
@@ -144,6 +146,15 @@ impl<C: Clock> FastLoop<C> {
     /// The devices.
     pub fn rig(&self) -> &Rig {
         &self.rig
+    }
+
+    /// How the design variables and objectives moved so far (empty without
+    /// any).
+    pub fn design_stats(&self) -> super::design::DesignStats {
+        self.design
+            .as_ref()
+            .map(|d| d.stats.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -194,6 +205,9 @@ impl<C: Clock> TickBody for FastLoop<C> {
         let cut = !solved || tick.index < self.cut_until;
 
         let t_s = now.as_secs_f64();
+        if let Some(d) = &mut self.design {
+            d.record(t_s, &self.program.program, solved);
+        }
         let mut fault = None;
         for i in 0..self.targets.len() {
             let d = self.rig.finger_device[i];

@@ -12,6 +12,7 @@
 //! thread, so two runs produce bit-identical results.
 
 mod contact;
+mod design;
 mod fast;
 mod plan;
 mod recorder;
@@ -21,6 +22,7 @@ mod stats;
 mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
+pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
 pub use plan::{Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
@@ -101,6 +103,8 @@ pub struct SessionOutcome {
     /// Translational joint rows of the model (0: a scene of free bodies,
     /// whose joint violation cannot be measured).
     pub joint_rows: usize,
+    /// How the design variables and objectives moved (empty without any).
+    pub design: DesignStats,
 }
 
 /// Everything the loops need, built before the clock starts.
@@ -116,6 +120,9 @@ pub struct Built<C: Clock> {
     pub device_traces: Vec<TraceStream>,
     /// The initial assembly.
     pub assembly: Option<SolveInfo>,
+    /// The reporter's end of the design-variable trace (scenes with design
+    /// variables or objectives).
+    pub design: Option<DesignColumns>,
 }
 
 /// Builds the program (and assembles the scene), the devices (registered on
@@ -218,6 +225,10 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         }
         None => (Vec::new(), Vec::new()),
     };
+    let (design, design_columns) = match DesignTracker::new(&model, program.program.q()) {
+        Some((t, c)) => (Some(t), Some(c)),
+        None => (None, None),
+    };
     let counts = vec![[0; 3]; rig.devices.len()];
     let rig_devices = rig.devices.len();
     // A violation above the scene's tolerance (else 0.1 mm) triggers a
@@ -243,6 +254,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
         recorders,
         inbox,
+        design,
     };
     let slow = SlowLoop {
         snapshots,
@@ -266,6 +278,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         device_traces,
         trace,
         assembly,
+        design: design_columns,
     })
 }
 
@@ -381,6 +394,7 @@ fn finish<C: Clock>(
         wall_clock_s: (MonotonicClock::new().now() - wall_start).0 as f64 / 1e9,
         track,
         joint_rows: joint_length_rows(&scene.compiled.model),
+        design: fast.design_stats(),
     })
 }
 
@@ -455,6 +469,7 @@ fn run_deterministic(
     let clock = MockClock::new(Nanos(0));
     let mut built = build(scene, plan, clock.clone())?;
     recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
+    recorder.attach_design(built.design.take())?;
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
     let _running = LoopsRunning::start();
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
@@ -503,8 +518,10 @@ fn run_real_time(
         trace,
         device_traces,
         assembly,
+        design,
     } = built;
     recorder.attach_device_traces(device_traces);
+    recorder.attach_design(design)?;
     let _running = LoopsRunning::start();
     let handle = spawn_loop(
         &plan.schedule(),

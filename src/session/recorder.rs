@@ -1,7 +1,10 @@
 //! The reporter's side of the trace: drains the fast loop's lock-free queue of
 //! [`TraceSample`]s into `trace.csv` (written as it goes) and into decimated
-//! series for the plots. Runs off the real-time thread.
+//! series for the plots; in scenes with design variables or objectives, each
+//! row also gets the tick's design components and objective values
+//! ([`DesignColumns`]). Runs off the real-time thread.
 
+use super::design::DesignColumns;
 use super::fast::TraceSample;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
@@ -39,10 +42,26 @@ impl Series {
     }
 }
 
+/// The columns every `trace.csv` has.
+const TRACE_HEADER: &str = "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m";
+
 /// Drains trace samples into a CSV file and plot series.
 pub struct Recorder {
     /// The CSV being written (under `trace.csv.partial`) and its final path.
     csv: Option<(BufWriter<File>, PathBuf, PathBuf)>,
+    /// The header is written with the first rows (design columns are known
+    /// once the session is built).
+    header_written: bool,
+    /// The design trace (scenes with design variables or objectives).
+    design: Option<DesignColumns>,
+    /// Per design column (components, then objectives): value over time.
+    pub design_series: Vec<Series>,
+    /// Design column names, as in `trace.csv`.
+    pub design_names: Vec<String>,
+    /// How many of `design_series` are design components (the rest are
+    /// objectives).
+    pub design_variables: usize,
+    expected_ticks: u64,
     /// |force| per finger.
     pub force: Vec<Series>,
     /// Largest length-row violation per tick (from finger 0's rows).
@@ -67,20 +86,22 @@ impl Recorder {
                 // Written under a temporary name and renamed when complete: a
                 // crash never leaves a `trace.csv` with a cut-off last row.
                 let partial = d.join("trace.csv.partial");
-                let mut w = BufWriter::new(
+                let w = BufWriter::new(
                     File::create(&partial)
                         .with_context(|| format!("creating {}", partial.display()))?,
                 );
-                writeln!(
-                    w,
-                    "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m"
-                )?;
                 Some((w, partial, path))
             }
             None => None,
         };
         Ok(Recorder {
             csv,
+            header_written: false,
+            design: None,
+            design_series: Vec::new(),
+            design_names: Vec::new(),
+            design_variables: 0,
+            expected_ticks: ticks,
             force: fingers.iter().map(|_| Series::with_budget(ticks)).collect(),
             violation: Series::with_budget(ticks),
             latest: vec![TraceSample::default(); fingers.len()],
@@ -96,23 +117,76 @@ impl Recorder {
         self.device_traces = streams;
     }
 
+    /// Takes over the design trace of the session (before the first
+    /// [`drain`](Self::drain)): `trace.csv` gains its columns.
+    pub fn attach_design(&mut self, design: Option<DesignColumns>) -> Result<()> {
+        if let Some(d) = &design {
+            self.design_names = d.names.clone();
+            self.design_variables = d.variables;
+            self.design_series = d
+                .names
+                .iter()
+                .map(|_| Series::with_budget(self.expected_ticks))
+                .collect();
+        }
+        self.design = design;
+        Ok(())
+    }
+
+    fn write_header(&mut self) -> Result<()> {
+        if self.header_written {
+            return Ok(());
+        }
+        self.header_written = true;
+        if let Some((w, _, _)) = &mut self.csv {
+            write!(w, "{TRACE_HEADER}")?;
+            for n in &self.design_names {
+                write!(w, ",{n}")?;
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    }
+
     /// Moves every queued sample into the file and the series, and every
     /// queued device-trace row into its file.
     pub fn drain(&mut self, queue: &ArrayQueue<TraceSample>, names: &[String]) -> Result<()> {
         for t in &mut self.device_traces {
             t.drain()?;
         }
+        self.write_header()?;
         while let Some(s) = queue.pop() {
             let i = usize::from(s.finger);
+            let group = self.design.as_mut().and_then(|d| d.at(s.t_s));
             if let Some((w, _, _)) = &mut self.csv {
                 let [tx, ty, tz] = s.target_m;
                 let [px, py, pz] = s.position_m;
                 let [fx, fy, fz] = s.force_n;
-                writeln!(
+                write!(
                     w,
                     "{:.6},{},{tx:e},{ty:e},{tz:e},{px:e},{py:e},{pz:e},{fx:e},{fy:e},{fz:e},{:e}",
                     s.t_s, names[i], s.violation_m
                 )?;
+                match group {
+                    Some(g) => {
+                        for v in g {
+                            write!(w, ",{v:e}")?;
+                        }
+                    }
+                    None => {
+                        for _ in 0..self.design_names.len() {
+                            write!(w, ",")?;
+                        }
+                    }
+                }
+                writeln!(w)?;
+            }
+            if i == 0
+                && let Some(g) = group
+            {
+                for (series, &v) in self.design_series.iter_mut().zip(g) {
+                    series.push(s.t_s, v);
+                }
             }
             let f = s.force_n;
             self.force[i].push(s.t_s, (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt());
@@ -128,6 +202,7 @@ impl Recorder {
     /// Flushes the CSV file and gives it its final name (`trace.csv`), and
     /// finishes every device trace.
     pub fn finish(&mut self) -> Result<()> {
+        self.write_header()?;
         for t in std::mem::take(&mut self.device_traces) {
             self.device_trace_dropped += t.finish()?;
         }

@@ -6,6 +6,7 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod contact;
+mod design;
 mod docs;
 mod scene_format;
 mod scenes;

@@ -128,6 +128,14 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
             after("[[joint]]\n", "free = [\"zz_unknown\"]\n"),
         ),
         (
+            "[[objective]]",
+            format!("{base}\n[[objective]]\nkind = \"finger\"\nzz_unknown = 1\n"),
+        ),
+        (
+            "[[objective]] kind values",
+            format!("{base}\n[[objective]]\nkind = \"zz_unknown\"\n"),
+        ),
+        (
             "grasp values",
             replace("grasp = \"point\"", "grasp = \"zz_unknown\""),
         ),

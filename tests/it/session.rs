@@ -309,10 +309,18 @@ fn replay_refuses_a_trace_that_belongs_to_another_session() {
 }
 
 /// After warm-up, the fast loop's tick (devices, solver, safety layer,
-/// statistics, snapshot, trace queue, scheduler) allocates nothing.
+/// statistics, snapshot, trace queue, scheduler) allocates nothing; the
+/// design scenes add objectives, free design variables, bounds and the
+/// design trace queue.
 #[test]
 fn the_fast_loop_tick_allocates_nothing() {
-    for name in ["four-bar", "stewart", "grasp-3"] {
+    for name in [
+        "four-bar",
+        "stewart",
+        "grasp-3",
+        "stewart-feet",
+        "dexterity-arm",
+    ] {
         let scene = resolve(name).unwrap();
         let plan = Plan::new(&scene, &deterministic(30.0)).unwrap();
         let clock = MockClock::new(Nanos(0));

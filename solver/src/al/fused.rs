@@ -39,6 +39,9 @@ struct Plan {
     frame: [usize; 2],
     /// Body index of each end if it moves (its accumulator).
     moving: [bool; 2],
+    /// The rows depend on the ends' poses (not a norm or design-bound row,
+    /// which write raw entries only).
+    ends: bool,
     groups: Groups,
     finger: bool,
     /// Column of e for a quaternion-norm row (evaluated inline: C = eᵀe − 1,
@@ -91,14 +94,16 @@ impl Fused {
             .geometry
             .iter()
             .zip(&model.constraints)
-            .map(|(g, info)| {
+            .enumerate()
+            .map(|(k, (g, info))| {
                 let frame = g.frames();
                 let moving = frame.map(|f| f < n_bodies && model.layout.body_cols[f].is_some());
                 Plan {
                     rows: (info.rows.start, info.rows.end),
                     frame,
                     moving,
-                    groups: g.groups(),
+                    ends: g.has_ends(),
+                    groups: model.constraint_groups(k),
                     finger: info.finger.is_some(),
                     norm: match info.kind {
                         ConstraintKind::QuaternionNorm => {
@@ -181,8 +186,10 @@ impl Fused {
             }
             // Σ_k w_k ∂C_k/∂(δr, δθ) of each end, then once into the body.
             let mut acc = RowGrad::default();
-            for (rg, &wk) in sink.rows[..r1 - r0].iter().zip(&w) {
-                acc.add_scaled(wk, rg);
+            if p.ends {
+                for (rg, &wk) in sink.rows[..r1 - r0].iter().zip(&w) {
+                    acc.add_scaled(wk, rg);
+                }
             }
             for end in 0..2 {
                 if p.moving[end] {
@@ -194,6 +201,11 @@ impl Fused {
                     let dk = self.frames[p.frame[end]].rot.tr_mul(&acc.lin[end]);
                     for j in 0..3 {
                         g[col + j] += dk[j];
+                    }
+                }
+                if let Some((col, _)) = p.groups[Slot::origin(end) as usize] {
+                    for j in 0..3 {
+                        g[col + j] += acc.lin[end][j];
                     }
                 }
             }
@@ -237,6 +249,11 @@ impl Fused {
             self.frames[b] = BodyFrame::new(r, e).ok_or(EvalError::DegenerateQuaternion {
                 body: BodyId(b as u32),
             })?;
+        }
+        for (b, o) in model.layout.origin_cols.iter().enumerate() {
+            if let Some(o) = *o {
+                self.frames[b].r = Vector3::new(q[o], q[o + 1], q[o + 2]);
+            }
         }
         Ok(())
     }

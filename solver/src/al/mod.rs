@@ -43,6 +43,7 @@
 //! Multipliers here are the optimisation's λ, not physical forces: the
 //! physical load on a finger comes from Eq. 7 ([`crate::force`]).
 
+pub(crate) mod design;
 pub(crate) mod fused;
 pub(crate) mod projected;
 pub(crate) mod scaling;

@@ -26,7 +26,9 @@
 //! sparse solve with the existing factor and an m_f × m_f Cholesky of its
 //! Schur complement per iteration, no new factorisation. The least-astonishment
 //! metric becomes the mass matrix (Gauss's least constraint); design variables,
-//! which have no inertia, stay fixed (only the gradient update moves them).
+//! which have no inertia, get a metric of their own and move through a
+//! low-rank (Woodbury) correction on the same factor, their bounds a box
+//! (`design`). Objectives act through q₀ (`program::objective`).
 //! Inequalities follow the force solve's active set (a released row is free
 //! from the next tick on). The y are the step's multipliers: stored as λ
 //! (equalities) and ν = max(0, −y) (inequalities).
@@ -49,6 +51,7 @@
 //! that costs a few ticks of up to 0.7 mm violation, and the linkage folds
 //! into its other branch instead of flying apart.
 
+use super::design::DesignStep;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
 use crate::program::TickOutcome;
@@ -94,6 +97,8 @@ pub(crate) struct Projected {
     reach: Vec<(usize, f64)>,
     /// How far the last taken step moved a shaped body's points, metres.
     moved_m: f64,
+    /// The design columns' correction (models with design variables).
+    design: Option<DesignStep>,
 }
 
 /// The virtual coupling of contact-finger proxies, as the projected step
@@ -164,7 +169,15 @@ impl Projected {
                 })
                 .collect(),
             moved_m: 0.0,
+            design: None,
         }
+    }
+
+    /// Lets the design columns of `model` move, with metric `w_kg` each (see
+    /// `design`). Allocates.
+    pub fn with_design(mut self, model: &Model, w_kg: f64) -> Self {
+        self.design = DesignStep::new(model, w_kg);
+        self
     }
 
     /// How far the last step moved any point of a shaped body, metres (0
@@ -203,6 +216,9 @@ impl Projected {
             .map_err(TickOutcome::Eval)?;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
             *d = a - b;
+        }
+        if let Some(design) = &self.design {
+            design.pin(q, &mut self.d);
         }
         let jac = ev.jacobian();
         jac.mul_vec(&self.d, &mut self.jd)
@@ -247,6 +263,12 @@ impl Projected {
         }
         fb.project(&self.r, &self.k_inv, &mut self.y)
             .map_err(|_| TickOutcome::ForceSolve)?;
+        let mut d_changed = false;
+        if let Some(design) = &mut self.design {
+            d_changed = design
+                .correct(ev, fb, &self.k_inv, q, &mut self.d, &mut self.y, step)
+                .map_err(|()| TickOutcome::ForceSolve)?;
+        }
         let scale = fb.row_scale();
         for (y, sc) in self.y.iter_mut().zip(scale) {
             *y *= sc;
@@ -254,6 +276,15 @@ impl Projected {
         jac.mul_t_vec(&self.y, &mut self.g)
             .map_err(|_| TickOutcome::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
+        if let Some(design) = &self.design {
+            for (&c, &mg) in design.cols.iter().zip(&design.mg) {
+                self.mg[c] = mg;
+            }
+            if d_changed {
+                jac.mul_vec(&self.d, &mut self.jd)
+                    .map_err(|_| TickOutcome::NonFinite)?;
+            }
+        }
         let mut step = step;
         let mut size = self
             .d
@@ -313,7 +344,11 @@ impl Projected {
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {
                 Role::Equality | Role::Friction => y,
-                Role::Finger | Role::Coupling | Role::Redundant => 0.0,
+                Role::Finger
+                | Role::Coupling
+                | Role::Redundant
+                | Role::DesignBound
+                | Role::DesignPin => 0.0,
                 Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }

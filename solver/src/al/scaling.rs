@@ -52,6 +52,15 @@ pub(crate) enum Role {
     /// A friction stick row: C = 0 while its contact sticks, else free. Only
     /// the projected rule and the force solve use it (its gains are 0).
     Friction,
+    /// A design-variable bound (C ≥ 0) on one design column, touching no
+    /// body: the gradient rule treats it like [`Role::Inequality`]; Eq. 7
+    /// never sees it and the projected rule enforces it as a box on its
+    /// design step.
+    DesignBound,
+    /// A design-variable component held at lo = hi (C = 0), touching no
+    /// body: the gradient rule treats it like [`Role::Equality`]; the
+    /// projected rule keeps the component where it is.
+    DesignPin,
     /// A row found linearly dependent on the kept rows at `Program::new`
     /// (`force::redundancy`): evaluated and its violation reported, but it
     /// takes part in no update and no force solve (gain 0, multiplier 0).
@@ -97,6 +106,8 @@ impl Scaling {
                     .is_some_and(|f| model.fingers()[f.index()].tip.is_some());
             let r = match (info.finger.is_some(), row.sense) {
                 (true, _) if proxy => Role::Coupling,
+                _ if info.kind == ConstraintKind::DesignBound => Role::DesignBound,
+                _ if info.kind == ConstraintKind::DesignPin => Role::DesignPin,
                 (true, _) => Role::Finger,
                 (false, Sense::Equality) => Role::Equality,
                 (false, Sense::Inequality) if info.kind == ConstraintKind::Contact => Role::Contact,

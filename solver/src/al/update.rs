@@ -31,12 +31,12 @@ use crate::{Model, RowUnit, Sense};
 #[inline(always)]
 pub(crate) fn row_weight(s: &Scaling, i: usize, c: f64, lambda: &mut f64) -> f64 {
     match s.role[i] {
-        Role::Equality => {
+        Role::Equality | Role::DesignPin => {
             *lambda += s.integral[i] * c;
             *lambda + s.penalty[i] * c
         }
         Role::Finger | Role::Coupling => s.penalty[i] * c,
-        Role::Inequality | Role::Contact => {
+        Role::Inequality | Role::Contact | Role::DesignBound => {
             *lambda = (*lambda - s.integral[i] * c).max(0.0);
             -(*lambda - s.penalty[i] * c).max(0.0)
         }
@@ -119,8 +119,11 @@ impl Violation {
                     v.max_penetration_m = v.max_penetration_m.max(-ci);
                     continue;
                 }
-                (Role::Equality, _) | (Role::Redundant, Sense::Equality) => ci.abs(),
-                (Role::Inequality, _) | (Role::Redundant, Sense::Inequality) => (-ci).max(0.0),
+                (Role::Equality | Role::DesignPin, _) | (Role::Redundant, Sense::Equality) => {
+                    ci.abs()
+                }
+                (Role::Inequality | Role::DesignBound, _)
+                | (Role::Redundant, Sense::Inequality) => (-ci).max(0.0),
             };
             match row.unit {
                 RowUnit::Length => {

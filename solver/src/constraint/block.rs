@@ -5,7 +5,8 @@
 //! virtual displacement δr (3) and virtual rotation δθ (3), accumulated in a
 //! [`RowGrad`]. The [`Sink`] then maps δθ to the four Euler-parameter columns
 //! through Ω(e) (see [`crate::rotation`]) and, for a free anchor, maps the
-//! world-frame point gradient n to the anchor's body-frame columns Rᵀn.
+//! world-frame point gradient n to the anchor's body-frame columns Rᵀn; for a
+//! fixed body with a free position, n itself goes to its three origin columns.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -70,6 +71,10 @@ pub(crate) enum Slot {
     AnchorI = 2,
     AnchorJ = 3,
     Length = 4,
+    /// The free position (3 design columns, world frame) of a fixed body at
+    /// end 0 or 1 (see `Model::constraint_groups`).
+    OriginI = 5,
+    OriginJ = 6,
 }
 
 impl Slot {
@@ -88,10 +93,20 @@ impl Slot {
             Self::AnchorJ
         }
     }
+
+    /// The free-position design group of a fixed body at end 0 or 1.
+    #[inline]
+    pub fn origin(end: usize) -> Self {
+        if end == 0 {
+            Self::OriginI
+        } else {
+            Self::OriginJ
+        }
+    }
 }
 
 /// Number of [`Slot`]s.
-pub(crate) const SLOTS: usize = 5;
+pub(crate) const SLOTS: usize = 7;
 
 /// For each slot, `(first column, width)` if the constraint touches it.
 pub(crate) type Groups = [Option<(usize, usize)>; SLOTS];
@@ -304,6 +319,11 @@ impl Sink for Block<'_> {
             if p != u16::MAX {
                 let dk = f.rot.tr_mul(&g.lin[end]);
                 self.vals[base + p as usize..base + p as usize + 3].copy_from_slice(dk.as_slice());
+            }
+            let p = self.pos[Slot::origin(end) as usize];
+            if p != u16::MAX {
+                self.vals[base + p as usize..base + p as usize + 3]
+                    .copy_from_slice(g.lin[end].as_slice());
             }
         }
     }

@@ -45,12 +45,18 @@ impl Limit {
         g
     }
 
-    pub fn eval<S: Sink>(&self, x: &Ctx, c: &mut [f64], sink: &mut S) {
-        let (v, g) = match &self.joint {
+    /// The joint coordinate x and its gradient.
+    #[inline]
+    pub fn coordinate(&self, x: &Ctx) -> (f64, super::block::RowGrad) {
+        match &self.joint {
             Limited::Angle(j) => j.coordinate(x),
             Limited::Displacement(j) => j.coordinate(x),
             Limited::Length(j) => j.coordinate(x),
-        };
+        }
+    }
+
+    pub fn eval<S: Sink>(&self, x: &Ctx, c: &mut [f64], sink: &mut S) {
+        let (v, g) = self.coordinate(x);
         c[0] = v - self.lo;
         c[1] = self.hi - v;
         sink.row(0, &g);

@@ -43,6 +43,10 @@ pub enum ConstraintKind {
     Contact,
     /// The two friction stick rows of a fingertip contact, m.
     ContactFriction,
+    /// Bounds on one design-variable component: 2 inequality rows, m.
+    DesignBound,
+    /// A design-variable component held at its bound (lo = hi): 1 row, m.
+    DesignPin,
 }
 
 impl ConstraintKind {
@@ -51,7 +55,9 @@ impl ConstraintKind {
         use ConstraintKind::*;
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
-            | PointPlaneInequality | Contact | ContactFriction => return RowUnit::Length,
+            | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin => {
+                return RowUnit::Length;
+            }
             Perpendicular | RevoluteLimit => return RowUnit::Angle,
             QuaternionNorm => return RowUnit::Dimensionless,
             Universal | Revolute | Fixed | RigidFinger => 3,
@@ -68,9 +74,8 @@ impl ConstraintKind {
     pub fn sense(self) -> Sense {
         use ConstraintKind::*;
         match self {
-            RevoluteLimit | PrismaticLimit | DistanceLimit | PointPlaneInequality | Contact => {
-                Sense::Inequality
-            }
+            RevoluteLimit | PrismaticLimit | DistanceLimit | PointPlaneInequality | Contact
+            | DesignBound => Sense::Inequality,
             ContactFriction => Sense::Friction,
             _ => Sense::Equality,
         }
@@ -97,6 +102,8 @@ impl ConstraintKind {
             PointPlaneInequality => "point-plane inequality",
             Contact => "contact",
             ContactFriction => "contact friction",
+            DesignBound => "design bound",
+            DesignPin => "design pin",
         }
     }
 }

@@ -14,12 +14,14 @@
 //! | `finger.rs` | point grasp / rigid grasp | 3 / 3 + 3 | m, angle |
 //! | `quat_norm.rs` | Euler-parameter norm, one per moving body | 1 | dimensionless |
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
+//! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
 
 pub(crate) mod axes;
 pub(crate) mod block;
+pub(crate) mod bound;
 pub(crate) mod distance;
 pub(crate) mod finger;
 pub(crate) mod limit;
@@ -53,6 +55,7 @@ pub(crate) enum Geometry {
     QuatNorm(quat_norm::QuatNorm),
     Limit(limit::Limit),
     Contact(witness::ContactRows),
+    Bound(bound::DesignBound),
 }
 
 impl Geometry {
@@ -71,7 +74,15 @@ impl Geometry {
             Self::QuatNorm(_) => quat_norm::QuatNorm::ROWS,
             Self::Limit(_) => limit::Limit::ROWS,
             Self::Contact(c) => c.rows as usize,
+            Self::Bound(b) => b.rows(),
         }
+    }
+
+    /// Whether the rows depend on the poses of the two ends of
+    /// [`frames`](Self::frames) (false for quaternion norms and design
+    /// bounds, which read raw coordinates).
+    pub fn has_ends(&self) -> bool {
+        !matches!(self, Self::QuatNorm(_) | Self::Bound(_))
     }
 
     /// The column groups every row of this constraint touches.
@@ -95,6 +106,7 @@ impl Geometry {
             Self::QuatNorm(j) => j.groups(),
             Self::Limit(j) => j.groups(),
             Self::Contact(c) => c.pair.groups(),
+            Self::Bound(b) => b.groups(),
         }
     }
 
@@ -114,6 +126,8 @@ impl Geometry {
             Self::QuatNorm(_) => [0, 0],
             Self::Limit(j) => j.pair().frame,
             Self::Contact(c) => c.pair.frame,
+            // Raw values only, like the norm row.
+            Self::Bound(_) => [0, 0],
         }
     }
 
@@ -133,6 +147,7 @@ impl Geometry {
             Self::QuatNorm(j) => j.eval(x, c, sink),
             Self::Limit(j) => j.eval(x, c, sink),
             Self::Contact(j) => j.eval(x, c, sink),
+            Self::Bound(j) => j.eval(x, c, sink),
         }
     }
 }

@@ -71,6 +71,9 @@ pub(crate) struct Feedback {
     /// Per row: a contact or friction row, solved with a small relative
     /// compliance ([`CONTACT_COMPLIANCE`]).
     compliant: Vec<bool>,
+    /// Counts the factorisations: whatever caches products with the factor
+    /// (the projected update's design columns) recomputes when it changes.
+    pub generation: u64,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -156,6 +159,7 @@ impl Feedback {
             coupling: vec![(Vector3::zeros(), Vector3::zeros()); fingers.len()],
             known: vec![None; m_f],
             max_pull_n: 0.0,
+            generation: 0,
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -428,7 +432,8 @@ impl Feedback {
                 }
                 Role::Equality | Role::Finger | Role::Coupling => true,
                 Role::Friction => self.stick.get(i).copied().unwrap_or(false),
-                Role::Redundant => false,
+                // Design rows touch no body: never part of the solve.
+                Role::Redundant | Role::DesignBound | Role::DesignPin => false,
             };
             *sc = if active { s.ell[i] } else { 0.0 };
         }
@@ -441,6 +446,7 @@ impl Feedback {
         ev: &Evaluation,
         settings: &SolverSettings,
     ) -> Result<(), FactorError> {
+        self.generation = self.generation.wrapping_add(1);
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
         let q = &self.motion.q_prev;

@@ -53,7 +53,7 @@ mod inertia;
 mod motion;
 mod redundancy;
 mod reference;
-mod small;
+pub(crate) mod small;
 mod solve;
 mod wrench;
 

@@ -252,7 +252,12 @@ pub(crate) fn detect(
     // Equality and finger rows in, inequality rows out.
     let mut scale: Vec<f64> = (0..model.n_rows())
         .map(|i| match s.role[i] {
-            Role::Inequality | Role::Redundant | Role::Contact | Role::Friction => 0.0,
+            Role::Inequality
+            | Role::Redundant
+            | Role::Contact
+            | Role::Friction
+            | Role::DesignBound
+            | Role::DesignPin => 0.0,
             Role::Equality | Role::Finger | Role::Coupling => s.ell[i],
         })
         .collect();

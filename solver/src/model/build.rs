@@ -4,15 +4,16 @@ use std::collections::HashMap;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::compiler::{Compiler, compile_finger};
+use super::compiler::{Compiler, check_bounds, compile_finger};
 use super::error::{BuildError, Owner};
 use super::joints::compile_joint;
-use super::layout::Layout;
+use super::layout::{DesignOwner, DesignVar, Layout};
 use super::spec::{
-    BodySpec, DEFAULT_DENSITY_KG_M3, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, FINGERTIP_MASS_KG,
-    FingerSpec, Fingertip, JointSpec, Shape,
+    BodySpec, DEFAULT_DENSITY_KG_M3, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam,
+    FINGERTIP_MASS_KG, FingerSpec, Fingertip, JointSpec, Shape,
 };
 use super::{Body, Model, initial_frame, next_model_id};
+use crate::constraint::bound::DesignBound;
 use crate::constraint::quat_norm::QuatNorm;
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, RowInfo};
 use crate::rotation::BodyFrame;
@@ -26,6 +27,7 @@ pub struct ModelBuilder {
     bodies: Vec<BodySpec>,
     joints: Vec<JointSpec>,
     fingers: Vec<FingerSpec>,
+    objectives: Vec<crate::objective::ObjectiveSpec>,
     gravity: [f64; 3],
 }
 
@@ -59,6 +61,17 @@ impl ModelBuilder {
         FingerId(self.fingers.len() as u32 - 1)
     }
 
+    /// Adds an objective (`[[objective]]`); compiled against the built model.
+    pub fn objective(&mut self, spec: crate::objective::ObjectiveSpec) -> &mut Self {
+        self.objectives.push(spec);
+        self
+    }
+
+    /// The objectives added so far, in order.
+    pub fn objective_specs(&self) -> &[crate::objective::ObjectiveSpec] {
+        &self.objectives
+    }
+
     /// The bodies added so far, in order.
     pub fn body_specs(&self) -> &[BodySpec] {
         &self.bodies
@@ -85,10 +98,11 @@ impl ModelBuilder {
         self.build_with(true)
     }
 
-    /// The same model without the finger constraints: the same bodies
-    /// (contact fingers' fingertips included), the same layout of q, joint
-    /// and quaternion-norm rows only (for re-projection, which must not hold
-    /// a finger where the mechanism cannot reach).
+    /// The same model without the finger constraints and objectives: the
+    /// same bodies (contact fingers' fingertips included), the same layout of
+    /// q, joint, quaternion-norm and design-bound rows only (for
+    /// re-projection, which must not hold a finger where the mechanism cannot
+    /// reach).
     pub fn build_joints_only(&self) -> Result<Model, BuildError> {
         self.build_with(false)
     }
@@ -134,6 +148,16 @@ impl ModelBuilder {
         let mut frames: Vec<BodyFrame> = bodies.iter().map(initial_frame).collect();
         frames.push(BodyFrame::IDENTITY);
         let mut cx = Compiler::new(&bodies, &by_name, &frames, &body_cols, col);
+        // Free positions of fixed bodies: the first design columns.
+        let mut origin_cols = vec![None; bodies.len()];
+        for (i, s) in self.bodies.iter().enumerate() {
+            if s.free.contains(&DesignParam::Position) {
+                let owner = DesignOwner::Body(BodyId(i as u32));
+                let bounds = s.bounds.as_ref();
+                origin_cols[i] =
+                    Some(cx.free(owner, &s.name, DesignParam::Position, &s.position_m, bounds));
+            }
+        }
 
         let mut out = Assembler::default();
         let mut limits = Vec::new();
@@ -175,10 +199,19 @@ impl ModelBuilder {
                 out.push(info, Geometry::QuatNorm(QuatNorm { col }));
             }
         }
+        // Pinned design components (equalities), then the joint limits and
+        // the design bounds (inequalities).
+        let bounds = design_bounds(&design_vars);
+        for (info, g) in bounds.iter().filter(|(_, g)| g.lo == g.hi) {
+            out.push(info.clone(), Geometry::Bound(*g));
+        }
         let equality_rows = out.rows.len();
         for (mut info, geometry, joint) in limits {
             info.limits = Some(joint);
             out.push(info, geometry);
+        }
+        for (info, g) in bounds.iter().filter(|(_, g)| g.lo != g.hi) {
+            out.push(info.clone(), Geometry::Bound(*g));
         }
 
         let mut q0 = Vec::with_capacity(len);
@@ -189,12 +222,13 @@ impl ModelBuilder {
         }
         q0.extend_from_slice(&dv_q0);
         let body_coords = col;
-        Ok(Model {
+        let mut model = Model {
             id: next_model_id(),
             bodies,
             fingers,
             layout: Layout {
                 body_cols,
+                origin_cols,
                 design_vars,
                 body_coords,
                 len,
@@ -207,7 +241,12 @@ impl ModelBuilder {
             equality_rows,
             characteristic_length,
             contact: super::ContactLayout::default(),
-        })
+            objectives: crate::objective::Objectives::default(),
+        };
+        if with_fingers {
+            model.objectives = crate::objective::compile(&self.objectives, &model)?;
+        }
+        Ok(model)
     }
 }
 
@@ -233,6 +272,43 @@ impl Assembler {
         self.infos.push(info);
         self.geometry.push(geometry);
     }
+}
+
+/// One bound constraint per bounded design-variable component: its info
+/// (named `"<component>.bounds"`, the owner's bodies) and geometry.
+fn design_bounds(vars: &[DesignVar]) -> Vec<(ConstraintInfo, DesignBound)> {
+    let mut out = Vec::new();
+    for d in vars {
+        let Some(b) = d.bounds else { continue };
+        let bodies = match d.owner {
+            DesignOwner::Body(id) => [Some(id), None],
+            DesignOwner::Joint(_) => [None, None],
+        };
+        for (k, &[lo, hi]) in b.iter().take(d.width).enumerate() {
+            let kind = if lo == hi {
+                ConstraintKind::DesignPin
+            } else {
+                ConstraintKind::DesignBound
+            };
+            let info = ConstraintInfo {
+                name: format!("{}.bounds", d.component_name(k)),
+                kind,
+                rows: 0..0,
+                bodies,
+                finger: None,
+                limits: None,
+            };
+            out.push((
+                info,
+                DesignBound {
+                    col: d.offset + k,
+                    lo,
+                    hi,
+                },
+            ));
+        }
+    }
+    out
 }
 
 /// The fingertip body of a contact finger: a ball of the finger's radius and
@@ -379,6 +455,23 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             value: s.friction,
         });
     }
+    for (k, &param) in s.free.iter().enumerate() {
+        if param != DesignParam::Position || !s.fixed {
+            return Err(BuildError::UnsupportedBodyFree {
+                owner: owner(),
+                param,
+            });
+        }
+        if s.free[..k].contains(&param) {
+            return Err(BuildError::DuplicateFree {
+                owner: owner(),
+                param,
+            });
+        }
+    }
+    let freed: Vec<(DesignParam, &[f64])> =
+        s.free.iter().map(|&p| (p, &s.position_m[..])).collect();
+    check_bounds(&owner(), &s.name, s.bounds.as_ref(), &freed)?;
     let [w, x, y, z] = s.orientation_wxyz;
     let q = Quaternion::new(w, x, y, z);
     let n2 = q.norm_squared();

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 use nalgebra::Vector3;
 
 use super::error::{BuildError, Owner};
-use super::layout::DesignVar;
+use super::layout::{DesignOwner, DesignVar};
 use super::spec::{DesignParam, FingerSpec, Grasp};
 use super::{Body, Finger};
 use crate::constraint::block::{Pair, Param3};
@@ -68,20 +68,25 @@ impl<'a> Compiler<'a> {
             })
     }
 
+    /// Allocates the columns of one design variable of `owner` (named
+    /// `"<name>.<param>"`), starting at `init`, with optional per-component
+    /// bounds (already checked).
     pub fn free(
         &mut self,
-        joint: ConstraintId,
+        owner: DesignOwner,
         name: &str,
         param: DesignParam,
         init: &[f64],
+        bounds: Option<&super::spec::Bounds>,
     ) -> usize {
         let offset = self.next_col;
         self.design_vars.push(DesignVar {
             name: format!("{name}.{param}"),
-            joint,
+            owner,
             param,
             offset,
             width: init.len(),
+            bounds: bounds.map(|b| [0, 1, 2].map(|k| b.component(k))),
         });
         self.dv_q0.extend_from_slice(init);
         self.next_col += init.len();
@@ -135,6 +140,64 @@ pub(super) fn unit(
             field,
         })
     }
+}
+
+/// Checks `bounds` against the variables an entry frees: `(param, initial
+/// value)` each, named `"<name>.<param>"`. Errors name the first problem.
+pub(super) fn check_bounds(
+    owner: &Owner,
+    name: &str,
+    bounds: Option<&super::spec::Bounds>,
+    vars: &[(DesignParam, &[f64])],
+) -> Result<(), BuildError> {
+    use super::spec::Bounds;
+    let Some(b) = bounds else {
+        return Ok(());
+    };
+    if vars.is_empty() {
+        return Err(BuildError::BoundsWithoutFree {
+            owner: owner.clone(),
+        });
+    }
+    let flat: &[f64] = match b {
+        Bounds::Scalar(v) => v,
+        Bounds::Vector(v) => v.as_flattened(),
+    };
+    finite(owner, "bounds", flat)?;
+    for &(param, init) in vars {
+        if matches!(b, Bounds::Vector(_)) && init.len() != 3 {
+            return Err(BuildError::BoundsShape {
+                owner: owner.clone(),
+                param,
+            });
+        }
+        for (k, &value) in init.iter().enumerate() {
+            let [lo, hi] = b.component(k);
+            if lo > hi {
+                return Err(BuildError::BoundsReversed {
+                    owner: owner.clone(),
+                    lo,
+                    hi,
+                });
+            }
+            // Written with finite digits: 1 nm of slack.
+            if value < lo - 1e-9 || value > hi + 1e-9 {
+                let var = if init.len() == 1 {
+                    format!("{name}.{param}")
+                } else {
+                    format!("{name}.{param}.{}", ["x", "y", "z"][k])
+                };
+                return Err(BuildError::OutsideBounds {
+                    owner: owner.clone(),
+                    var,
+                    value,
+                    lo,
+                    hi,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Validates the `k`-th finger and compiles its constraint.

@@ -16,6 +16,8 @@ pub enum Owner {
     /// A point–plane inequality passed to
     /// [`Model::with_inequalities`](crate::Model::with_inequalities).
     Inequality(String),
+    /// An `[[objective]]` (by its name, or its kind).
+    Objective(String),
     /// Scene-level settings (gravity).
     Scene,
 }
@@ -27,6 +29,7 @@ impl fmt::Display for Owner {
             Self::Joint(n) => write!(f, "joint `{n}`"),
             Self::Finger(n) => write!(f, "finger `{n}`"),
             Self::Inequality(n) => write!(f, "inequality `{n}`"),
+            Self::Objective(n) => write!(f, "objective `{n}`"),
             Self::Scene => f.write_str("scene"),
         }
     }
@@ -225,6 +228,106 @@ pub enum BuildError {
         /// The parameter.
         param: DesignParam,
     },
+    /// `free` on a body that is not fixed, or with a parameter a body has not.
+    #[error(
+        "{owner}: `free = [\"{param}\"]` is not available here: a fixed body may free its `position` (a moving body's position is already free)"
+    )]
+    UnsupportedBodyFree {
+        /// The body.
+        owner: Owner,
+        /// The parameter.
+        param: DesignParam,
+    },
+    /// `bounds` given where nothing is free.
+    #[error("{owner}: `bounds` given but nothing is free (add `free = [...]`)")]
+    BoundsWithoutFree {
+        /// The joint or body.
+        owner: Owner,
+    },
+    /// Per-component (vector) bounds on a one-component variable.
+    #[error(
+        "{owner}: per-component bounds [[...], [...]] need 3-wide variables, but `{param}` has one component; use `bounds = [lo, hi]`"
+    )]
+    BoundsShape {
+        /// The joint.
+        owner: Owner,
+        /// The one-component parameter.
+        param: DesignParam,
+    },
+    /// Bounds with lo > hi.
+    #[error("{owner}: bounds [{lo}, {hi}] have lo > hi")]
+    BoundsReversed {
+        /// The joint or body.
+        owner: Owner,
+        /// Lower bound.
+        lo: f64,
+        /// Upper bound.
+        hi: f64,
+    },
+    /// A design variable's initial value lies outside its bounds.
+    #[error("{owner}: `{var}` starts at {value} m, outside its bounds [{lo}, {hi}]")]
+    OutsideBounds {
+        /// The joint or body.
+        owner: Owner,
+        /// The component's name (`"left.length"`, `"foot.position.z"`).
+        var: String,
+        /// Its initial value.
+        value: f64,
+        /// Lower bound.
+        lo: f64,
+        /// Upper bound.
+        hi: f64,
+    },
+    /// An objective's value out of range.
+    #[error("{owner}: `{field}` must be {why}")]
+    BadObjective {
+        /// The objective.
+        owner: Owner,
+        /// The key.
+        field: &'static str,
+        /// What it must be.
+        why: &'static str,
+    },
+    /// Two successive bodies of a dexterity chain share no joint.
+    #[error(
+        "{owner}: no joint between `{a}` and `{b}`; a chain's bodies must be joined in order, base first"
+    )]
+    ChainNotJoined {
+        /// The objective.
+        owner: Owner,
+        /// The earlier body.
+        a: String,
+        /// The later body.
+        b: String,
+    },
+    /// A dexterity chain's joint of a kind without a Jacobian column form.
+    #[error(
+        "{owner}: joint `{joint}` is a {kind} joint; a dexterity chain needs revolute, prismatic, spherical or universal joints"
+    )]
+    ChainJointKind {
+        /// The objective.
+        owner: Owner,
+        /// The joint.
+        joint: String,
+        /// Its kind.
+        kind: crate::ConstraintKind,
+    },
+    /// A reference to a joint name that does not exist.
+    #[error("{owner}: names unknown joint `{joint}`")]
+    UnknownJoint {
+        /// The objective.
+        owner: Owner,
+        /// The name given.
+        joint: String,
+    },
+    /// A joint named for `joint_limit_distance` has no limits.
+    #[error("{owner}: joint `{joint}` has no `limits` to keep away from")]
+    NoLimits {
+        /// The objective.
+        owner: Owner,
+        /// The joint.
+        joint: String,
+    },
     /// A finger on a fixed body.
     #[error("{owner}: body `{body}` is fixed; a finger must hold a moving body")]
     FingerOnFixedBody {
@@ -292,6 +395,16 @@ impl BuildError {
             | LengthOutsideLimits { owner, .. }
             | UnsupportedFree { owner, .. }
             | DuplicateFree { owner, .. }
+            | UnsupportedBodyFree { owner, .. }
+            | BoundsWithoutFree { owner }
+            | BoundsShape { owner, .. }
+            | BoundsReversed { owner, .. }
+            | OutsideBounds { owner, .. }
+            | BadObjective { owner, .. }
+            | ChainNotJoined { owner, .. }
+            | ChainJointKind { owner, .. }
+            | UnknownJoint { owner, .. }
+            | NoLimits { owner, .. }
             | FingerOnFixedBody { owner, .. }
             | Shape { owner, .. }
             | BadFingertip { owner, .. }

@@ -5,8 +5,9 @@ use std::f64::consts::PI;
 
 use nalgebra::Vector3;
 
-use super::compiler::{Compiler, DEGENERATE, finite, in_range, unit};
+use super::compiler::{Compiler, DEGENERATE, check_bounds, finite, in_range, unit};
 use super::error::{BuildError, Owner};
+use super::layout::DesignOwner;
 use super::spec::{DesignParam, JointKind, JointSpec};
 use crate::constraint::axes::JointAxes;
 use crate::constraint::block::{Pair, Param1, Param3};
@@ -52,7 +53,7 @@ pub(super) fn compile_joint(
     cx: &mut Compiler,
 ) -> Result<Compiled, BuildError> {
     let j = check(k, s, cx)?;
-    let (pair, length) = params(&j, ConstraintId(k as u32), cx);
+    let (pair, length) = params(&j, ConstraintId(k as u32), cx)?;
     let geometry = geometry(&j, pair, length, cx)?;
     let info = |name: String, kind| ConstraintInfo {
         name,
@@ -119,6 +120,7 @@ fn check<'s>(k: usize, s: &'s JointSpec, cx: &Compiler) -> Result<Checked<'s>, B
         }
         let supported = match param {
             DesignParam::Length => s.kind == JointKind::Distance,
+            DesignParam::Position => false,
             _ => s.kind != JointKind::Perpendicular,
         };
         if !supported {
@@ -164,8 +166,9 @@ fn check<'s>(k: usize, s: &'s JointSpec, cx: &Compiler) -> Result<Checked<'s>, B
 }
 
 /// The two ends and the length, with design-variable columns allocated in the
-/// order `free` lists them. The default length is the anchors' initial distance.
-fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> (Pair, Param1) {
+/// order `free` lists them (after checking `bounds` against their initial
+/// values). The default length is the anchors' initial distance.
+fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Param1), BuildError> {
     let s = j.spec;
     let mut anchor = s.anchors_m.map(|a| Param3::Const(Vector3::from(a)));
     if s.kind == JointKind::Perpendicular {
@@ -176,22 +179,35 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> (Pair, Param1) {
     let initial = (f0.point(&Vector3::from(s.anchors_m[0]))
         - f1.point(&Vector3::from(s.anchors_m[1])))
     .norm();
-    let mut length = Param1::Const(s.length_m.unwrap_or(initial));
+    let l0 = s.length_m.unwrap_or(initial);
+    let mut length = Param1::Const(l0);
     for a in &s.anchors_m {
         cx.lever = cx.lever.max(Vector3::from(*a).norm());
     }
+    let inits: Vec<(DesignParam, &[f64])> = s
+        .free
+        .iter()
+        .map(|&p| match p {
+            DesignParam::AnchorI => (p, &s.anchors_m[0][..]),
+            DesignParam::AnchorJ => (p, &s.anchors_m[1][..]),
+            _ => (p, std::slice::from_ref(&l0)),
+        })
+        .collect();
+    check_bounds(&j.owner, &j.name, s.bounds.as_ref(), &inits)?;
+    let owner = DesignOwner::Joint(id);
+    let bounds = s.bounds.as_ref();
     for &p in &s.free {
         match (p, length) {
             (DesignParam::AnchorI, _) => {
-                anchor[0] = Param3::Free(cx.free(id, &j.name, p, &s.anchors_m[0]))
+                anchor[0] = Param3::Free(cx.free(owner, &j.name, p, &s.anchors_m[0], bounds))
             }
             (DesignParam::AnchorJ, _) => {
-                anchor[1] = Param3::Free(cx.free(id, &j.name, p, &s.anchors_m[1]))
+                anchor[1] = Param3::Free(cx.free(owner, &j.name, p, &s.anchors_m[1], bounds))
             }
             (DesignParam::Length, Param1::Const(l)) => {
-                length = Param1::Free(cx.free(id, &j.name, p, &[l]))
+                length = Param1::Free(cx.free(owner, &j.name, p, &[l], bounds))
             }
-            (DesignParam::Length, Param1::Free(_)) => {}
+            (DesignParam::Length, Param1::Free(_)) | (DesignParam::Position, _) => {}
         }
     }
     let pair = Pair {
@@ -199,7 +215,7 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> (Pair, Param1) {
         col: [cx.body_cols[bi], cx.body_cols[bj]],
         anchor,
     };
-    (pair, length)
+    Ok((pair, length))
 }
 
 /// The kind-specific geometry, checked for degeneracy at the initial poses.

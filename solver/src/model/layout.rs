@@ -1,34 +1,64 @@
 //! Where everything lives in q.
 //!
 //! q = [ moving bodies in body order: r (3, metres, world) then e (4, [w, x, y, z]) ]
-//!     [ free design variables in joint order, then in the order `free` lists them ]
+//!     [ free positions of fixed bodies, in body order (3 each, metres, world) ]
+//!     [ free design variables of joints in joint order, then in the order `free` lists them ]
 //!
-//! Fixed bodies have no coordinates.
+//! Fixed bodies have no coordinates of their own; a fixed body whose position
+//! is free (`free = ["position"]`) has it among the design variables: its
+//! frame's origin is read from q, its orientation stays the initial one.
 
 use std::ops::Range;
 
 use super::spec::DesignParam;
 use crate::{BodyId, ConstraintId, DesignVarId};
 
+/// What a design variable belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DesignOwner {
+    /// A joint's length or anchor.
+    Joint(ConstraintId),
+    /// A fixed body's position.
+    Body(BodyId),
+}
+
 /// One free design variable.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DesignVar {
-    /// `"<joint>.<param>"`, e.g. `"left.length"`.
+    /// `"<joint>.<param>"` or `"<body>.position"`, e.g. `"left.length"`.
     pub name: String,
-    /// The joint it belongs to.
-    pub joint: ConstraintId,
+    /// The joint or fixed body it belongs to.
+    pub owner: DesignOwner,
     /// Which parameter.
     pub param: DesignParam,
     /// First column in q.
     pub offset: usize,
-    /// 1 (length, metres) or 3 (anchor, metres, body frame).
+    /// 1 (length, metres) or 3 (anchor, metres, body frame; position,
+    /// metres, world frame).
     pub width: usize,
+    /// `[lo, hi]` per component (the first `width` entries), if bounded.
+    pub bounds: Option<[[f64; 2]; 3]>,
+}
+
+impl DesignVar {
+    /// The name of component `k`: the variable's own name when it has one
+    /// component, else `"<name>.x"`, `".y"`, `".z"`.
+    pub fn component_name(&self, k: usize) -> String {
+        if self.width == 1 {
+            self.name.clone()
+        } else {
+            format!("{}.{}", self.name, ["x", "y", "z"][k.min(2)])
+        }
+    }
 }
 
 /// Map from bodies and design variables to columns of q.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
     pub(crate) body_cols: Vec<Option<usize>>,
+    /// Per body: the first of the three design columns of a fixed body's
+    /// free position.
+    pub(crate) origin_cols: Vec<Option<usize>>,
     pub(crate) design_vars: Vec<DesignVar>,
     pub(crate) body_coords: usize,
     pub(crate) len: usize,
@@ -54,6 +84,17 @@ impl Layout {
     /// r occupies `offset..offset + 3`, its e = [w, x, y, z] `offset + 3..offset + 7`.
     pub fn body_offset(&self, body: BodyId) -> Option<usize> {
         self.body_cols.get(body.index()).copied().flatten()
+    }
+
+    /// First design column of a fixed body's free position (metres, world
+    /// frame: `offset..offset + 3`); `None` for other bodies.
+    pub fn origin_offset(&self, body: BodyId) -> Option<usize> {
+        self.origin_cols.get(body.index()).copied().flatten()
+    }
+
+    /// Number of design-variable columns (every column after the bodies').
+    pub fn design_coords(&self) -> usize {
+        self.len - self.body_coords
     }
 
     /// Columns of r (metres, world frame) of a moving body.

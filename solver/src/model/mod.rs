@@ -16,10 +16,11 @@ pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
-pub use layout::{DesignVar, Layout};
+pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{
-    BodySpec, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam,
-    FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape, UnknownName,
+    BodySpec, Bounds, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG,
+    DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape,
+    UnknownName,
 };
 
 use std::ops::Range;
@@ -87,6 +88,7 @@ pub struct Model {
     pub(crate) equality_rows: usize,
     pub(crate) characteristic_length: f64,
     pub(crate) contact: ContactLayout,
+    pub(crate) objectives: crate::objective::Objectives,
 }
 
 fn next_model_id() -> u64 {
@@ -229,13 +231,38 @@ impl Model {
         if q.len() != self.layout.len {
             return None;
         }
-        match self.layout.body_offset(body) {
-            Some(o) => BodyFrame::new(
+        match (
+            self.layout.body_offset(body),
+            self.layout.origin_offset(body),
+        ) {
+            (Some(o), _) => BodyFrame::new(
                 Vector3::new(q[o], q[o + 1], q[o + 2]),
                 [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
             ),
-            None => Some(initial_frame(b)),
+            (None, Some(o)) => {
+                let mut f = initial_frame(b);
+                f.r = Vector3::new(q[o], q[o + 1], q[o + 2]);
+                Some(f)
+            }
+            (None, None) => Some(initial_frame(b)),
         }
+    }
+
+    /// The column groups of constraint `k`: its geometry's, plus the design
+    /// columns of any end that is a fixed body with a free position (those
+    /// rows move with the body's origin: ∂p/∂r = I).
+    pub(crate) fn constraint_groups(&self, k: usize) -> crate::constraint::block::Groups {
+        use crate::constraint::block::Slot;
+        let g = &self.geometry[k];
+        let mut groups = g.groups();
+        if g.has_ends() {
+            for (end, &f) in g.frames().iter().enumerate() {
+                if let Some(c) = self.layout.origin_cols.get(f).copied().flatten() {
+                    groups[Slot::origin(end) as usize] = Some((c, 3));
+                }
+            }
+        }
+        groups
     }
 }
 

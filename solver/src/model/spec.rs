@@ -45,6 +45,13 @@ pub struct BodySpec {
     /// geometric mean of its two bodies'; 0: frictionless, the default).
     /// Acts with inertial motion only (`SolverSettings::dynamics`).
     pub friction: f64,
+    /// Design variables of a fixed body: [`DesignParam::Position`] makes its
+    /// position three coordinates of q (metres, world frame) that objectives
+    /// and fingers' pulls may move (Nelson & Cohen Fig. 15's "feet"); it
+    /// still has no inertia and no orientation coordinates.
+    pub free: Vec<DesignParam>,
+    /// Optional bounds on the freed position (see [`Bounds`]).
+    pub bounds: Option<Bounds>,
 }
 
 impl BodySpec {
@@ -60,6 +67,8 @@ impl BodySpec {
             shape: None,
             density_kg_m3: None,
             friction: 0.0,
+            free: Vec::new(),
+            bounds: None,
         }
     }
 
@@ -111,6 +120,44 @@ impl BodySpec {
     pub fn friction(mut self, mu: f64) -> Self {
         self.friction = mu;
         self
+    }
+
+    /// Frees a fixed body's position ([`DesignParam::Position`]).
+    pub fn free_position(mut self) -> Self {
+        self.free.push(DesignParam::Position);
+        self
+    }
+
+    /// Sets bounds on the freed position.
+    pub fn bounds(mut self, bounds: Bounds) -> Self {
+        self.bounds = Some(bounds);
+        self
+    }
+}
+
+/// `bounds` of a `[[joint]]` or `[[body]]` entry: limits on the design
+/// variables it frees, each component in its own unit and frame (metres; a
+/// length, an anchor in its body's frame, a position in the world frame).
+/// Every component gets two `≥ 0` rows, x − lo ≥ 0 and hi − x ≥ 0, or, when
+/// lo = hi, one equality row x − lo = 0 (the component stays put: a foot
+/// that slides on the ground plane keeps its height).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bounds {
+    /// `[lo, hi]`: the same range for every component of every variable the
+    /// entry frees.
+    Scalar([f64; 2]),
+    /// `[[lo_x, lo_y, lo_z], [hi_x, hi_y, hi_z]]`: per component, for
+    /// 3-wide variables (anchors, positions) only.
+    Vector([[f64; 3]; 2]),
+}
+
+impl Bounds {
+    /// `[lo, hi]` of component `k` (0, 1, 2).
+    pub fn component(&self, k: usize) -> [f64; 2] {
+        match *self {
+            Self::Scalar(b) => b,
+            Self::Vector([lo, hi]) => [lo[k], hi[k]],
+        }
     }
 }
 
@@ -193,6 +240,9 @@ named_enum!(
         AnchorI = "anchor_i",
         /// Anchor k_j in body j's frame (3 coordinates, metres).
         AnchorJ = "anchor_j",
+        /// A fixed body's position (3 coordinates, metres, world frame);
+        /// `[[body]]` entries only.
+        Position = "position",
     }
 );
 
@@ -243,6 +293,8 @@ pub struct JointSpec {
     pub limits: Option<[f64; 2]>,
     /// Parameters that become design variables.
     pub free: Vec<DesignParam>,
+    /// Optional bounds on the design variables `free` lists (see [`Bounds`]).
+    pub bounds: Option<Bounds>,
 }
 
 impl JointSpec {
@@ -257,6 +309,7 @@ impl JointSpec {
             length_m: None,
             limits: None,
             free: Vec::new(),
+            bounds: None,
         }
     }
 
@@ -293,6 +346,12 @@ impl JointSpec {
     /// Marks parameters free.
     pub fn free(mut self, params: &[DesignParam]) -> Self {
         self.free.extend_from_slice(params);
+        self
+    }
+
+    /// Sets bounds on the free parameters.
+    pub fn bounds(mut self, bounds: Bounds) -> Self {
+        self.bounds = Some(bounds);
         self
     }
 }

@@ -22,9 +22,9 @@ impl StructureKey {
     pub fn of(model: &Model) -> Self {
         let mut h = DefaultHasher::new();
         (model.n_coords(), model.n_rows(), model.equality_rows).hash(&mut h);
-        for g in &model.geometry {
+        for (k, g) in model.geometry.iter().enumerate() {
             g.rows().hash(&mut h);
-            g.groups().hash(&mut h);
+            model.constraint_groups(k).hash(&mut h);
         }
         Self(h.finish())
     }

@@ -53,11 +53,13 @@
 //! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
 mod contact;
+mod objective;
 mod report;
 mod state;
 mod tick;
 
 pub use contact::DYNAMIC_DAMPING_PER_S;
+pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use tick::MAX_ACTIVATIONS;
 
 pub use report::{
@@ -70,7 +72,7 @@ use std::time::Duration;
 
 use crate::al::fused::Fused;
 use crate::al::projected::Projected;
-use crate::al::scaling::{Scaling, check_stable};
+use crate::al::scaling::{Role, Scaling, check_stable};
 use crate::al::{RedundancyCheck, SolverSettings};
 use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
@@ -114,6 +116,8 @@ pub struct Program {
     /// For each of `feedback.friction`, the indices in `feedback.masses` of
     /// its two bodies (`None`: fixed).
     friction_bodies: Vec<[Option<usize>; 2]>,
+    /// The objectives' pull on q₀ (models with design objectives).
+    objective: Option<objective::ObjectivePull>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -136,6 +140,11 @@ impl Program {
     /// Allocates; call it off the real-time thread.
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
         settings.validate()?;
+        // The scene's `finger` and `least_astonishment` weights.
+        let mut settings = settings;
+        let weights = model.objectives();
+        settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
+        settings.validate()?;
         let mut ev = model.evaluation();
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
@@ -148,6 +157,11 @@ impl Program {
         let mut excluded = vec![false; model.n_rows()];
         for &i in &local {
             excluded[i] = true;
+        }
+        // Design bounds touch no body: never part of A (the projected update
+        // keeps them as a box on its design step).
+        for (e, role) in excluded.iter_mut().zip(&scaling.role) {
+            *e |= matches!(role, Role::DesignBound | Role::DesignPin);
         }
         let mut feedback = Feedback::new(&model, &ev, &settings, &excluded)
             .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
@@ -168,7 +182,12 @@ impl Program {
             settings.gain,
             settings.finger_weight,
             feedback.mean_mass_kg(),
+        )
+        .with_design(
+            &model,
+            objective::design_metric_kg(&model, feedback.mean_mass_kg()),
         );
+        let objective = objective::ObjectivePull::new(&model, feedback.mean_mass_kg());
         let mut friction_slot = vec![false; model.contact().slots];
         let mut friction_pair = Vec::new();
         for (k, pair) in model.contact().pairs.iter().enumerate() {
@@ -199,6 +218,7 @@ impl Program {
             step_budget_m: f64::INFINITY,
             contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
+            objective,
             friction_slot,
             friction_pair,
             lambda: vec![0.0; m],

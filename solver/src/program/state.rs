@@ -147,6 +147,7 @@ impl Program {
         }
         self.adopt_friction(old);
         let _ = self.refresh();
+        self.measure_objectives();
         self.report = old.report;
     }
 

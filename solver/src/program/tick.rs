@@ -243,6 +243,7 @@ impl Program {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
+        self.pull_objectives();
         let n = match self.iterations(targets, n) {
             Ok(applied) => applied,
             Err((status, k)) => return self.failed(status, k),
@@ -281,6 +282,7 @@ impl Program {
         if self.last_targets.len() == targets.len() {
             self.last_targets.copy_from_slice(targets);
         }
+        self.measure_objectives();
         TickReport {
             iterations: n,
             max_violation_m: v.max_m,

@@ -8,13 +8,14 @@
 use super::LoadedScene;
 use super::SceneError;
 use super::spec::{
-    Arr, BodySection, FreeSpec, GraspSpec, JointKindSpec, JointSection, Quat, ShapeSpec,
-    SolverSection,
+    Arr, BodySection, BoundsSpec, FreeSpec, GraspSpec, JointKindSpec, JointSection,
+    ObjectiveKindSpec, ObjectiveSection, Quat, ShapeSpec, SolverSection,
 };
 use crate::model::{
-    BodySpec, BuildError, DEFAULT_FINGERTIP_RADIUS_M, DesignParam, FingerSpec, JointKind,
+    BodySpec, Bounds, BuildError, DEFAULT_FINGERTIP_RADIUS_M, DesignParam, FingerSpec, JointKind,
     JointSpec, Owner, Shape,
 };
+use crate::objective::{ObjectiveSpec, ObstacleSpec};
 use crate::{FingerId, Model, ModelBuilder, RowUnit, Sense};
 use std::ops::Range;
 use std::path::PathBuf;
@@ -209,7 +210,95 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.shape = b.shape.as_ref().map(|s| shape(s.get_ref()));
     spec.density_kg_m3 = b.density.as_ref().map(|d| *d.get_ref());
     spec.friction = b.friction.as_ref().map_or(0.0, |m| *m.get_ref());
+    spec.free = b.free.iter().map(|f| free_param(*f.get_ref())).collect();
+    spec.bounds = b.bounds.as_ref().map(|x| bounds(*x.get_ref()));
     spec
+}
+
+fn free_param(f: FreeSpec) -> DesignParam {
+    match f {
+        FreeSpec::Length => DesignParam::Length,
+        FreeSpec::AnchorI => DesignParam::AnchorI,
+        FreeSpec::AnchorJ => DesignParam::AnchorJ,
+        FreeSpec::Position => DesignParam::Position,
+    }
+}
+
+fn bounds(b: BoundsSpec) -> Bounds {
+    match b {
+        BoundsSpec::Scalar(v) => Bounds::Scalar(v),
+        BoundsSpec::Vector(v) => Bounds::Vector(v),
+    }
+}
+
+/// The builder's objective for a validated `[[objective]]` (keys the kind
+/// does not take were refused by `validate`).
+pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
+    let weight = o.weight.as_ref().map_or(1.0, |w| *w.get_ref());
+    let name = o.name.as_ref().map(|n| n.get_ref().clone());
+    let point =
+        |p: &Option<Spanned<super::spec::Vec3>>| p.as_ref().map_or([0.0; 3], |p| p.get_ref().get());
+    let names = |v: &Option<Spanned<Vec<Spanned<String>>>>| {
+        v.as_ref().map_or(Vec::new(), |v| {
+            v.get_ref().iter().map(|s| s.get_ref().clone()).collect()
+        })
+    };
+    match o.kind.get_ref() {
+        ObjectiveKindSpec::Finger => ObjectiveSpec::Finger { weight },
+        ObjectiveKindSpec::LeastAstonishment => ObjectiveSpec::LeastAstonishment {
+            weight,
+            design_weight: o.design_weight.as_ref().map_or(1.0, |w| *w.get_ref()),
+        },
+        ObjectiveKindSpec::Dexterity => ObjectiveSpec::Dexterity {
+            name,
+            weight,
+            chain: names(&o.chain),
+            point_m: point(&o.point),
+            directions: o.directions.as_ref().map_or(Vec::new(), |d| {
+                d.get_ref().iter().map(|v| v.get()).collect()
+            }),
+        },
+        ObjectiveKindSpec::Obstacle => ObjectiveSpec::Obstacle {
+            name,
+            weight,
+            points: o.points.as_ref().map_or(Vec::new(), |p| {
+                p.get_ref()
+                    .iter()
+                    .map(|r| {
+                        let r = r.get_ref();
+                        (
+                            r.body.get_ref().clone(),
+                            r.point.map_or([0.0; 3], |p| p.get()),
+                        )
+                    })
+                    .collect()
+            }),
+            obstacle: match (&o.obstacle, &o.obstacle_body) {
+                (Some(p), _) => ObstacleSpec::World(p.get_ref().get()),
+                (None, b) => ObstacleSpec::Body {
+                    body: b.as_ref().map_or(String::new(), |b| b.get_ref().clone()),
+                    point_m: point(&o.obstacle_point),
+                },
+            },
+            distance_m: o.distance.as_ref().map_or(0.0, |d| *d.get_ref()),
+        },
+        ObjectiveKindSpec::StraightLine => ObjectiveSpec::StraightLine {
+            name,
+            weight,
+            body: o
+                .body
+                .as_ref()
+                .map_or(String::new(), |b| b.get_ref().clone()),
+            point_m: point(&o.point),
+            line_point_m: point(&o.line_point),
+            direction: point(&o.direction),
+        },
+        ObjectiveKindSpec::JointLimitDistance => ObjectiveSpec::JointLimitDistance {
+            name,
+            weight,
+            joints: names(&o.joints),
+        },
+    }
 }
 
 fn shape(s: &ShapeSpec) -> Shape {
@@ -245,15 +334,8 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.axes = j.axes.as_ref().map(|a| a.get_ref().nested());
     spec.length_m = j.length.as_ref().map(|l| *l.get_ref());
     spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
-    spec.free = j
-        .free
-        .iter()
-        .map(|f| match f.get_ref() {
-            FreeSpec::Length => DesignParam::Length,
-            FreeSpec::AnchorI => DesignParam::AnchorI,
-            FreeSpec::AnchorJ => DesignParam::AnchorJ,
-        })
-        .collect();
+    spec.free = j.free.iter().map(|f| free_param(*f.get_ref())).collect();
+    spec.bounds = j.bounds.as_ref().map(|x| bounds(*x.get_ref()));
     spec
 }
 
@@ -297,6 +379,9 @@ impl LoadedScene {
                 ),
             };
             builder.finger(spec);
+        }
+        for o in &s.objectives {
+            builder.objective(objective_spec(o));
         }
         // The same mechanism without finger rows: same bodies (fingertips
         // included), same layout of q, joint rows only (for re-projection
@@ -507,6 +592,13 @@ impl LoadedScene {
                     _ => f.name.span(),
                 })
             }
+            Owner::Objective(name) => {
+                let specs: Vec<ObjectiveSpec> = s.objectives.iter().map(objective_spec).collect();
+                let k = (0..specs.len())
+                    .filter(|&k| &crate::objective::display_name(&specs, k) == name)
+                    .nth(usize::from(matches!(e, BuildError::DuplicateName { .. })));
+                k.map_or(whole, |k| objective_field(&s.objectives[k], e))
+            }
             Owner::Inequality(_) => whole,
         };
         let mut msg = e.to_string();
@@ -544,7 +636,67 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
         } => or_name(b.density.as_ref().map(Spanned::span)),
         BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
         BuildError::BadFriction { .. } => or_name(b.friction.as_ref().map(Spanned::span)),
+        BuildError::UnsupportedBodyFree { .. } | BuildError::DuplicateFree { .. } => {
+            let dup = matches!(e, BuildError::DuplicateFree { .. });
+            or_name(
+                b.free
+                    .iter()
+                    .filter(|f| *f.get_ref() == FreeSpec::Position || !dup)
+                    .nth(usize::from(dup))
+                    .map(Spanned::span),
+            )
+        }
+        BuildError::NonFinite {
+            field: "bounds", ..
+        }
+        | BuildError::BoundsWithoutFree { .. }
+        | BuildError::BoundsShape { .. }
+        | BuildError::BoundsReversed { .. }
+        | BuildError::OutsideBounds { .. } => or_name(b.bounds.as_ref().map(Spanned::span)),
         _ => b.name.span(),
+    }
+}
+
+/// The span of the value of objective `o` that error `e` is about.
+fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
+    let head = o.name.as_ref().map_or(o.kind.span(), Spanned::span);
+    let or_head = |v: Option<Range<usize>>| v.unwrap_or_else(|| head.clone());
+    let in_list = |v: &Option<Spanned<Vec<Spanned<String>>>>, name: &str| {
+        v.as_ref().and_then(|v| {
+            v.get_ref()
+                .iter()
+                .find(|x| x.get_ref() == name)
+                .map(Spanned::span)
+        })
+    };
+    match e {
+        BuildError::UnknownBody { body, .. } => or_head(
+            in_list(&o.chain, body)
+                .or_else(|| {
+                    o.points.as_ref().and_then(|p| {
+                        p.get_ref()
+                            .iter()
+                            .find(|r| r.get_ref().body.get_ref() == body)
+                            .map(|r| r.get_ref().body.span())
+                    })
+                })
+                .or_else(|| o.body.as_ref().map(Spanned::span))
+                .or_else(|| o.obstacle_body.as_ref().map(Spanned::span)),
+        ),
+        BuildError::ChainNotJoined { b, .. } => or_head(in_list(&o.chain, b)),
+        BuildError::ChainJointKind { .. } => or_head(o.chain.as_ref().map(Spanned::span)),
+        BuildError::UnknownJoint { joint, .. } | BuildError::NoLimits { joint, .. } => {
+            or_head(in_list(&o.joints, joint))
+        }
+        BuildError::BadObjective { field, .. } | BuildError::NonFinite { field, .. } => {
+            let span = o
+                .keys()
+                .into_iter()
+                .find(|(k, _)| k == field)
+                .map(|(_, s)| s);
+            or_head(span)
+        }
+        _ => head,
     }
 }
 
@@ -589,11 +741,19 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         | BuildError::LimitsReversed { .. }
         | BuildError::LimitsUnsupported { .. }
         | BuildError::AngleLimitsOutOfRange { .. } => or_head(j.limits.as_ref().map(Spanned::span)),
+        BuildError::NonFinite {
+            field: "bounds", ..
+        }
+        | BuildError::BoundsWithoutFree { .. }
+        | BuildError::BoundsShape { .. }
+        | BuildError::BoundsReversed { .. }
+        | BuildError::OutsideBounds { .. } => or_head(j.bounds.as_ref().map(Spanned::span)),
         BuildError::UnsupportedFree { param, .. } | BuildError::DuplicateFree { param, .. } => {
             let want = match param {
                 DesignParam::Length => FreeSpec::Length,
                 DesignParam::AnchorI => FreeSpec::AnchorI,
                 DesignParam::AnchorJ => FreeSpec::AnchorJ,
+                DesignParam::Position => FreeSpec::Position,
             };
             let dup = matches!(e, BuildError::DuplicateFree { .. });
             j.free

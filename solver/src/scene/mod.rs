@@ -14,6 +14,7 @@
 
 mod compile;
 mod error;
+mod flags;
 mod polygon;
 pub mod spec;
 mod validate;
@@ -21,6 +22,7 @@ mod write;
 
 pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
 pub use error::SceneError;
+pub use flags::Flagged;
 pub use write::mechanism_tables;
 
 use std::ops::Range;

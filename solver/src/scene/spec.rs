@@ -83,6 +83,9 @@ pub struct SceneFile {
     /// `[[finger]]` tables, in file order.
     #[serde(default, rename = "finger")]
     pub fingers: Vec<FingerSection>,
+    /// `[[objective]]` tables, in file order.
+    #[serde(default, rename = "objective")]
+    pub objectives: Vec<ObjectiveSection>,
     /// `[labels]`: each key is ≤ every label in its list (a partial order).
     #[serde(default)]
     pub labels: BTreeMap<Spanned<String>, Spanned<Vec<Spanned<String>>>>,
@@ -177,6 +180,12 @@ pub struct BodySection {
     /// `[[body.binding]]` semantic areas.
     #[serde(default)]
     pub binding: Vec<AreaSection>,
+    /// Design variables of a fixed body: `["position"]`.
+    #[serde(default)]
+    pub free: Vec<Spanned<FreeSpec>>,
+    /// Bounds on the freed position.
+    #[serde(default)]
+    pub bounds: Option<Spanned<BoundsSpec>>,
 }
 
 /// `shape = { … }`.
@@ -242,6 +251,47 @@ pub enum FreeSpec {
     AnchorI,
     /// The anchor on body j.
     AnchorJ,
+    /// A fixed body's position (`[[body]]` only).
+    Position,
+}
+
+/// `bounds = [lo, hi]` or `bounds = [[lo_x, lo_y, lo_z], [hi_x, hi_y, hi_z]]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BoundsSpec {
+    /// The same range for every component.
+    Scalar([f64; 2]),
+    /// A range per component.
+    Vector([[f64; 3]; 2]),
+}
+
+impl<'de> Deserialize<'de> for BoundsSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Scalar(Vec<f64>),
+            Vector(Vec<Vec<f64>>),
+        }
+        let shape = || {
+            serde::de::Error::custom(
+                "expected `bounds = [lo, hi]` or `bounds = [[lo_x, lo_y, lo_z], [hi_x, hi_y, hi_z]]`",
+            )
+        };
+        match Raw::deserialize(d).map_err(|_| shape())? {
+            Raw::Scalar(v) => <[f64; 2]>::try_from(v)
+                .map(BoundsSpec::Scalar)
+                .map_err(|_| shape()),
+            Raw::Vector(v) => {
+                let rows: Vec<[f64; 3]> = v
+                    .into_iter()
+                    .map(|r| <[f64; 3]>::try_from(r).map_err(|_| shape()))
+                    .collect::<Result<_, _>>()?;
+                <[[f64; 3]; 2]>::try_from(rows)
+                    .map(BoundsSpec::Vector)
+                    .map_err(|_| shape())
+            }
+        }
+    }
 }
 
 /// `[[joint]]`.
@@ -270,6 +320,9 @@ pub struct JointSection {
     /// Design variables.
     #[serde(default)]
     pub free: Vec<Spanned<FreeSpec>>,
+    /// Bounds on the design variables.
+    #[serde(default)]
+    pub bounds: Option<Spanned<BoundsSpec>>,
 }
 
 /// `[[device]]`.
@@ -381,4 +434,119 @@ pub struct FingerSection {
     /// Contact fingers: Coulomb friction coefficient (default 0).
     #[serde(default)]
     pub friction: Option<Spanned<f64>>,
+}
+
+/// `kind = "…"` of an objective.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ObjectiveKindSpec {
+    /// The finger rows' weight.
+    Finger,
+    /// Least astonishment's weight (and the design variables' metric).
+    LeastAstonishment,
+    /// Manipulability of a chain, Eq. 12–14.
+    Dexterity,
+    /// Body points kept away from an obstacle, Eq. 15.
+    Obstacle,
+    /// A body point kept on a line.
+    StraightLine,
+    /// Joints kept away from their limits.
+    JointLimitDistance,
+}
+
+/// `{ body = "…", point = [x, y, z] }` in an objective's `points`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointRef {
+    /// The body.
+    pub body: Spanned<String>,
+    /// Body frame, m; default its origin.
+    #[serde(default)]
+    pub point: Option<Vec3>,
+}
+
+/// `[[objective]]`: one table for every kind; `validate` checks which keys
+/// the kind takes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectiveSection {
+    /// The kind.
+    pub kind: Spanned<ObjectiveKindSpec>,
+    /// Optional, unique among objectives.
+    #[serde(default)]
+    pub name: Option<Spanned<String>>,
+    /// Relative to least astonishment; default 1.
+    #[serde(default)]
+    pub weight: Option<Spanned<f64>>,
+    /// least_astonishment: the design variables' metric; default 1.
+    #[serde(default)]
+    pub design_weight: Option<Spanned<f64>>,
+    /// dexterity: bodies joined in order, base first.
+    #[serde(default)]
+    pub chain: Option<Spanned<Vec<Spanned<String>>>>,
+    /// dexterity, straight_line: the point on the (last) body, body frame.
+    #[serde(default)]
+    pub point: Option<Spanned<Vec3>>,
+    /// dexterity: task directions, world frame.
+    #[serde(default)]
+    pub directions: Option<Spanned<Vec<Vec3>>>,
+    /// obstacle: the body points kept away.
+    #[serde(default)]
+    pub points: Option<Spanned<Vec<Spanned<PointRef>>>>,
+    /// obstacle: a world point.
+    #[serde(default)]
+    pub obstacle: Option<Spanned<Vec3>>,
+    /// obstacle: or a body carrying the obstacle.
+    #[serde(default)]
+    pub obstacle_body: Option<Spanned<String>>,
+    /// obstacle: the point on `obstacle_body`, body frame.
+    #[serde(default)]
+    pub obstacle_point: Option<Spanned<Vec3>>,
+    /// obstacle: activation distance, m.
+    #[serde(default)]
+    pub distance: Option<Spanned<f64>>,
+    /// straight_line: the body.
+    #[serde(default)]
+    pub body: Option<Spanned<String>>,
+    /// straight_line: a point of the line, world frame.
+    #[serde(default)]
+    pub line_point: Option<Spanned<Vec3>>,
+    /// straight_line: the line's direction, world frame.
+    #[serde(default)]
+    pub direction: Option<Spanned<Vec3>>,
+    /// joint_limit_distance: joint names; default every limited joint.
+    #[serde(default)]
+    pub joints: Option<Spanned<Vec<Spanned<String>>>>,
+}
+
+impl ObjectiveSection {
+    /// Every optional key that is set, with its span (for `validate`).
+    pub fn keys(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        let mut out = Vec::new();
+        macro_rules! key {
+            ($($f:ident),*) => {$(
+                if let Some(v) = &self.$f {
+                    out.push((stringify!($f), v.span()));
+                }
+            )*};
+        }
+        key!(
+            name,
+            weight,
+            design_weight,
+            chain,
+            point,
+            directions,
+            points,
+            obstacle,
+            obstacle_body,
+            obstacle_point,
+            distance,
+            body,
+            line_point,
+            direction,
+            joints
+        );
+        out
+    }
 }

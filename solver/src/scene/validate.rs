@@ -94,7 +94,101 @@ impl Checker<'_> {
         for f in &s.fingers {
             self.finger(f)?;
         }
+        for o in &s.objectives {
+            self.objective(o)?;
+        }
         self.labels(s)
+    }
+
+    /// The keys an objective's kind takes (the rest are errors at their
+    /// place), the ones it needs, and `obstacle`'s either-or.
+    fn objective(&self, o: &super::spec::ObjectiveSection) -> Check {
+        use super::spec::ObjectiveKindSpec as K;
+        let kind = *o.kind.get_ref();
+        let (name, takes, needs): (&str, &[&str], &[&str]) = match kind {
+            K::Finger => ("finger", &["weight"], &[]),
+            K::LeastAstonishment => ("least_astonishment", &["weight", "design_weight"], &[]),
+            K::Dexterity => (
+                "dexterity",
+                &["name", "weight", "chain", "point", "directions"],
+                &["chain"],
+            ),
+            K::Obstacle => (
+                "obstacle",
+                &[
+                    "name",
+                    "weight",
+                    "points",
+                    "obstacle",
+                    "obstacle_body",
+                    "obstacle_point",
+                    "distance",
+                ],
+                &["points", "distance"],
+            ),
+            K::StraightLine => (
+                "straight_line",
+                &["name", "weight", "body", "point", "line_point", "direction"],
+                &["body", "line_point", "direction"],
+            ),
+            K::JointLimitDistance => ("joint_limit_distance", &["name", "weight", "joints"], &[]),
+        };
+        let keys = o.keys();
+        for (key, span) in &keys {
+            if !takes.contains(key) {
+                return Err(self.err(
+                    span.clone(),
+                    format!(
+                        "a {name} objective has no `{key}`; it takes {}",
+                        takes
+                            .iter()
+                            .map(|k| format!("`{k}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
+        for need in needs {
+            if !keys.iter().any(|(k, _)| k == need) {
+                return Err(self.err(o.kind.span(), format!("a {name} objective needs `{need}`")));
+            }
+        }
+        if kind == K::Obstacle {
+            match (&o.obstacle, &o.obstacle_body) {
+                (Some(_), Some(b)) => {
+                    return Err(self.err(
+                        b.span(),
+                        "an obstacle is either a world point (`obstacle`) or a body's (`obstacle_body`), not both",
+                    ));
+                }
+                (None, None) => {
+                    return Err(self.err(
+                        o.kind.span(),
+                        "an obstacle objective needs `obstacle = [x, y, z]` (a world point) or `obstacle_body` (a body's point)",
+                    ));
+                }
+                (Some(_), None) => {
+                    if let Some(p) = &o.obstacle_point {
+                        return Err(self.err(
+                            p.span(),
+                            "`obstacle_point` is a point of `obstacle_body`; a world `obstacle` takes none",
+                        ));
+                    }
+                }
+                (None, Some(_)) => {}
+            }
+        }
+        for (v, what) in [
+            (&o.weight, "weight"),
+            (&o.design_weight, "design_weight"),
+            (&o.distance, "distance"),
+        ] {
+            if let Some(v) = v {
+                self.non_negative(v, what)?;
+            }
+        }
+        Ok(())
     }
 
     /// A point or rigid finger holds a `body` (at `point`); a contact finger

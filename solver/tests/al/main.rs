@@ -7,6 +7,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 
 mod common;
 mod convergence;
+mod design;
 mod force;
 mod limits;
 mod planar;

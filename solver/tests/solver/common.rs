@@ -1,7 +1,7 @@
 //! Small models exercising one constraint kind each, and random states.
 
 use haptloop_solver::{
-    BodySpec, DesignParam as P, FingerSpec, FingerTarget, JointKind as K, JointSpec, Model,
+    BodySpec, Bounds, DesignParam as P, FingerSpec, FingerTarget, JointKind as K, JointSpec, Model,
     ModelBuilder, PlaneOwner, PointPlaneSpec,
 };
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -146,6 +146,46 @@ pub fn point_on_plane() -> Model {
         JointSpec::new(K::PointOnPlane, "b", "ground")
             .anchors(KJ, KI)
             .axes([0.0; 3], [0.0, 0.0, 1.0]),
+    );
+    build(&b)
+}
+
+/// Fixed bodies with free positions (one bounded per component with a
+/// pinned z, one bounded by one range) joined to moving bodies by several
+/// kinds, plus a bounded free length and a bounded anchor.
+pub fn free_positions() -> Model {
+    let mut b = bodies();
+    b.body(
+        BodySpec::fixed("foot")
+            .at([0.2, 0.3, -0.1])
+            .oriented([0.7, 0.1, 0.5, -0.2])
+            .free_position()
+            .bounds(Bounds::Vector([[-1.0, -1.0, -0.1], [1.0, 1.0, -0.1]])),
+    );
+    b.body(
+        BodySpec::fixed("base")
+            .at([-0.1, 0.0, 0.2])
+            .free_position()
+            .bounds(Bounds::Scalar([-1.0, 1.0])),
+    );
+    b.joint(JointSpec::new(K::Spherical, "foot", "a").anchors(KI, KJ));
+    b.joint(
+        JointSpec::new(K::Revolute, "b", "base")
+            .anchors(KJ, KI)
+            .axes([0.2, 0.3, 1.0], [1.0, -0.2, 0.1])
+            .limits(-1.0, 1.5),
+    );
+    b.joint(
+        JointSpec::new(K::Distance, "foot", "b")
+            .anchors(KI, KJ)
+            .length(0.4)
+            .free(&[P::Length, P::AnchorI])
+            .bounds(Bounds::Scalar([-2.0, 2.0])),
+    );
+    b.joint(
+        JointSpec::new(K::Prismatic, "base", "a")
+            .anchors(KJ, KI)
+            .axes([0.0, 0.3, 1.0], [1.0, 0.1, 0.0]),
     );
     build(&b)
 }

@@ -54,6 +54,17 @@ fd_test!(distance, [C::Distance, C::DistanceLimit]);
 fd_test!(point_on_plane, [C::PointOnPlane]);
 fd_test!(fingers, [C::PointFinger, C::RigidFinger]);
 fd_test!(point_plane_inequalities, [C::PointPlaneInequality]);
+fd_test!(
+    free_positions,
+    [
+        C::Spherical,
+        C::Revolute,
+        C::Distance,
+        C::Prismatic,
+        C::DesignBound,
+        C::DesignPin
+    ]
+);
 
 /// The checker itself can fail: corrupting one analytic entry by 1e-4 is caught.
 #[test]

@@ -7,6 +7,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod alloc;
 mod build_errors;
 mod common;
+mod design;
 mod fd;
 mod jacobian_fd;
 mod mechanisms;

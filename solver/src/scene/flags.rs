@@ -1,0 +1,300 @@
+//! `haptloop run SCENE --free j.var --objective KIND:key=value,…`: design
+//! variables and objectives added from the command line, without editing the
+//! scene. Errors name the flag (`--free:1:7: …`, with the flag as the source
+//! line), not a place in the file.
+//!
+//! `--objective` becomes an `[[objective]]` table appended to the scene's
+//! text (so it is parsed, validated and compiled like any other, with the
+//! same keys and errors: `docs/scene-format.md`); `--free` adds an entry to
+//! a joint's or fixed body's `free` list.
+
+use std::ops::Range;
+
+use toml::Spanned;
+
+use super::spec::{FreeSpec, JointKindSpec};
+use super::{LoadedScene, SceneError};
+
+/// A scene with command-line design flags applied, and what it takes to
+/// attribute later errors to them.
+#[derive(Debug, Clone)]
+pub struct Flagged {
+    /// The scene, flags applied (its text ends with the appended objectives).
+    pub loaded: LoadedScene,
+    /// Lines (1-based, end exclusive) of each `--objective`'s table, and the
+    /// flag's value.
+    objective_lines: Vec<(Range<usize>, String)>,
+}
+
+fn flag_error(flag: &str, value: &str, at: usize, message: impl Into<String>) -> SceneError {
+    SceneError {
+        file: flag.to_string(),
+        line: 1,
+        column: value[..at.min(value.len())].chars().count() + 1,
+        message: message.into(),
+        source_line: value.to_string(),
+    }
+}
+
+/// Splits `a=1,b=[x,y]` at the commas outside brackets and quotes.
+fn split_pairs(s: &str) -> Vec<(usize, &str)> {
+    let (mut out, mut depth, mut quoted, mut start) = (Vec::new(), 0i32, false, 0);
+    for (i, c) in s.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            '[' | '{' if !quoted => depth += 1,
+            ']' | '}' if !quoted => depth -= 1,
+            ',' if !quoted && depth == 0 => {
+                out.push((start, &s[start..i]));
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push((start, &s[start..]));
+    out
+}
+
+/// Quotes bare words in a TOML value (`[base, upper]` → `["base", "upper"]`)
+/// so names need no shell-escaped quotes; numbers, booleans and quoted
+/// strings are left alone.
+fn quote_words(v: &str) -> String {
+    let mut out = String::with_capacity(v.len() + 8);
+    let chars: Vec<char> = v.chars().collect();
+    let (mut i, mut quoted) = (0, false);
+    let word = |c: char| c.is_alphanumeric() || matches!(c, '_' | '-' | '.' | '#');
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '"' {
+            quoted = !quoted;
+            out.push(c);
+            i += 1;
+            continue;
+        }
+        let starts = !quoted
+            && (c.is_alphabetic() || c == '_' || c == '#')
+            && (i == 0 || !(word(chars[i - 1]) || chars[i - 1] == '+'));
+        if starts {
+            let end = (i..chars.len())
+                .find(|&j| !word(chars[j]))
+                .unwrap_or(chars.len());
+            let w: String = chars[i..end].iter().collect();
+            if matches!(w.as_str(), "true" | "false" | "inf" | "nan") {
+                out.push_str(&w);
+            } else {
+                out.push('"');
+                out.push_str(&w);
+                out.push('"');
+            }
+            i = end;
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    out
+}
+
+impl LoadedScene {
+    /// Applies `--objective` values (`KIND` or `KIND:key=value,…`, the keys
+    /// of `[[objective]]`; bare words are names) and `--free` values
+    /// (`<joint>.<length|anchor_i|anchor_j>` or `<fixed body>.position`).
+    pub fn with_flags(self, free: &[String], objectives: &[String]) -> Result<Flagged, SceneError> {
+        let mut text = self.text.clone();
+        let mut objective_lines = Vec::new();
+        for value in objectives {
+            let (kind, rest) = value.split_once(':').unwrap_or((value.as_str(), ""));
+            if kind.trim().is_empty() {
+                return Err(flag_error(
+                    "--objective",
+                    value,
+                    0,
+                    "expected KIND or KIND:key=value,… (e.g. `dexterity:chain=[base,arm],point=[0.1,0,0]`)",
+                ));
+            }
+            if !text.ends_with('\n') {
+                text.push('\n');
+            }
+            let first = text.lines().count() + 1;
+            text.push_str(&format!(
+                "\n# --objective {value}\n[[objective]]\nkind = \"{}\"\n",
+                kind.trim()
+            ));
+            for (at, pair) in split_pairs(rest)
+                .into_iter()
+                .filter(|(_, p)| !p.trim().is_empty())
+            {
+                let Some((key, v)) = pair.split_once('=') else {
+                    let at = kind.len() + 1 + at;
+                    return Err(flag_error(
+                        "--objective",
+                        value,
+                        at,
+                        format!("`{}` is not key=value", pair.trim()),
+                    ));
+                };
+                text.push_str(&format!("{} = {}\n", key.trim(), quote_words(v.trim())));
+            }
+            objective_lines.push((first..text.lines().count() + 1, value.clone()));
+        }
+        let mut flagged = Flagged {
+            loaded: self.clone(),
+            objective_lines,
+        };
+        if !objectives.is_empty() {
+            flagged.loaded = super::parse(&self.file, &text, self.dir.as_deref())
+                .map_err(|e| flagged.attribute(e))?;
+        }
+        for value in free {
+            flagged.free(value)?;
+        }
+        Ok(flagged)
+    }
+}
+
+impl Flagged {
+    /// Maps an error located in an appended objective's lines to its flag.
+    pub fn attribute(&self, e: SceneError) -> SceneError {
+        match self
+            .objective_lines
+            .iter()
+            .find(|(r, _)| r.contains(&e.line))
+        {
+            Some((_, value)) => SceneError {
+                file: "--objective".into(),
+                line: 1,
+                column: 1,
+                message: e.message,
+                source_line: value.clone(),
+            },
+            None => e,
+        }
+    }
+
+    /// One `--free` value.
+    fn free(&mut self, value: &str) -> Result<(), SceneError> {
+        let err = |at: usize, m: String| flag_error("--free", value, at, m);
+        let Some((owner, var)) = value.rsplit_once('.') else {
+            return Err(err(
+                0,
+                "expected <joint>.<variable> or <fixed body>.position, e.g. `left.length`".into(),
+            ));
+        };
+        let at = owner.len() + 1;
+        let param = match var {
+            "length" => FreeSpec::Length,
+            "anchor_i" => FreeSpec::AnchorI,
+            "anchor_j" => FreeSpec::AnchorJ,
+            "position" => FreeSpec::Position,
+            other => {
+                return Err(err(
+                    at,
+                    format!(
+                        "unknown design variable `{other}`; expected one of length | anchor_i | anchor_j | position"
+                    ),
+                ));
+            }
+        };
+        let spec = &mut self.loaded.spec;
+        if param == FreeSpec::Position {
+            let names: Vec<String> = spec
+                .bodies
+                .iter()
+                .map(|b| b.name.get_ref().clone())
+                .collect();
+            let Some(b) = spec.bodies.iter_mut().find(|b| b.name.get_ref() == owner) else {
+                return Err(err(
+                    0,
+                    format!("no body `{owner}` (bodies: {})", names.join(", ")),
+                ));
+            };
+            if !b.fixed {
+                return Err(err(
+                    0,
+                    format!(
+                        "body `{owner}` is not fixed: a moving body's position is already free; `position` frees a fixed body's"
+                    ),
+                ));
+            }
+            if !b.free.iter().any(|f| *f.get_ref() == param) {
+                b.free.push(Spanned::new(b.name.span(), param));
+            }
+            return Ok(());
+        }
+        let names: Vec<String> = spec
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| {
+                j.name
+                    .as_ref()
+                    .map_or(format!("#{}", k + 1), |n| n.get_ref().clone())
+            })
+            .collect();
+        let Some(k) = names.iter().position(|n| n == owner) else {
+            return Err(err(
+                0,
+                format!("no joint `{owner}` (joints: {})", names.join(", ")),
+            ));
+        };
+        let j = &mut spec.joints[k];
+        let kind = *j.kind.get_ref();
+        let ok = match param {
+            FreeSpec::Length => kind == JointKindSpec::Distance,
+            _ => kind != JointKindSpec::Perpendicular,
+        };
+        if !ok {
+            let has = if kind == JointKindSpec::Perpendicular {
+                "none"
+            } else {
+                "anchor_i, anchor_j"
+            };
+            return Err(err(
+                at,
+                format!(
+                    "joint `{owner}` ({}) has no design variable `{var}`; it has {has}",
+                    format!("{kind:?}").to_lowercase()
+                ),
+            ));
+        }
+        if !j.free.iter().any(|f| *f.get_ref() == param) {
+            let span = j.name.as_ref().map_or(j.kind.span(), Spanned::span);
+            j.free.push(Spanned::new(span, param));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{quote_words, split_pairs};
+
+    #[test]
+    fn bare_words_are_quoted_and_numbers_are_not() {
+        assert_eq!(
+            quote_words("[base, upper-arm, #3]"),
+            r##"["base", "upper-arm", "#3"]"##
+        );
+        assert_eq!(
+            quote_words("[1e-3, -0.5, +2E+4, inf]"),
+            "[1e-3, -0.5, +2E+4, inf]"
+        );
+        assert_eq!(
+            quote_words(r#"["quoted name", true]"#),
+            r#"["quoted name", true]"#
+        );
+        assert_eq!(
+            quote_words("[{body=link1,point=[0.1,0,0]}]"),
+            r#"[{"body"="link1","point"=[0.1,0,0]}]"#
+        );
+    }
+
+    #[test]
+    fn pairs_split_at_top_level_commas_only() {
+        let p: Vec<&str> = split_pairs("chain=[a,b],point=[1,0,0],name=\"x,y\"")
+            .into_iter()
+            .map(|(_, s)| s)
+            .collect();
+        assert_eq!(p, ["chain=[a,b]", "point=[1,0,0]", "name=\"x,y\""]);
+    }
+}

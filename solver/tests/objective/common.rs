@@ -1,0 +1,268 @@
+//! Small mechanisms carrying one objective each, random states, and F by
+//! finite differences.
+
+use haptloop_solver::{
+    BodySpec, Bounds, DesignParam as P, JointKind as K, JointSpec, Model, ModelBuilder,
+    ObjectiveSpec, ObstacleSpec,
+};
+use nalgebra::{Quaternion, Vector3};
+
+const Z: [f64; 3] = [0.0, 0.0, 1.0];
+const Y: [f64; 3] = [0.0, 1.0, 0.0];
+
+/// A spatial 3R arm (yaw at the base, pitch, pitch) whose fixed base has a
+/// free position; links 0.3 m and 0.25 m; the hand point at the forearm's
+/// tip. Elbow bent by `elbow` radians.
+pub fn arm(elbow: f64) -> ModelBuilder {
+    let mut b = ModelBuilder::new();
+    b.body(
+        BodySpec::fixed("base")
+            .free_position()
+            .bounds(Bounds::Scalar([-1.0, 1.0])),
+    );
+    b.body(BodySpec::new("turret").mass(0.2));
+    b.body(BodySpec::new("upper").at([0.15, 0.0, 0.0]).mass(0.1));
+    let (s, c) = elbow.sin_cos();
+    let fore = [0.3 + 0.125 * c, 0.0, -0.125 * s];
+    let q = nalgebra::UnitQuaternion::from_axis_angle(&Vector3::y_axis(), elbow);
+    let q = q.quaternion();
+    b.body(
+        BodySpec::new("fore")
+            .at(fore)
+            .oriented([q.w, q.i, q.j, q.k])
+            .mass(0.1),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "base", "turret")
+            .named("yaw")
+            .axes(Z, Z),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "turret", "upper")
+            .named("shoulder")
+            .anchors([0.0; 3], [-0.15, 0.0, 0.0])
+            .axes(Y, Y)
+            .limits(-1.5, 1.5),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "upper", "fore")
+            .named("elbow")
+            .anchors([0.15, 0.0, 0.0], [-0.125, 0.0, 0.0])
+            .axes(Y, Y)
+            .limits(-2.5, 2.5),
+    );
+    b
+}
+
+/// The arm with a dexterity objective at the hand (all three directions).
+pub fn dexterity() -> Model {
+    let mut b = arm(1.0);
+    b.objective(ObjectiveSpec::Dexterity {
+        name: None,
+        weight: 0.7,
+        chain: ["base", "turret", "upper", "fore"]
+            .map(String::from)
+            .to_vec(),
+        point_m: [0.125, 0.0, 0.0],
+        directions: Vec::new(),
+    });
+    b.build().expect("dexterity model")
+}
+
+/// A chain of every joint kind with a column form (spherical, universal,
+/// prismatic, revolute with free anchors), two task directions.
+pub fn dexterity_mixed() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground"));
+    b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
+    b.body(
+        BodySpec::new("b")
+            .at([0.25, 0.05, 0.0])
+            .oriented([0.9, 0.1, 0.2, 0.3]),
+    );
+    b.body(BodySpec::new("c").at([0.35, 0.1, 0.05]));
+    b.body(BodySpec::new("d").at([0.5, 0.1, 0.1]));
+    b.joint(JointSpec::new(K::Spherical, "ground", "a").anchors([0.0; 3], [-0.1, 0.0, 0.0]));
+    b.joint(
+        JointSpec::new(K::Universal, "a", "b")
+            .anchors([0.1, 0.0, 0.0], [-0.05, -0.05, 0.0])
+            .axes([0.0, 0.0, 1.0], [0.2, 1.0, 0.1]),
+    );
+    b.joint(
+        JointSpec::new(K::Prismatic, "b", "c")
+            .anchors([0.05, 0.05, 0.0], [-0.05, -0.05, -0.05])
+            .axes([1.0, 0.2, 0.0], [1.0, 0.0, 0.0]),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "d", "c")
+            .anchors([-0.1, 0.0, 0.0], [0.05, 0.0, 0.05])
+            .axes([0.3, 0.0, 1.0], [0.0, 0.2, 1.0])
+            .free(&[P::AnchorI, P::AnchorJ]),
+    );
+    b.objective(ObjectiveSpec::Dexterity {
+        name: None,
+        weight: 1.3,
+        chain: ["ground", "a", "b", "c", "d"].map(String::from).to_vec(),
+        point_m: [0.05, 0.02, -0.01],
+        directions: vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.2]],
+    });
+    b.build().expect("mixed chain")
+}
+
+/// Three bodies' points near an obstacle point on a fourth, moving body.
+pub fn obstacle(on_body: bool) -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground").free_position());
+    b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
+    b.body(BodySpec::new("b").at([0.0, 0.2, 0.0]));
+    b.body(BodySpec::new("bullet").at([0.05, 0.05, 0.1]));
+    b.joint(JointSpec::new(K::Spherical, "ground", "a").anchors([0.0; 3], [-0.1, 0.0, 0.0]));
+    let obstacle = if on_body {
+        ObstacleSpec::Body {
+            body: "bullet".into(),
+            point_m: [0.01, 0.0, -0.02],
+        }
+    } else {
+        ObstacleSpec::World([0.05, 0.05, 0.1])
+    };
+    b.objective(ObjectiveSpec::Obstacle {
+        name: Some("dodge".into()),
+        weight: 2.0,
+        points: vec![
+            ("a".into(), [0.05, 0.0, 0.0]),
+            ("b".into(), [0.0, -0.05, 0.02]),
+            ("ground".into(), [0.02, 0.02, 0.0]),
+        ],
+        obstacle,
+        distance_m: 0.4,
+    });
+    b.build().expect("obstacle model")
+}
+
+/// A body point on a world line.
+pub fn straight_line() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(
+        BodySpec::new("a")
+            .at([0.1, 0.2, 0.0])
+            .oriented([0.8, 0.3, -0.2, 0.1]),
+    );
+    b.objective(ObjectiveSpec::StraightLine {
+        name: None,
+        weight: 0.5,
+        body: "a".into(),
+        point_m: [0.05, -0.03, 0.02],
+        line_point_m: [0.0, 0.1, 0.0],
+        direction: [1.0, 0.5, 0.0],
+    });
+    b.build().expect("line model")
+}
+
+/// Revolute, prismatic and distance limits (free anchors on two of them).
+pub fn joint_limits() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground").free_position());
+    b.body(
+        BodySpec::new("a")
+            .at([0.3, 0.1, 0.2])
+            .oriented([0.8, 0.2, 0.4, -0.1]),
+    );
+    b.body(
+        BodySpec::new("b")
+            .at([-0.2, 0.4, 0.1])
+            .oriented([0.5, -0.5, 0.1, 0.6]),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "ground", "a")
+            .named("hinge")
+            .anchors([0.0, 0.1, 0.0], [0.1, -0.05, 0.2])
+            .axes([0.0, 1.0, 0.0], [0.2, 1.0, 0.0])
+            .limits(-1.0, 0.5)
+            .free(&[P::AnchorJ]),
+    );
+    b.joint(
+        JointSpec::new(K::Prismatic, "a", "b")
+            .named("slider")
+            .anchors([0.1, -0.05, 0.2], [-0.15, 0.1, 0.05])
+            .axes([0.0, 0.3, 1.0], [1.0, 0.1, 0.0])
+            .limits(-0.1, 0.2),
+    );
+    b.joint(
+        JointSpec::new(K::Distance, "b", "ground")
+            .named("strut")
+            .anchors([0.0; 3], [0.1, 0.0, 0.0])
+            .limits(0.1, 2.0)
+            .free(&[P::AnchorI]),
+    );
+    b.objective(ObjectiveSpec::JointLimitDistance {
+        name: None,
+        weight: 3.0,
+        joints: Vec::new(),
+    });
+    b.build().expect("limits model")
+}
+
+/// A random state from uniform numbers in [-1, 1]: positions ±0.5 m around
+/// q0, quaternions of random direction with norm in [0.6, 1.5] (non-unit on
+/// purpose), design variables ±0.1 m around q0.
+pub fn state(model: &Model, u: &[f64]) -> Vec<f64> {
+    let mut q = model.q0().to_vec();
+    let mut it = u.iter().copied();
+    let mut next = || it.next().expect("enough random numbers");
+    for (_, o) in model.layout().moving_bodies() {
+        for k in 0..3 {
+            q[o + k] += 0.2 * next();
+        }
+        let dir = Quaternion::new(next(), next(), next(), next());
+        let dir = if dir.norm() < 1e-3 {
+            Quaternion::identity()
+        } else {
+            dir / dir.norm()
+        };
+        let norm = 0.6 + 0.45 * (next() + 1.0);
+        q[o + 3..o + 7].copy_from_slice(&[dir.w * norm, dir.i * norm, dir.j * norm, dir.k * norm]);
+    }
+    for x in &mut q[model.layout().body_coords()..] {
+        *x += 0.1 * next();
+    }
+    q
+}
+
+/// How many numbers [`state`] consumes.
+pub fn state_len(model: &Model) -> usize {
+    model.layout().moving_bodies().count() * 8 + model.layout().design_coords()
+}
+
+/// Σ w_k F_k by a fresh evaluation.
+pub fn total(model: &Model, q: &[f64]) -> f64 {
+    let mut ev = model.objective_evaluation();
+    let mut f = vec![0.0; model.objectives().terms.len()];
+    ev.values(model, q, &mut f).expect("values");
+    f.iter()
+        .zip(&model.objectives().terms)
+        .map(|(f, t)| f * t.weight)
+        .sum()
+}
+
+/// The analytic gradient of Σ w_k F_k, and the total it returns.
+pub fn gradient(model: &Model, q: &[f64]) -> (Vec<f64>, f64) {
+    let mut ev = model.objective_evaluation();
+    let mut g = vec![0.0; model.n_coords()];
+    let f = ev.gradient(model, q, &mut g).expect("gradient");
+    (g, f)
+}
+
+/// Central differences of [`total`] with step `h`.
+pub fn fd(model: &Model, q: &[f64], h: f64) -> Vec<f64> {
+    let mut x = q.to_vec();
+    (0..q.len())
+        .map(|c| {
+            x[c] = q[c] + h;
+            let plus = total(model, &x);
+            x[c] = q[c] - h;
+            let minus = total(model, &x);
+            x[c] = q[c];
+            (plus - minus) / (2.0 * h)
+        })
+        .collect()
+}
