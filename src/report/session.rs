@@ -155,13 +155,17 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         );
         let _ = writeln!(
             out,
-            "  {} witness changes, {} tables, {} new programs (build mean {:.0} µs, max {:.0} µs), {} backups, \
-             {} expansions, {} in-tick activations ({} ticks at the limit)",
+            "  {} witness changes, {} tables, {} new programs ({} built: mean {:.0} µs, max {:.0} µs; {} reused: mean {:.0} µs, max {:.0} µs), \
+             {} backups, {} expansions, {} in-tick activations ({} ticks at the limit)",
             c.witness_changes,
             c.witness_tables,
             c.structure_changes,
+            c.structure_changes - c.reused,
             c.build_us_mean,
             c.build_us_max,
+            c.reused,
+            c.reuse_us_mean,
+            c.reuse_us_max,
             c.backups,
             c.expansions,
             c.activations,

@@ -227,6 +227,15 @@ pub struct Contact {
     /// Same, largest.
     #[serde(with = "super::figure")]
     pub build_us_max: f64,
+    /// Structure changes served from the cache by structure (a set of pairs
+    /// seen before), and preparing one of those, µs: mean and largest.
+    pub reused: u64,
+    /// Mean, µs.
+    #[serde(with = "super::figure")]
+    pub reuse_us_mean: f64,
+    /// Largest, µs.
+    #[serde(with = "super::figure")]
+    pub reuse_us_max: f64,
 }
 
 /// How one design-variable component (m) or objective value moved over the
@@ -501,8 +510,11 @@ impl Summary {
                     latency_ticks_max: f.latency_max_ticks,
                     cycle_us_mean: mean(c.cycle_ns_sum, c.cycles) / 1e3,
                     cycle_us_max: c.cycle_ns_max as f64 / 1e3,
-                    build_us_mean: mean(c.build_ns_sum, c.structure_changes) / 1e3,
+                    build_us_mean: mean(c.build_ns_sum, c.structure_changes - c.reused) / 1e3,
                     build_us_max: c.build_ns_max as f64 / 1e3,
+                    reused: c.reused,
+                    reuse_us_mean: mean(c.reuse_ns_sum, c.reused) / 1e3,
+                    reuse_us_max: c.reuse_ns_max as f64 / 1e3,
                 }
             }),
             trace_dropped: o.trace_dropped,

@@ -136,7 +136,12 @@ impl SlowLoop {
     /// re-project if the fast loop has drifted past the threshold.
     pub fn step(&mut self) {
         self.stats.steps += 1;
-        self.stats.programs_dropped += self.programs.collect_all() as u64;
+        while let Some(spent) = self.programs.collect() {
+            self.stats.programs_dropped += 1;
+            if let Some(c) = &mut self.contact {
+                c.recycle(spent.program);
+            }
+        }
         if !self.snapshots.refresh() {
             return;
         }
