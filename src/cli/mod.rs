@@ -14,6 +14,18 @@ use clap::{CommandFactory, Parser, Subcommand};
 use haptloop_rt::schedule::StopFlag;
 use std::process::ExitCode;
 
+/// Writes `text` and a newline to stdout. A closed stdout (`haptloop run |
+/// head`) is not an error: the run still writes its files, where `println!`
+/// would panic halfway.
+pub(crate) fn emit(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out
+        .write_all(text.as_bytes())
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+}
+
 /// Real-time haptic interaction with constrained virtual mechanisms.
 ///
 /// A pinned kilohertz loop keeps a virtual mechanism assembled around the

@@ -454,6 +454,10 @@ impl Summary {
                             "the dense reference is skipped above {} coordinates",
                             crate::session::REFERENCE_MAX_COORDS
                         )
+                    } else if o.slow.reference_skipped_no_joints > 0 {
+                        "the scene has no joint rows: a joints-only reference would be the \
+                         configuration itself"
+                            .into()
                     } else if measured == 0 {
                         "no tick succeeded".into()
                     } else {

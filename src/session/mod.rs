@@ -607,11 +607,17 @@ fn report_live(
                 })
                 .collect();
             let t = recorder.latest.first().map_or(0.0, |s| s.t_s);
+            // No joint rows: nothing to violate, and no 0 that says otherwise.
+            let violation = if plan.joint_rows > 0 {
+                let v = recorder.latest.first().map_or(f64::NAN, |s| s.violation_m);
+                format!("{v:8.2e} m")
+            } else {
+                "    none".to_string()
+            };
             on_status(&format!(
-                "t {t:5.1}/{:.0} s | {rate:6.0} Hz | misses {misses} | lateness p99 {:6.1} µs | violation {:8.2e} m | {}",
+                "t {t:5.1}/{:.0} s | {rate:6.0} Hz | misses {misses} | lateness p99 {:6.1} µs | violation {violation} | {}",
                 plan.seconds,
                 iv.lateness.quantile(0.99) as f64 / 1e3,
-                recorder.latest.first().map_or(0.0, |s| s.violation_m),
                 force.join(", ")
             ));
         }

@@ -102,6 +102,9 @@ pub struct Plan {
     pub thread: ThreadConfig,
     /// The contact active set's knobs (scenes with shapes).
     pub contact: ContactSettings,
+    /// Translational joint rows (violation is measured on these; 0: the
+    /// status line and report say there is nothing to violate).
+    pub joint_rows: usize,
 }
 
 impl Plan {
@@ -189,6 +192,7 @@ impl Plan {
             spin: options.spin,
             thread: options.thread.clone(),
             contact,
+            joint_rows: super::joint_length_rows(&scene.compiled.model),
         })
     }
 

@@ -91,6 +91,10 @@ pub struct SlowStats {
     /// Reference samples skipped because the model has more than
     /// [`REFERENCE_MAX_COORDS`] coordinates.
     pub reference_skipped_large: u64,
+    /// Reference samples skipped because the model has no joint rows: the
+    /// joints-only reference would be the configuration itself and every
+    /// figure a trivial 0.
+    pub reference_skipped_no_joints: u64,
     /// Largest distance of a fast-loop body position from the reference
     /// configuration, m.
     pub reference_q_error_m: f64,
@@ -125,6 +129,16 @@ pub struct SlowLoop {
     pub(super) reference_every: u64,
     /// The contact active set, for scenes with shapes that can touch.
     pub(super) contact: Option<super::contact::ContactLoop>,
+}
+
+/// Whether `model` holds a joint (anything but quaternion norms and design
+/// bounds, which a configuration satisfies by itself).
+fn has_joints(model: &Model) -> bool {
+    use haptloop_solver::ConstraintKind::{DesignBound, DesignPin, QuaternionNorm};
+    model
+        .constraints()
+        .iter()
+        .any(|c| !matches!(c.kind, QuaternionNorm | DesignBound | DesignPin))
 }
 
 /// Largest model (coordinates) whose snapshots are compared with the dense
@@ -184,6 +198,10 @@ impl SlowLoop {
     fn measure_against_reference(&mut self, q: &[f64]) {
         if self.model.n_coords() > REFERENCE_MAX_COORDS {
             self.stats.reference_skipped_large += 1;
+            return;
+        }
+        if !has_joints(&self.joints_only) {
+            self.stats.reference_skipped_no_joints += 1;
             return;
         }
         let mut q_star = q.to_vec();

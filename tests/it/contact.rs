@@ -231,6 +231,11 @@ fn the_pinch_lifts_only_with_friction() {
         "not back on the table"
     );
     assert!(s.contact.as_ref().unwrap().max_sticking >= 2);
+    // No joint rows: no joints-only reference to compare with (it would be
+    // the configuration itself, every figure a trivial 0).
+    assert_eq!(s.slow_loop.reference_samples, 0);
+    let why = s.slow_loop.reference_missing.as_deref().unwrap_or("");
+    assert!(why.contains("no joint rows"), "{why}");
     // Frictionless fingertips: the same file with `friction = 0.0`.
     let text =
         include_str!("../../scenes/pinch-lift.toml").replace("friction = 0.8", "friction = 0.0");
