@@ -46,6 +46,10 @@
 //!   finger, world frame), with zero allocation, and refuses a finite but
 //!   absurd result ([`TickOutcome::Diverged`]); [`reference_finger_wrenches`]
 //!   is the dense reference.
+//! - [`semantic`]: Gösele & Stuerzlinger's semantic constraints on the slow
+//!   loop (labels, snapping, checkMove, the grouping graph, consistency);
+//!   a satisfied constraint reaches the fast loop as rows
+//!   ([`Model::with_semantic`]).
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
@@ -94,6 +98,7 @@ pub mod placement;
 pub mod program;
 pub mod rotation;
 pub mod scene;
+pub mod semantic;
 
 pub use al::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
@@ -107,6 +112,7 @@ pub use model::{
     FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model,
     ModelBuilder, Owner, PlaneOwner, PointPlaneSpec, Shape, UnknownName,
 };
+pub use model::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 pub use objective::{
     Objective, ObjectiveEval, ObjectiveKind, ObjectiveSpec, Objectives, ObstacleSpec,
 };
