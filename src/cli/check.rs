@@ -159,11 +159,6 @@ pub fn summary(scene: &Scene) -> String {
             if n == 1 { "y" } else { "ies" }
         ),
     };
-    out += &match c.semantic_areas {
-        0 => "  semantic     no areas\n".to_string(),
-        n => format!(
-            "  semantic     {n} areas parsed and checked; semantic snapping is not yet simulated\n"
-        ),
-    };
+    out += &crate::report::semantic::check_lines(c);
     out
 }

@@ -5,5 +5,6 @@ pub mod figure;
 pub mod plots;
 pub mod probe;
 pub mod scene_plot;
+pub mod semantic;
 pub mod session;
 pub mod summary;

@@ -177,6 +177,9 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             c.updates, c.latency_ticks_mean, c.latency_ticks_max, c.cycle_us_mean, c.cycle_us_max
         );
     }
+    if let Some(sem) = &s.semantic {
+        super::semantic::lines(&mut out, sem);
+    }
     match &s.slow_loop.reference_missing {
         None => {
             let _ = writeln!(

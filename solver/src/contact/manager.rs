@@ -133,6 +133,19 @@ impl ContactManager {
         }
     }
 
+    /// Takes `base` as the mechanism from now on (the same bodies and
+    /// layout with other joints: satisfied semantic constraints, a hand's
+    /// holds; its jointed pairs stop colliding), runs a cycle at `q` and
+    /// returns the program for it and the pairs in reach. Programs kept for
+    /// reuse belonged to the old mechanism and are dropped. Allocates.
+    pub fn rebase(&mut self, base: Arc<Model>, q: &[f64]) -> Result<Program, ContactError> {
+        self.active.set_excluded(jointed_pairs(&base));
+        self.base = base;
+        self.cache.clear();
+        let _ = self.cycle(q);
+        self.build_program()
+    }
+
     /// How the contact programs so far were obtained.
     pub fn builds(&self) -> BuildCounts {
         self.builds

@@ -37,6 +37,30 @@ impl SemanticScene {
         }
     }
 
+    /// Distance from a ball of `radius_m` at the world point `centre` to
+    /// object `o`'s shape, m (0 when they overlap; infinite without a shape).
+    pub fn ball_distance_m(
+        &self,
+        o: BodyId,
+        centre: &nalgebra::Vector3<f64>,
+        radius_m: f64,
+    ) -> f64 {
+        let Some(c) = self.objects[o.index()].collider.as_ref() else {
+            return f64::INFINITY;
+        };
+        let ball = Pose3 {
+            r: *centre,
+            rot: nalgebra::Matrix3::identity(),
+        };
+        query::distance(
+            &ball.to_parry(),
+            &parry3d_f64::shape::Ball::new(radius_m),
+            &self.objects[o.index()].pose.to_parry(),
+            &*c.full,
+        )
+        .map_or(f64::INFINITY, |d| d.distance)
+    }
+
     /// Whether the collisions of `x` and `y` are tested at all (two fixed
     /// bodies never collide: walls meet the floor by construction).
     pub fn tested(&self, x: BodyId, y: BodyId) -> bool {
