@@ -153,19 +153,24 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             c.max_active,
             c.max_tracked_pairs
         );
+        // Mean and max only over programs that were built (or reused).
+        let timed = |n: u64, what: &str, mean: f64, max: f64| {
+            if n == 0 {
+                format!("none {what}")
+            } else {
+                format!("{n} {what}: mean {mean:.0} µs, max {max:.0} µs")
+            }
+        };
+        let built = c.structure_changes - c.reused;
         let _ = writeln!(
             out,
-            "  {} witness changes, {} tables, {} new programs ({} built: mean {:.0} µs, max {:.0} µs; {} reused: mean {:.0} µs, max {:.0} µs), \
+            "  {} witness changes, {} tables, {} new programs ({}; {}), \
              {} backups, {} expansions, {} in-tick activations ({} ticks at the limit)",
             c.witness_changes,
             c.witness_tables,
             c.structure_changes,
-            c.structure_changes - c.reused,
-            c.build_us_mean,
-            c.build_us_max,
-            c.reused,
-            c.reuse_us_mean,
-            c.reuse_us_max,
+            timed(built, "built", c.build_us_mean, c.build_us_max),
+            timed(c.reused, "reused", c.reuse_us_mean, c.reuse_us_max),
             c.backups,
             c.expansions,
             c.activations,
