@@ -54,10 +54,12 @@
 
 mod contact;
 mod report;
+mod stages;
 mod state;
 mod tick;
 
 pub use contact::DYNAMIC_DAMPING_PER_S;
+pub use stages::{SolverStage, StageMarks};
 pub use tick::MAX_ACTIVATIONS;
 
 pub use report::{

@@ -4,6 +4,7 @@ use std::cmp::Ordering;
 use std::time::Duration;
 
 use super::report::max_tracking;
+use super::stages::{Ordered, SolverStage, StageMarks};
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
 use crate::al::projected::Step;
 use crate::al::update::Violation;
@@ -104,13 +105,29 @@ impl Program {
     /// [module docs](super)): (iterations + 1) evaluations, a fixed-pattern
     /// sparse Cholesky, no tolerance-driven loops.
     pub fn tick(&mut self, targets: &[FingerTarget], dt: Duration) -> TickReport {
+        self.tick_marked(targets, dt, &mut ())
+    }
+
+    /// [`tick`](Self::tick), telling `marks` when each [`SolverStage`] ends
+    /// (for a caller that times them; the solver reads no clock).
+    ///
+    /// # Real-time
+    /// As `tick`, plus one `marks.end` per stage.
+    pub fn tick_marked<M: StageMarks>(
+        &mut self,
+        targets: &[FingerTarget],
+        dt: Duration,
+        marks: &mut M,
+    ) -> TickReport {
         let n = self.settings.iterations;
         let dt_s = dt.as_secs_f64();
+        let mut marks = Ordered::new(marks);
         self.report = if dt_s > 0.0 {
-            self.run_tick(targets, dt_s, n)
+            self.run_tick(targets, dt_s, n, &mut marks)
         } else {
             self.failed(TickOutcome::ZeroDt, 0)
         };
+        marks.finish();
         self.report
     }
 
@@ -232,7 +249,13 @@ impl Program {
         }
     }
 
-    fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
+    fn run_tick<M: StageMarks>(
+        &mut self,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        n: u32,
+        marks: &mut Ordered<'_, M>,
+    ) -> TickReport {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
@@ -243,6 +266,7 @@ impl Program {
         if let Some(d) = self.diverged_state() {
             return self.failed(TickOutcome::Diverged(d), n);
         }
+        marks.end(SolverStage::Update);
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
@@ -253,6 +277,7 @@ impl Program {
         if !within(v.max_scaled_m, self.limits.violation_m) {
             return self.failed(TickOutcome::Diverged(Divergence::Violation), n);
         }
+        marks.end(SolverStage::Evaluation);
         let solved = self.feedback.compute(
             &self.model,
             &self.scaling,
