@@ -18,6 +18,7 @@ mod recorder;
 mod rig;
 mod slow;
 mod stats;
+mod timing;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
@@ -26,6 +27,7 @@ pub use recorder::{Recorder, Series};
 pub use rig::{Rig, SessionDevice};
 pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
 pub use stats::{FingerStats, RunStats};
+pub use timing::{Stage, StageClock, StageTimes};
 
 use crate::scenes::Scene;
 use anyhow::{Context, Result};
@@ -236,6 +238,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
         recorders,
         inbox,
+        timer: StageClock::default(),
+        rendered: vec![Vector3::zeros(); fingers],
+        commanded: vec![Vector3::zeros(); fingers],
     };
     let slow = SlowLoop {
         snapshots,
@@ -252,6 +257,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         // Every 100 ms of slow-loop steps (each about 5 ms).
         reference_every: 20,
         contact,
+        step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
     Ok(Built {
         fast,

@@ -4,6 +4,7 @@
 //! Every `record*` method is a handful of arithmetic operations on
 //! preallocated fields: no allocation, no lock.
 
+use super::timing::StageTimes;
 use haptloop_rt::hist::LatencyHistogram;
 use haptloop_solver::TickReport;
 use nalgebra::Vector3;
@@ -91,6 +92,8 @@ pub struct RunStats {
     pub programs_swapped: u64,
     /// Contact figures of the fast loop.
     pub contact: ContactStats,
+    /// Time per stage of the tick, monotonic clock.
+    pub stages: StageTimes,
 }
 
 /// What the fast loop saw of contact.
@@ -156,6 +159,7 @@ impl RunStats {
             force_cuts: 0,
             programs_swapped: 0,
             contact: ContactStats::default(),
+            stages: StageTimes::new(),
         }
     }
 
