@@ -11,24 +11,16 @@
 //! S⁺ (minimum norm) makes the finger carry only what the joints cannot: the
 //! component of −M q̈ + Q along the mechanism's free motions. In directions
 //! the mechanism cannot move, the joints hold; the user feels those through
-//! the virtual coupling instead. A_JJ is factored by a faer sparse Cholesky
-//! (LLᵀ) whose symbolic analysis (AMD ordering, elimination tree, supernodes)
-//! is done once; each tick refactors the values and solves 1 + m_f
-//! right-hand sides. Sequential (`Par::Seq`), so the result is bit-identical
-//! run to run.
-
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::SparseColMatRef;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
-};
-use faer::{Conj, MatMut, Par, Side};
+//! the virtual coupling instead. A_JJ is factored by the crate's supernodal
+//! sparse Cholesky (LLᵀ, `crate::cholesky`) whose symbolic analysis (AMD
+//! ordering, elimination tree, supernodes, update plan) is done once; each
+//! tick refactors the values and solves the 1 + m_f right-hand sides
+//! together. Sequential, so the result is bit-identical run to run.
 
 use super::cg::Cg;
 use super::gram::Gram;
 use super::small::{cholesky_solve, min_norm_solve};
+use crate::cholesky::{Cholesky, Regularization};
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
@@ -37,9 +29,7 @@ pub(crate) struct FactorError;
 
 /// Symbolic factor and every buffer of the solve.
 pub(crate) struct MultiplierSolve {
-    symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
-    mem: MemBuffer,
+    llt: Cholesky,
     /// n_J × (1 + m_f), column-major: r_J, then A_JF's columns; solved in place.
     rhs: Vec<f64>,
     schur: Vec<f64>,
@@ -62,8 +52,8 @@ pub(crate) struct MultiplierSolve {
 impl std::fmt::Debug for MultiplierSolve {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("MultiplierSolve")
-            .field("n", &self.symbolic.nrows())
-            .field("factor_nnz", &self.l_values.len())
+            .field("n", &self.rhs.len())
+            .field("factor_nnz", &self.llt.len_values())
             .field("rank", &self.rank)
             .finish_non_exhaustive()
     }
@@ -74,21 +64,10 @@ impl MultiplierSolve {
     /// capped conjugate-gradient solve replaces the numeric Cholesky.
     /// Allocates.
     pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
-        let symbolic = factorize_symbolic_cholesky(
-            gram.pattern.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )?;
         let (n, m) = (gram.n_j, gram.m_f);
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1 + m, Par::Seq),
-        ]);
+        let llt = Cholesky::analyze(n, gram.pattern.col_ptr(), gram.pattern.row_idx(), 1 + m)?;
         Ok(Self {
-            l_values: vec![0.0; symbolic.len_val()],
-            symbolic,
-            mem: MemBuffer::new(req),
+            llt,
             rhs: vec![0.0; n * (1 + m)],
             schur: vec![0.0; m * m],
             schur_keep: vec![0.0; m * m],
@@ -103,9 +82,10 @@ impl MultiplierSolve {
         })
     }
 
-    /// Number of stored values of the Cholesky factor L.
+    /// Number of stored values of the Cholesky factor L (its supernodes'
+    /// dense blocks).
     pub fn factor_nnz(&self) -> usize {
-        self.l_values.len()
+        self.llt.len_values()
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
@@ -129,12 +109,7 @@ impl MultiplierSolve {
             cg.solve(gram, &mut self.rhs);
         } else {
             self.factor(gram)?;
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
-                Par::Seq,
-                MemStack::new(&mut self.mem),
-            );
+            self.llt.solve(&mut self.rhs, 1 + m);
         }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
@@ -171,7 +146,7 @@ impl MultiplierSolve {
 
 impl MultiplierSolve {
     /// Numeric LLᵀ of `gram`'s (assembled, regularised) A_JJ into the
-    /// factor's buffers, with faer's dynamic regularisation: a pivot below
+    /// factor's buffers, with faer's rule of dynamic regularisation: a pivot below
     /// 1e-14 × the largest diagonal entry is replaced by 1e-10 × it. That
     /// keeps the factorisation alive through a round-off pivot; it does not
     /// make a singular A_JJ well-posed (masking redundant rows does, see
@@ -182,27 +157,17 @@ impl MultiplierSolve {
     /// factor.
     pub fn factor(&mut self, gram: &Gram) -> Result<(), FactorError> {
         let nnz = gram.nnz();
-        let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
         let max_diag = gram
             .diag
             .iter()
             .map(|&d| gram.values[d])
             .fold(0.0, f64::max);
-        let reg = LltRegularization {
-            dynamic_regularization_delta: 1e-10 * max_diag,
-            dynamic_regularization_epsilon: 1e-14 * max_diag,
+        let reg = Regularization {
+            delta: 1e-10 * max_diag,
+            epsilon: 1e-14 * max_diag,
         };
-        self.symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                a,
-                Side::Lower,
-                reg,
-                Par::Seq,
-                MemStack::new(&mut self.mem),
-                Default::default(),
-            )
-            .map(|_| ())
+        self.llt
+            .factor(&gram.values[..nnz], reg)
             .map_err(|_| FactorError)
     }
 
@@ -211,13 +176,7 @@ impl MultiplierSolve {
     /// # Real-time
     /// No allocation; one pair of sparse triangular solves.
     pub fn solve_joint(&mut self, x: &mut [f64]) {
-        let n = x.len();
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(x, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
+        self.llt.solve(x, 1);
     }
 
     /// Solves the regularised normal equations of the projected update with
@@ -249,13 +208,7 @@ impl MultiplierSolve {
         for (j, &row) in gram.j_rows.iter().enumerate() {
             self.proj[j] = r[row];
         }
-        let llt = LltRef::new(&self.symbolic, &self.l_values);
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.proj, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
+        self.llt.solve(&mut self.proj, 1);
         let a_fj = &gram.values[nnz..nnz + m * n];
         self.small.copy_from_slice(&self.schur_keep);
         for f in 0..m {
@@ -292,4 +245,155 @@ impl MultiplierSolve {
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod timing {
+    //! `cargo test --release -p haptloop-solver --lib force::solve::timing -- --ignored --nocapture`:
+    //! the supernodal factor against faer's on the built-in mechanisms'
+    //! Eq. 7 matrices, interleaved. Prints; asserts only agreement.
+    use super::super::gram::Gram;
+    use super::super::inertia::BodyMass;
+    use crate::cholesky::{Cholesky, Regularization};
+    use crate::mechanisms::{four_bar, sphere_toy, stewart};
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::cholesky::llt::factor::LltRegularization;
+    use faer::sparse::SparseColMatRef;
+    use faer::sparse::linalg::cholesky::{
+        CholeskySymbolicParams, SymmetricOrdering, factorize_symbolic_cholesky,
+    };
+    use faer::{Conj, MatMut, Par, Side};
+    use std::time::Instant;
+
+    #[test]
+    #[ignore]
+    fn supernodal_against_faer() {
+        for (name, model) in [
+            ("four-bar", four_bar()),
+            ("stewart", stewart()),
+            ("sphere-toy", sphere_toy()),
+        ] {
+            let mut ev = model.evaluation();
+            ev.evaluate(&model, model.q0(), &model.initial_targets())
+                .unwrap();
+            let masses = BodyMass::of_model(&model);
+            let mut gram = Gram::new(&model, ev.jacobian(), &masses, &[]);
+            let scale = vec![1.0; model.n_rows()];
+            let b = vec![0.1; model.n_coords()];
+            let mut y = vec![0.0; model.n_coords()];
+            gram.assemble(model.q0(), ev.jacobian(), &scale, &masses, &b, &mut y);
+            let (n, k) = (gram.n_j, 1 + gram.m_f);
+            let a = &gram.values[..gram.nnz()];
+            let max_diag = gram.diag.iter().map(|&d| a[d]).fold(0.0, f64::max);
+            let reg = Regularization {
+                epsilon: 1e-14 * max_diag,
+                delta: 1e-10 * max_diag,
+            };
+            let mut ours =
+                Cholesky::analyze(n, gram.pattern.col_ptr(), gram.pattern.row_idx(), k).unwrap();
+            let sym = factorize_symbolic_cholesky(
+                gram.pattern.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                CholeskySymbolicParams::default(),
+            )
+            .unwrap();
+            let mut l = vec![0.0; sym.len_val()];
+            let mut mem = MemBuffer::new(StackReq::any_of(&[
+                sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                sym.solve_in_place_scratch::<f64>(k, Par::Seq),
+            ]));
+            let rhs: Vec<f64> = (0..n * k).map(|i| (i % 7) as f64 - 3.0).collect();
+            let (mut x1, mut x2) = (rhs.clone(), rhs.clone());
+            let reps = (20_000 / n).max(20);
+            let mut t = [[0f64; 2]; 4];
+            for _round in 0..6 {
+                let s = Instant::now();
+                for _ in 0..reps {
+                    ours.factor(a, reg).unwrap();
+                }
+                t[0][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x1.copy_from_slice(&rhs);
+                    ours.solve(&mut x1, k);
+                }
+                t[1][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    sym.factorize_numeric_llt::<f64>(
+                        &mut l,
+                        SparseColMatRef::new(gram.pattern.as_ref(), a),
+                        Side::Lower,
+                        LltRegularization {
+                            dynamic_regularization_delta: reg.delta,
+                            dynamic_regularization_epsilon: reg.epsilon,
+                        },
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                        Default::default(),
+                    )
+                    .unwrap();
+                }
+                t[0][1] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x2.copy_from_slice(&rhs);
+                    faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(&mut x2, n, k),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                }
+                t[1][1] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x1[..n].copy_from_slice(&rhs[..n]);
+                    ours.solve(&mut x1[..n], 1);
+                }
+                t[2][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x2[..n].copy_from_slice(&rhs[..n]);
+                    faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(&mut x2[..n], n, 1),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                }
+                t[2][1] += s.elapsed().as_secs_f64();
+            }
+            let per = |x: f64| x / (6 * reps) as f64 * 1e6;
+            x1.copy_from_slice(&rhs);
+            ours.solve(&mut x1, k);
+            x2.copy_from_slice(&rhs);
+            faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(&mut x2, n, k),
+                Par::Seq,
+                MemStack::new(&mut mem),
+            );
+            let diff = x1
+                .iter()
+                .zip(&x2)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let big = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(diff <= 1e-9 * big, "{name}: {diff:e} vs {big:e}");
+            println!(
+                "{name}: n {n}, k {k}: factor ours {:.2} µs faer {:.2} µs ({:.2}×); solve×{k} ours {:.2} faer {:.2} ({:.2}×); solve×1 ours {:.2} faer {:.2} ({:.2}×)",
+                per(t[0][0]),
+                per(t[0][1]),
+                t[0][1] / t[0][0],
+                per(t[1][0]),
+                per(t[1][1]),
+                t[1][1] / t[1][0],
+                per(t[2][0]),
+                per(t[2][1]),
+                t[2][1] / t[2][0],
+            );
+        }
+    }
 }
