@@ -51,8 +51,7 @@
 
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
-use crate::program::TickOutcome;
-use crate::{Evaluation, FingerTarget, Model};
+use crate::{EvalError, Evaluation, FingerTarget, Model};
 
 /// A predicted violation below this (metres) makes an inactive inequality
 /// row active within the tick (10 nm: round-off of a step that slides along
@@ -71,11 +70,26 @@ pub(crate) enum Step {
     Activate,
 }
 
+/// Why a projected step failed (the program turns it into its tick outcome).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum StepError {
+    /// C could not be evaluated at q (a non-finite q or target).
+    Eval(EvalError),
+    /// A product produced a NaN or infinity.
+    NonFinite,
+    /// The solve with the force factor failed.
+    Solve,
+}
+
 /// Buffers of the projected step.
 #[derive(Debug, Clone)]
 pub(crate) struct Projected {
     d: Vec<f64>,
+    /// C_q d with the chord C_q, kept up to date across the steps of one
+    /// sequence (see [`Projected::begin`]).
     jd: Vec<f64>,
+    /// `jd` holds C_q (q − q_ref) for the current q.
+    jd_current: bool,
     jm: Vec<f64>,
     r: Vec<f64>,
     y: Vec<f64>,
@@ -110,7 +124,17 @@ impl Projected {
             mg: vec![0.0; n],
             k_inv: vec![1.0 / (gain * finger_weight * mean_mass_kg); m_f],
             fingers,
+            jd_current: false,
         }
+    }
+
+    /// Starts a sequence of steps with one chord Jacobian and one q_ref:
+    /// the next step forms C_q (q − q_ref) afresh; the later ones update it
+    /// (a taken step moves q by −s (d + M̃⁻¹ g), so C_q d moves by
+    /// −s (C_q d + C_q M̃⁻¹ g), and C_q M̃⁻¹ g is formed anyway for the
+    /// inequality rows' prediction): one product per step saved.
+    pub fn begin(&mut self) {
+        self.jd_current = false;
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -136,15 +160,24 @@ impl Projected {
         step: f64,
         max_size_m: f64,
         lambda: &mut [f64],
-    ) -> Result<Step, TickOutcome> {
+    ) -> Result<Step, StepError> {
         ev.evaluate_values(model, q, targets)
-            .map_err(TickOutcome::Eval)?;
+            .map_err(StepError::Eval)?;
+        let mut moved = false;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
             *d = a - b;
+            moved |= *d != 0.0;
         }
         let jac = ev.jacobian();
-        jac.mul_vec(&self.d, &mut self.jd)
-            .map_err(|_| TickOutcome::NonFinite)?;
+        if !self.jd_current {
+            if moved {
+                jac.mul_vec(&self.d, &mut self.jd)
+                    .map_err(|_| StepError::NonFinite)?;
+            } else {
+                self.jd.fill(0.0);
+            }
+            self.jd_current = true;
+        }
         let (c, scale) = (ev.values(), fb.row_scale());
         for i in 0..c.len() {
             self.r[i] = scale[i] * (c[i] - self.jd[i]);
@@ -165,13 +198,13 @@ impl Projected {
             }
         }
         fb.project(&self.r, &self.k_inv, &mut self.y)
-            .map_err(|_| TickOutcome::ForceSolve)?;
+            .map_err(|_| StepError::Solve)?;
         let scale = fb.row_scale();
         for (y, sc) in self.y.iter_mut().zip(scale) {
             *y *= sc;
         }
         jac.mul_t_vec(&self.y, &mut self.g)
-            .map_err(|_| TickOutcome::NonFinite)?;
+            .map_err(|_| StepError::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
         let size = self
             .d
@@ -183,9 +216,10 @@ impl Projected {
         if size > max_size_m {
             return Ok(Step::Refused);
         }
-        // Predicted values of the inactive inequality rows after the step.
+        // Predicted values of the inactive inequality rows after the step
+        // (and the update of C_q d).
         jac.mul_vec(&self.mg, &mut self.jm)
-            .map_err(|_| TickOutcome::NonFinite)?;
+            .map_err(|_| StepError::NonFinite)?;
         let c = ev.values();
         let mut activate = false;
         for (i, &ci) in c.iter().enumerate() {
@@ -202,6 +236,9 @@ impl Projected {
         }
         for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
             *qc -= step * (d + mg);
+        }
+        for (jd, jm) in self.jd.iter_mut().zip(&self.jm) {
+            *jd -= step * (*jd + jm);
         }
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {

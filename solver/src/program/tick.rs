@@ -6,7 +6,7 @@ use std::time::Duration;
 use super::report::max_tracking;
 use super::stages::{Ordered, SolverStage, StageMarks};
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
-use crate::al::projected::Step;
+use crate::al::projected::{Step, StepError};
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
@@ -182,6 +182,7 @@ impl Program {
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
         let mut allowed = f64::INFINITY;
         self.activations = 0;
+        self.projected.begin();
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
@@ -428,7 +429,7 @@ impl Program {
         step: f64,
         allowed: f64,
     ) -> Result<Step, TickOutcome> {
-        self.projected.step(
+        let outcome = self.projected.step(
             &self.model,
             &self.scaling,
             &mut self.ev,
@@ -439,7 +440,12 @@ impl Program {
             step,
             allowed,
             &mut self.lambda,
-        )
+        );
+        outcome.map_err(|e| match e {
+            StepError::Eval(e) => TickOutcome::Eval(e),
+            StepError::NonFinite => TickOutcome::NonFinite,
+            StepError::Solve => TickOutcome::ForceSolve,
+        })
     }
 
     /// One assembly iteration from q (= `q_ref`): a gradient step, or a full
@@ -453,6 +459,7 @@ impl Program {
                     TickOutcome::Ok => {}
                     status => return Err(status),
                 }
+                self.projected.begin();
                 for _ in 0..=MAX_ACTIVATIONS {
                     match self.projected_step(targets, 1.0, f64::INFINITY)? {
                         Step::Activate => {
