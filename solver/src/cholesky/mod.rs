@@ -71,14 +71,36 @@ impl Cholesky {
     /// Analyses the pattern of the n × n symmetric matrix whose lower
     /// triangle (diagonal included, every diagonal entry present) is given in
     /// CSC form, for solves of up to `max_rhs` right-hand sides at once.
-    /// Allocates.
+    /// Allocates. (Tests and the timing comparison; the fast loop analyses
+    /// with a tail.)
+    #[cfg(test)]
     pub fn analyze(
         n: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
         max_rhs: usize,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let sym = Symbolic::analyze(n, col_ptr, row_idx)?;
+        let entries: Vec<(usize, usize, usize)> = (0..n)
+            .flat_map(|c| (col_ptr[c]..col_ptr[c + 1]).map(move |p| (p, c)))
+            .map(|(p, c)| (row_idx[p], c, p))
+            .collect();
+        Self::analyze_with_tail(n, 0, &entries, max_rhs)
+    }
+
+    /// Analyses the n × n symmetric matrix given by the (row, column, value
+    /// index) of its lower triangle's entries (row ≥ column, every diagonal
+    /// entry present) whose last `tail` rows and columns T are ordered last
+    /// and never factored: [`factor`](Self::factor) then leaves the Schur
+    /// complement A_TT − L_TL L_TLᵀ in [`tail_block`](Self::tail_block), and
+    /// [`solve_with_tail`](Self::solve_with_tail) solves the whole system
+    /// through a caller's solve of that block. Allocates.
+    pub fn analyze_with_tail(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        max_rhs: usize,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let sym = Symbolic::analyze(n, tail, entries)?;
         // The solve kernels are specialised up to 8 right-hand sides.
         let max_rhs = max_rhs.clamp(1, 8);
         let widest = sym
@@ -103,8 +125,10 @@ impl Cholesky {
         self.values.len()
     }
 
-    /// Numeric factorisation of the matrix whose lower CSC values (in the
-    /// order of the pattern given to [`analyze`](Self::analyze)) are `a`.
+    /// Numeric factorisation of the matrix whose values are `a` (indexed by
+    /// the value indices given to `analyze`: the CSC order with
+    /// [`analyze`](Self::analyze)). With a tail, its block is updated but not
+    /// factored: it ends as the Schur complement.
     ///
     /// # Real-time
     /// No allocation; time fixed by the pattern.
@@ -112,8 +136,8 @@ impl Cholesky {
         let sym = &self.sym;
         let v = &mut self.values;
         v.fill(0.0);
-        for (&dst, &x) in sym.load.iter().zip(a) {
-            v[dst as usize] += x;
+        for &(src, dst) in &sym.load {
+            v[dst as usize] += a[src as usize];
         }
         self.regularized = 0;
         for s in 0..sym.supernodes.len() {
@@ -130,31 +154,84 @@ impl Cholesky {
                 let rel = &sym.rel[u.rel as usize..][..m];
                 update(block, w, sn.c0 as usize, slab, wd, cols, rel);
             }
-            self.regularized += dense_factor(block, w, sn.c0 as usize, reg, &mut self.inv)?;
+            if s < sym.lead_supernodes {
+                self.regularized += dense_factor(block, w, sn.c0 as usize, reg, &mut self.inv)?;
+            }
         }
         Ok(())
     }
 
-    /// Solves A X = B in place for `k` right-hand sides (`x`: n × k,
-    /// column-major, in the original order), with the last factorisation.
-    /// `k` above the `max_rhs` of `analyze` (at most 8) is done in several
-    /// passes.
+    /// The tail's t × t block after [`factor`](Self::factor): the Schur
+    /// complement A_TT − A_TL A_LL⁻¹ A_LT, row-major, lower triangle (the
+    /// upper half is zero).
+    pub fn tail_block(&self) -> &[f64] {
+        match self.sym.supernodes.get(self.sym.lead_supernodes) {
+            Some(sn) => {
+                let t = sn.w as usize;
+                &self.values[sn.val as usize..sn.val as usize + t * t]
+            }
+            None => &[],
+        }
+    }
+
+    /// Solves the whole system A x = b in place (`x`: n entries, original
+    /// order, the tail last) with the last factorisation: a forward
+    /// substitution over the leading block, which leaves s = b_T − L_TL w in
+    /// the tail's entries; `tail_solve(S, s)` replaces s by the tail's
+    /// solution x_T (S: [`tail_block`](Self::tail_block)); a backward
+    /// substitution gives the leading block's x = L⁻ᵀ (w − L_TLᵀ x_T).
+    /// Whatever `tail_solve` returns is returned. Without a tail this is a
+    /// plain solve and `tail_solve` gets two empty slices.
+    ///
+    /// # Real-time
+    /// No allocation; 2 nnz(L) multiply-adds plus `tail_solve`.
+    pub fn solve_with_tail<R>(
+        &mut self,
+        x: &mut [f64],
+        tail_solve: impl FnOnce(&[f64], &mut [f64]) -> R,
+    ) -> R {
+        let (n, lead) = (self.sym.n, self.sym.n - self.sym.tail);
+        let work = &mut self.work[..n];
+        for (i, &xi) in x.iter().enumerate() {
+            work[self.sym.iperm[i] as usize] = xi;
+        }
+        self.sym.forward(&self.values, work, 1);
+        let t = self.sym.tail;
+        let block = match self.sym.supernodes.get(self.sym.lead_supernodes) {
+            Some(sn) => &self.values[sn.val as usize..sn.val as usize + t * t],
+            None => &[][..],
+        };
+        let out = tail_solve(block, &mut work[lead..]);
+        self.sym.backward(&self.values, work, 1);
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi = work[self.sym.iperm[i] as usize];
+        }
+        out
+    }
+
+    /// Solves A_LL X = B in place for `k` right-hand sides of the leading
+    /// block (`x`: n_L × k, column-major, in the original order; n_L = n
+    /// without a tail), with the last factorisation. `k` above the `max_rhs`
+    /// of `analyze` (at most 8) is done in several passes.
     ///
     /// # Real-time
     /// No allocation; 2 nnz(L) multiply-adds per right-hand side.
     pub fn solve(&mut self, x: &mut [f64], k: usize) {
-        let n = self.sym.n;
+        let n = self.sym.n - self.sym.tail;
+        let full = self.sym.n;
         let mut first = 0;
         while first < k {
             let kk = (k - first).min(self.max_rhs);
             let cols = &mut x[first * n..(first + kk) * n];
-            let work = &mut self.work[..n * kk];
+            let work = &mut self.work[..full * kk];
             for (t, col) in cols.chunks_exact(n).enumerate() {
                 for (i, &xi) in col.iter().enumerate() {
                     work[self.sym.iperm[i] as usize * kk + t] = xi;
                 }
             }
             self.sym.forward(&self.values, work, kk);
+            // A leading-block solve: the tail takes no part.
+            work[n * kk..].fill(0.0);
             self.sym.backward(&self.values, work, kk);
             for (t, col) in cols.chunks_exact_mut(n).enumerate() {
                 for (i, xi) in col.iter_mut().enumerate() {

@@ -36,10 +36,14 @@ pub(super) struct Update {
 #[derive(Debug, Clone)]
 pub(super) struct Symbolic {
     pub n: usize,
+    /// Trailing rows and columns ordered last and not factored.
+    pub tail: usize,
+    /// Supernodes before the tail's (all of them without a tail).
+    pub lead_supernodes: usize,
     /// iperm[original index] = index in the factor's order.
     pub iperm: Vec<u32>,
-    /// A's value index → index in `values`.
-    pub load: Vec<u32>,
+    /// (value index in the input, index in `values`) of every entry.
+    pub load: Vec<(u32, u32)>,
     pub supernodes: Vec<Supernode>,
     pub rows: Vec<u32>,
     pub updates: Vec<Update>,
@@ -62,19 +66,38 @@ impl Symbolic {
         self.len_values
     }
 
+    /// `entries`: (row, column, value index) of the lower triangle of the
+    /// n × n matrix (row ≥ column; every diagonal entry present); its last
+    /// `tail` rows and columns are ordered last and left unfactored.
     pub fn analyze(
         n: usize,
-        col_ptr: &[usize],
-        row_idx: &[usize],
+        tail: usize,
+        entries: &[(usize, usize, usize)],
     ) -> Result<Self, faer::sparse::FaerError> {
-        let nnz = row_idx.len();
-        // 1. Fill-reducing order (AMD on the pattern of A + Aᵀ).
-        let mut perm = vec![0usize; n];
-        let mut perm_inv = vec![0usize; n];
-        if n > 0 {
+        let lead = n - tail;
+        // 1. Fill-reducing order of the leading block (AMD on the pattern of
+        //    A + Aᵀ); the tail keeps its place at the end.
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead {
+                cols[c].push(r);
+            }
+        }
+        let mut col_ptr = vec![0usize];
+        let mut row_idx = Vec::new();
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let mut perm = vec![0usize; lead];
+        let mut perm_inv = vec![0usize; lead];
+        if lead > 0 {
+            let nnz = row_idx.len();
             let pattern =
-                SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, &row_idx[..nnz]);
-            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(n, nnz))
+                SymbolicSparseColMatRef::new_checked(lead, lead, &col_ptr, None, &row_idx);
+            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(lead, nnz))
                 .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
             amd::order_maybe_unsorted(
                 &mut perm,
@@ -84,18 +107,20 @@ impl Symbolic {
                 MemStack::new(&mut mem),
             )?;
         }
-        // 2. Elimination tree of the permuted matrix, then postorder it so
-        //    that every subtree is a contiguous range of columns.
-        let rows_of = |iperm: &[usize]| -> Vec<Vec<usize>> {
+        // 2. Elimination tree, then a postorder of the leading block's tree
+        //    (every subtree a contiguous range of columns), the tail after it:
+        //    a topological order of the whole tree.
+        let rows_of = |iperm: &[usize], size: usize| -> Vec<Vec<usize>> {
             // Row k of the permuted lower triangle: columns j < k.
-            let mut r = vec![Vec::new(); n];
-            for c in 0..n {
-                for &rr in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                    let (i, j) = (iperm[rr], iperm[c]);
-                    let (hi, lo) = (i.max(j), i.min(j));
-                    if hi != lo {
-                        r[hi].push(lo);
-                    }
+            let mut r = vec![Vec::new(); size];
+            for &(rr, c, _) in entries {
+                if rr >= size || c >= size {
+                    continue;
+                }
+                let (i, j) = (iperm[rr], iperm[c]);
+                let (hi, lo) = (i.max(j), i.min(j));
+                if hi != lo {
+                    r[hi].push(lo);
                 }
             }
             for row in &mut r {
@@ -104,18 +129,16 @@ impl Symbolic {
             }
             r
         };
-        let mut iperm = perm_inv;
-        let parent = etree(&rows_of(&iperm));
+        let parent = etree(&rows_of(&perm_inv, lead));
         let post = postorder(&parent);
         // post[new] = old (in the AMD order); compose.
-        let mut post_inv = vec![0usize; n];
+        let mut post_inv = vec![0usize; lead];
         for (new, &old) in post.iter().enumerate() {
             post_inv[old] = new;
         }
-        for v in iperm.iter_mut() {
-            *v = post_inv[*v];
-        }
-        let rows = rows_of(&iperm);
+        let mut iperm: Vec<usize> = perm_inv.iter().map(|&v| post_inv[v]).collect();
+        iperm.extend(lead..n);
+        let rows = rows_of(&iperm, n);
         let parent = etree(&rows);
         // 3. Pattern of L, column by column (rows strictly below the
         //    diagonal, ascending): row k's pattern is the union of the tree
@@ -147,7 +170,7 @@ impl Symbolic {
             }
         }
         let mut starts = vec![0usize];
-        for j in 1..n {
+        for j in 1..lead {
             let same = parent[j - 1] == j
                 && children[j] == 1
                 && colpat[j - 1].len() == colpat[j].len() + 1;
@@ -155,8 +178,16 @@ impl Symbolic {
                 starts.push(j);
             }
         }
-        starts.push(n);
-        let starts = amalgamate(&starts, &parent, &colpat);
+        starts.push(lead);
+        let mut starts = if lead > 0 {
+            amalgamate(&starts, &parent, &colpat)
+        } else {
+            vec![0]
+        };
+        // The tail is one supernode of its own.
+        if tail > 0 {
+            starts.push(n);
+        }
         // A relaxed supernode's columns take the union of their patterns
         // (the last column's rows plus the explicit zeros of the earlier
         // ones): below rows = ∪ colpat[j] minus the supernode's own columns.
@@ -203,16 +234,15 @@ impl Symbolic {
                         .expect("a row of L's pattern is in its supernode's rows")
             }
         };
-        // 5. Load map: A's entry (r, c) → its place in L's blocks.
-        let mut load = vec![0u32; nnz];
-        for c in 0..n {
-            for p in col_ptr[c]..col_ptr[c + 1] {
-                let (i, j) = (iperm[row_idx[p]], iperm[c]);
-                let (r, cc) = (i.max(j), i.min(j));
-                let s = &supernodes[col_sn[cc] as usize];
-                let lr = local(s, r);
-                load[p] = (s.val as usize + lr * s.w as usize + (cc - s.c0 as usize)) as u32;
-            }
+        // 5. Load map: entry (r, c) → its place in L's blocks.
+        let mut load = Vec::with_capacity(entries.len());
+        for &(rr, c, src) in entries {
+            let (i, j) = (iperm[rr], iperm[c]);
+            let (r, cc) = (i.max(j), i.min(j));
+            let s = &supernodes[col_sn[cc] as usize];
+            let lr = local(s, r);
+            let dst = s.val as usize + lr * s.w as usize + (cc - s.c0 as usize);
+            load.push((src as u32, dst as u32));
         }
         // 6. Update plan: each supernode d updates the supernodes that own
         //    its below rows; the rows falling in one target's columns are a
@@ -250,8 +280,11 @@ impl Symbolic {
             updates.extend(inc);
             supernodes[s].updates = (first, updates.len() as u32);
         }
+        let lead_supernodes = supernodes.len() - usize::from(tail > 0);
         Ok(Self {
             n,
+            tail,
+            lead_supernodes,
             iperm: iperm.iter().map(|&v| v as u32).collect(),
             load,
             supernodes,
@@ -262,7 +295,8 @@ impl Symbolic {
         })
     }
 
-    /// work ← L⁻¹ work (`k` interleaved right-hand sides).
+    /// work ← L⁻¹ work over the leading block's columns (`k` interleaved
+    /// right-hand sides): the tail entries end as r_T − L_TL w.
     pub fn forward(&self, values: &[f64], work: &mut [f64], k: usize) {
         match k {
             1 => self.forward_k::<1>(values, work),
@@ -276,7 +310,8 @@ impl Symbolic {
         }
     }
 
-    /// work ← L⁻ᵀ work.
+    /// work ← L⁻ᵀ work over the leading block's columns, with the tail
+    /// entries as they are (subtracting L_TLᵀ x_T).
     pub fn backward(&self, values: &[f64], work: &mut [f64], k: usize) {
         match k {
             1 => self.backward_k::<1>(values, work),
@@ -291,7 +326,7 @@ impl Symbolic {
     }
 
     fn forward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
-        for sn in &self.supernodes {
+        for sn in &self.supernodes[..self.lead_supernodes] {
             let (c0, w) = (sn.c0 as usize, sn.w as usize);
             let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
             let (head, tail) = work.split_at_mut((c0 + w) * K);
@@ -331,7 +366,7 @@ impl Symbolic {
     }
 
     fn backward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
-        for sn in self.supernodes.iter().rev() {
+        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
             let (c0, w) = (sn.c0 as usize, sn.w as usize);
             let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
             let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
@@ -369,11 +404,11 @@ impl Symbolic {
 }
 
 /// Relaxed amalgamation of the fundamental supernodes `starts` (first
-/// columns, then n): walking them in order (a postorder of the supernodal
+/// columns, then the end): walking them in order (a postorder of the supernodal
 /// tree), each absorbs the merged supernode just before it while that one
 /// is its child and the merged block stays within [`RELAX`].
 fn amalgamate(starts: &[usize], parent: &[usize], colpat: &[Vec<u32>]) -> Vec<usize> {
-    let n = parent.len();
+    let end = *starts.last().expect("starts end with the last column + 1");
     // True entries of column j of L (diagonal included).
     let count = |j: usize| colpat[j].len() + 1;
     // Merged runs so far: (first column, last column + 1, true entries).
@@ -407,7 +442,7 @@ fn amalgamate(starts: &[usize], parent: &[usize], colpat: &[Vec<u32>]) -> Vec<us
         runs.push((c0, c1, entries));
     }
     let mut out: Vec<usize> = runs.iter().map(|r| r.0).collect();
-    out.push(n);
+    out.push(end);
     out
 }
 

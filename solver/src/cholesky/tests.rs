@@ -188,3 +188,91 @@ fn supernodes_group_the_rows_of_a_joint() {
         f.sym.supernodes.iter().map(|s| s.w).collect::<Vec<_>>()
     );
 }
+
+/// Entries (row, column, value index) of the lower triangle of `a` where it
+/// is non-zero (diagonal always), indexing a row-major copy of `a`.
+fn entries_of(a: &DMatrix<f64>) -> (Vec<(usize, usize, usize)>, Vec<f64>) {
+    let n = a.nrows();
+    let mut e = Vec::new();
+    for r in 0..n {
+        for c in 0..=r {
+            if r == c || a[(r, c)] != 0.0 {
+                e.push((r, c, r * n + c));
+            }
+        }
+    }
+    let values = (0..n * n).map(|k| a[(k / n, k % n)]).collect();
+    (e, values)
+}
+
+/// With the last t rows as an unfactored tail: the tail block is the Schur
+/// complement, and a solve through it (here a dense Cholesky of it) solves
+/// the whole system.
+#[test]
+fn a_tail_leaves_its_schur_complement_and_solves_through_it() {
+    let mut lattice = Vec::new();
+    for y in 0..4 {
+        for x in 0..5 {
+            let b = y * 5 + x;
+            if x + 1 < 5 {
+                lattice.push((b, b + 1));
+            }
+            if y + 1 < 4 {
+                lattice.push((b, b + 5));
+            }
+        }
+    }
+    // The last edge's 3 rows (a "finger" on bodies 18, 19) are the tail;
+    // and a 6-row tail on two different edges.
+    for (rows, t) in [(3, 3), (3, 6)] {
+        let a = gram_like(&lattice, rows, 20, 11);
+        let n = a.nrows();
+        let l = n - t;
+        let (entries, values) = entries_of(&a);
+        let mut f = Cholesky::analyze_with_tail(n, t, &entries, 1).unwrap();
+        let reg = Regularization {
+            epsilon: 0.0,
+            delta: 0.0,
+        };
+        f.factor(&values, reg).unwrap();
+        let all = a.view((0, 0), (l, l)).into_owned();
+        let a_tl = a.view((l, 0), (t, l)).into_owned();
+        let schur = a.view((l, l), (t, t)).into_owned()
+            - &a_tl * all.clone().cholesky().unwrap().solve(&a_tl.transpose());
+        let block = f.tail_block();
+        for r in 0..t {
+            for c in 0..=r {
+                let err = (block[r * t + c] - schur[(r, c)]).abs();
+                assert!(err < 1e-10 * schur.amax(), "S[{r},{c}] off by {err:e}");
+            }
+        }
+        let b: Vec<f64> = (0..n).map(|i| (i % 5) as f64 - 2.0).collect();
+        let mut x = b.clone();
+        let ok = f.solve_with_tail(&mut x, |s, xt| {
+            let sm = DMatrix::from_fn(t, t, |r, c| s[r.max(c) * t + r.min(c)]);
+            let sol = sm
+                .cholesky()
+                .unwrap()
+                .solve(&DVector::from_column_slice(xt));
+            xt.copy_from_slice(sol.as_slice());
+            true
+        });
+        assert!(ok);
+        let want = a
+            .clone()
+            .cholesky()
+            .unwrap()
+            .solve(&DVector::from_vec(b.clone()));
+        let err = (DVector::from_vec(x) - &want).amax() / want.amax();
+        assert!(err < 1e-10, "tail {t}: relative error {err:e}");
+        // The leading block alone.
+        let mut y = b[..l].to_vec();
+        f.solve(&mut y, 1);
+        let want = all
+            .cholesky()
+            .unwrap()
+            .solve(&DVector::from_column_slice(&b[..l]));
+        let err = (DVector::from_vec(y) - &want).amax() / want.amax();
+        assert!(err < 1e-10, "leading block: relative error {err:e}");
+    }
+}

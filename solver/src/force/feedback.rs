@@ -264,7 +264,7 @@ impl Feedback {
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if matches!(s.role[row], Role::Inequality | Role::Contact)
                 && self.scale[row] != 0.0
-                && self.solve.joint_multiplier(self.gram.n_j, j) > 0.0
+                && self.solve.joint_multiplier(j) > 0.0
             {
                 self.scale[row] = 0.0;
                 released = true;
@@ -280,7 +280,7 @@ impl Feedback {
             let mut lt2 = 0.0;
             for &row in &p.rows {
                 if let super::gram::Slot::J(j) = self.gram.slot[row] {
-                    lt2 += (s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).powi(2);
+                    lt2 += (s.ell[row] * self.solve.joint_multiplier(j)).powi(2);
                 }
             }
             let grip = super::friction::grip(

@@ -187,6 +187,36 @@ impl Gram {
         self.pattern.row_idx().len()
     }
 
+    /// The whole (n_J + m_f)-square matrix's lower triangle as (row, column,
+    /// index in `values`), J rows first then F rows: A_JJ's pattern, the
+    /// entries of A_FJ the assembly can write (rows sharing a body with a
+    /// finger), and all of A_FF's lower triangle. Allocates.
+    pub fn factor_entries(&self) -> Vec<(usize, usize, usize)> {
+        let (nnz, n_j, m_f) = (self.nnz(), self.n_j, self.m_f);
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let mut e: Vec<(usize, usize, usize)> = (0..n_j)
+            .flat_map(|c| (cp[c]..cp[c + 1]).map(move |p| (ri[p], c, p)))
+            .collect();
+        let mut fj: Vec<usize> = self
+            .products
+            .iter()
+            .map(|p| p.dest as usize)
+            .filter(|&d| d >= nnz && d < nnz + m_f * n_j)
+            .collect();
+        fj.sort_unstable();
+        fj.dedup();
+        e.extend(
+            fj.iter()
+                .map(|&d| (n_j + (d - nnz) / n_j, (d - nnz) % n_j, d)),
+        );
+        for f in 0..m_f {
+            for g in 0..=f {
+                e.push((n_j + f, n_j + g, nnz + m_f * n_j + f * m_f + g));
+            }
+        }
+        e
+    }
+
     /// out = M̃⁻¹ g at the configuration of the last assembly (zero on
     /// design-variable columns, which have no inertia).
     ///

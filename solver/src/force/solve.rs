@@ -11,14 +11,24 @@
 //! S⁺ (minimum norm) makes the finger carry only what the joints cannot: the
 //! component of −M q̈ + Q along the mechanism's free motions. In directions
 //! the mechanism cannot move, the joints hold; the user feels those through
-//! the virtual coupling instead. A_JJ is factored by the crate's supernodal
-//! sparse Cholesky (LLᵀ, `crate::cholesky`) whose symbolic analysis (AMD
-//! ordering, elimination tree, supernodes, update plan) is done once; each
-//! tick refactors the values and solves the 1 + m_f right-hand sides
-//! together. Sequential, so the result is bit-identical run to run.
+//! the virtual coupling instead.
+//!
+//! The whole matrix [A_JJ A_JF; A_FJ A_FF] goes to the crate's supernodal
+//! sparse Cholesky (`crate::cholesky`) with the finger rows as an unfactored
+//! tail: the factorisation of A_JJ (AMD order, symbolic analysis once)
+//! carries the finger rows along as L_FJ = A_FJ L_JJ⁻ᵀ and leaves
+//! S = A_FF − L_FJ L_FJᵀ in the tail's block. One solve then does everything:
+//! the forward substitution leaves s = r_F − L_FJ L_JJ⁻¹ r_J in the finger
+//! entries, S⁺ s replaces it, and the backward substitution gives the joint
+//! multipliers A_JJ⁻¹ (r_J − A_JF λ̃_F): one right-hand side where solving
+//! for A_JJ⁻¹ [r_J A_JF] took 1 + m_f. Sequential, so the result is
+//! bit-identical run to run.
+//!
+//! `ForceSolver::ConjugateGradient` keeps the explicit form: CG solves
+//! A_JJ X = [r_J A_JF] and S is formed from X.
 
 use super::cg::Cg;
-use super::gram::Gram;
+use super::gram::{Gram, Slot};
 use super::small::{cholesky_solve, min_norm_solve};
 use crate::cholesky::{Cholesky, Regularization};
 
@@ -30,16 +40,18 @@ pub(crate) struct FactorError;
 /// Symbolic factor and every buffer of the solve.
 pub(crate) struct MultiplierSolve {
     llt: Cholesky,
-    /// n_J × (1 + m_f), column-major: r_J, then A_JF's columns; solved in place.
+    /// n_J + m_f: the right-hand side in J then F order, solved in place.
+    x: Vec<f64>,
+    /// Scaled joint multipliers λ̃_J of the last solve.
+    lambda_j: Vec<f64>,
+    /// CG only: n_J × (1 + m_f), column-major: r_J, then A_JF's columns.
     rhs: Vec<f64>,
     schur: Vec<f64>,
-    /// S as assembled (the eigensolve destroys `schur`), for `project`.
+    /// S (full, symmetric) of the last solve (the eigensolve destroys
+    /// `schur`), for `project`.
     schur_keep: Vec<f64>,
     schur_rhs: Vec<f64>,
-    /// Scratch of `project`: A_JJ⁻¹ r_J, then (S + K⁻¹) and its right-hand side.
-    proj: Vec<f64>,
     small: Vec<f64>,
-    small_rhs: Vec<f64>,
     eig: Vec<f64>,
     /// Scaled finger multipliers λ̃_F.
     pub lambda_f: Vec<f64>,
@@ -52,7 +64,7 @@ pub(crate) struct MultiplierSolve {
 impl std::fmt::Debug for MultiplierSolve {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("MultiplierSolve")
-            .field("n", &self.rhs.len())
+            .field("n", &self.x.len())
             .field("factor_nnz", &self.llt.len_values())
             .field("rank", &self.rank)
             .finish_non_exhaustive()
@@ -60,25 +72,30 @@ impl std::fmt::Debug for MultiplierSolve {
 }
 
 impl MultiplierSolve {
-    /// Symbolic analysis of `gram`'s A_JJ pattern; with `cg_iterations`, a
-    /// capped conjugate-gradient solve replaces the numeric Cholesky.
-    /// Allocates.
+    /// Symbolic analysis of `gram`'s pattern (A_JJ and the finger rows as
+    /// the tail); with `cg_iterations`, a capped conjugate-gradient solve
+    /// replaces the numeric Cholesky in [`solve`](Self::solve). Allocates.
     pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
-        let llt = Cholesky::analyze(n, gram.pattern.col_ptr(), gram.pattern.row_idx(), 1 + m)?;
+        let llt = Cholesky::analyze_with_tail(n + m, m, &gram.factor_entries(), 1)?;
+        let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
         Ok(Self {
             llt,
-            rhs: vec![0.0; n * (1 + m)],
+            x: vec![0.0; n + m],
+            lambda_j: vec![0.0; n],
+            rhs: if cg.is_some() {
+                vec![0.0; n * (1 + m)]
+            } else {
+                Vec::new()
+            },
             schur: vec![0.0; m * m],
             schur_keep: vec![0.0; m * m],
             schur_rhs: vec![0.0; m],
-            proj: vec![0.0; n],
             small: vec![0.0; m * m],
-            small_rhs: vec![0.0; m],
             eig: vec![0.0; m * m],
             lambda_f: vec![0.0; m],
             rank: 0,
-            cg: cg_iterations.map(|it| Cg::new(n, 1 + m, it)),
+            cg,
         })
     }
 
@@ -89,27 +106,80 @@ impl MultiplierSolve {
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
-    /// λ̃_F given the scaled right-hand side `r` (one entry per row of C).
+    /// λ̃_F and λ̃_J given the scaled right-hand side `r` (one entry per row
+    /// of C).
     ///
     /// # Real-time
-    /// No allocation (faer runs in the preallocated `MemBuffer`), no locks;
-    /// time bounded by the symbolic factor: one numeric LLᵀ, 1 + m_f
-    /// triangular solve pairs, and an m_f × m_f Jacobi eigensolve.
+    /// No allocation, no locks; time bounded by the symbolic factor: one
+    /// numeric LLᵀ, one triangular solve pair, and an m_f × m_f Jacobi
+    /// eigensolve.
     pub fn solve(&mut self, gram: &Gram, r: &[f64]) -> Result<(), FactorError> {
+        if self.cg.is_some() {
+            return self.solve_cg(gram, r);
+        }
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        self.factor(gram)?;
+        // S from the tail block (lower triangle), mirrored.
+        let block = self.llt.tail_block();
+        for f in 0..m {
+            for g in 0..=f {
+                let v = block[f * m + g];
+                self.schur_keep[f * m + g] = v;
+                self.schur_keep[g * m + f] = v;
+            }
+        }
+        self.gather(gram, r);
+        let a_ff = &gram.values[nnz + m * n..];
+        let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
+        let Self {
+            llt,
+            x,
+            schur,
+            schur_keep,
+            lambda_f,
+            eig,
+            ..
+        } = self;
+        let rank = llt.solve_with_tail(x, |_, s| {
+            schur.copy_from_slice(schur_keep);
+            let rank = min_norm_solve(schur, s, lambda_f, eig, reference);
+            s.copy_from_slice(lambda_f);
+            rank
+        });
+        self.rank = rank;
+        self.lambda_j.copy_from_slice(&self.x[..n]);
+        if self.lambda_f.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(FactorError)
+        }
+    }
+
+    /// x ← r in J then F order.
+    fn gather(&mut self, gram: &Gram, r: &[f64]) {
+        let n = gram.n_j;
+        for (row, slot) in r.iter().zip(&gram.slot) {
+            match *slot {
+                Slot::J(j) => self.x[j] = *row,
+                Slot::F(f) => self.x[n + f] = *row,
+                Slot::Out => {}
+            }
+        }
+    }
+
+    /// [`solve`](Self::solve) with conjugate gradients on A_JJ X = [r_J A_JF].
+    fn solve_cg(&mut self, gram: &Gram, r: &[f64]) -> Result<(), FactorError> {
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
         let a_fj = &gram.values[nnz..nnz + m * n];
         let a_ff = &gram.values[nnz + m * n..];
         for (row, slot) in r.iter().zip(&gram.slot) {
-            if let super::gram::Slot::J(j) = *slot {
+            if let Slot::J(j) = *slot {
                 self.rhs[j] = *row;
             }
         }
         self.rhs[n..].copy_from_slice(a_fj);
         if let Some(cg) = &mut self.cg {
             cg.solve(gram, &mut self.rhs);
-        } else {
-            self.factor(gram)?;
-            self.llt.solve(&mut self.rhs, 1 + m);
         }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
@@ -136,6 +206,13 @@ impl MultiplierSolve {
             &mut self.eig,
             reference,
         );
+        for j in 0..n {
+            let mut v = self.rhs[j];
+            for (f, l) in self.lambda_f.iter().enumerate() {
+                v -= self.rhs[(1 + f) * n + j] * l;
+            }
+            self.lambda_j[j] = v;
+        }
         if self.lambda_f.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
@@ -146,17 +223,17 @@ impl MultiplierSolve {
 
 impl MultiplierSolve {
     /// Numeric LLᵀ of `gram`'s (assembled, regularised) A_JJ into the
-    /// factor's buffers, with faer's rule of dynamic regularisation: a pivot below
-    /// 1e-14 × the largest diagonal entry is replaced by 1e-10 × it. That
-    /// keeps the factorisation alive through a round-off pivot; it does not
-    /// make a singular A_JJ well-posed (masking redundant rows does, see
+    /// factor's buffers, carrying the finger rows (their block ends as the
+    /// Schur complement), with faer's rule of dynamic regularisation: a pivot
+    /// below 1e-14 × the largest diagonal entry is replaced by 1e-10 × it.
+    /// That keeps the factorisation alive through a round-off pivot; it does
+    /// not make a singular A_JJ well-posed (masking redundant rows does, see
     /// `redundancy`).
     ///
     /// # Real-time
     /// No allocation; one numeric sparse Cholesky with the fixed symbolic
     /// factor.
     pub fn factor(&mut self, gram: &Gram) -> Result<(), FactorError> {
-        let nnz = gram.nnz();
         let max_diag = gram
             .diag
             .iter()
@@ -166,9 +243,7 @@ impl MultiplierSolve {
             delta: 1e-10 * max_diag,
             epsilon: 1e-14 * max_diag,
         };
-        self.llt
-            .factor(&gram.values[..nnz], reg)
-            .map_err(|_| FactorError)
+        self.llt.factor(&gram.values, reg).map_err(|_| FactorError)
     }
 
     /// x ← A_JJ⁻¹ x (n_J entries, J order) with the last [`factor`](Self::factor).
@@ -180,19 +255,20 @@ impl MultiplierSolve {
     }
 
     /// Solves the regularised normal equations of the projected update with
-    /// the factor and Schur data of the last [`solve`](Self::solve):
+    /// the factor and Schur complement of the last [`solve`](Self::solve):
     ///
     /// ```text
     /// [A_JJ  A_JF             ] [y_J]   [r_J]
     /// [A_FJ  A_FF + diag(k_inv)] [y_F] = [r_F]
     /// ```
     ///
-    /// by y_F = (S + diag(k_inv))⁻¹ (r_F − A_FJ A_JJ⁻¹ r_J), y_J = A_JJ⁻¹ r_J −
-    /// X y_F. `r`, `y`: one entry per row of C; `k_inv`: one per finger row.
+    /// by y_F = (S + diag(k_inv))⁻¹ (r_F − A_FJ A_JJ⁻¹ r_J) and
+    /// y_J = A_JJ⁻¹ (r_J − A_JF y_F), in one solve through the factor's tail.
+    /// `r`, `y`: one entry per row of C; `k_inv`: one per finger row.
     ///
     /// # Real-time
-    /// No allocation; one pair of sparse triangular solves, an m_f × m_f
-    /// Cholesky, O(n_J m_f).
+    /// No allocation; one pair of sparse triangular solves and an m_f × m_f
+    /// Cholesky.
     pub fn project(
         &mut self,
         gram: &Gram,
@@ -200,45 +276,42 @@ impl MultiplierSolve {
         k_inv: &[f64],
         y: &mut [f64],
     ) -> Result<(), FactorError> {
-        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        let (n, m) = (gram.n_j, gram.m_f);
         if self.cg.is_some() {
             // The projected update needs the factor (checked by Program::new).
             return Err(FactorError);
         }
-        for (j, &row) in gram.j_rows.iter().enumerate() {
-            self.proj[j] = r[row];
-        }
-        self.llt.solve(&mut self.proj, 1);
-        let a_fj = &gram.values[nnz..nnz + m * n];
-        self.small.copy_from_slice(&self.schur_keep);
-        for f in 0..m {
-            self.small[f * m + f] += k_inv[f];
-            self.small_rhs[f] = r[gram.finger_rows[f]] - dot(&a_fj[f * n..(f + 1) * n], &self.proj);
-        }
-        if !cholesky_solve(&mut self.small, &mut self.small_rhs) {
+        self.gather(gram, r);
+        let Self {
+            llt,
+            x,
+            schur_keep,
+            small,
+            ..
+        } = self;
+        let ok = llt.solve_with_tail(x, |_, s| {
+            small.copy_from_slice(schur_keep);
+            for f in 0..m {
+                small[f * m + f] += k_inv[f];
+            }
+            cholesky_solve(small, s)
+        });
+        if !ok {
             return Err(FactorError);
         }
         for (j, &row) in gram.j_rows.iter().enumerate() {
-            let mut v = self.proj[j];
-            for (f, yf) in self.small_rhs.iter().enumerate() {
-                v -= self.rhs[(1 + f) * n + j] * yf;
-            }
-            y[row] = v;
+            y[row] = self.x[j];
         }
         for (f, &row) in gram.finger_rows.iter().enumerate() {
-            y[row] = self.small_rhs[f];
+            y[row] = self.x[n + f];
         }
         Ok(())
     }
 
     /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:
-    /// A_JJ⁻¹ (r_J − A_JF λ̃_F) = z_j − Σ_f X_jf λ̃_f.
-    pub fn joint_multiplier(&self, n_j: usize, j: usize) -> f64 {
-        let mut v = self.rhs[j];
-        for (f, l) in self.lambda_f.iter().enumerate() {
-            v -= self.rhs[(1 + f) * n_j + j] * l;
-        }
-        v
+    /// A_JJ⁻¹ (r_J − A_JF λ̃_F).
+    pub fn joint_multiplier(&self, j: usize) -> f64 {
+        self.lambda_j[j]
     }
 }
 
