@@ -69,6 +69,10 @@ fn mechanism_scenes_are_exactly_the_solver_builders() {
         ("four-bar", mechanisms::four_bar()),
         ("stewart", mechanisms::stewart()),
         ("sphere-toy", mechanisms::sphere_toy()),
+        (
+            "sphere-toy-400",
+            mechanisms::sphere_toy_sized(20, 20).build().unwrap(),
+        ),
     ] {
         let scene = resolve(name).unwrap();
         let m = &scene.compiled.model;

@@ -37,7 +37,7 @@ fn every_builtin_scene_runs_within_its_stated_tolerance() {
             .violation
             .tolerance
             .unwrap_or_else(|| panic!("{} states no violation_tolerance", b.name));
-        // Every slot of 2 s at the scene's own rate (sphere-toy: 500 Hz).
+        // Every slot of 2 s at the scene's own rate (sphere-toy-400: 500 Hz).
         assert_eq!(s.ticks, 2 * u64::from(s.rate_hz), "{}", b.name);
         assert!(s.rate_hz >= 500, "{}", b.name);
         let assembly = s.assembly.as_ref().expect("assembled");
