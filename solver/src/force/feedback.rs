@@ -8,13 +8,13 @@ use super::friction::FrictionPair;
 use super::gram::{Gram, Slot};
 use super::inertia::BodyMass;
 use super::motion::Motion;
+use super::output::FingerOutput;
 use super::redundancy::{self, Redundancy};
 use super::reference::INEQUALITY_ACTIVE_BAND;
 use super::solve::{FactorError, MultiplierSolve};
 use super::wrench::on_finger;
 use crate::al::scaling::{Role, Scaling};
 use crate::al::{ForceSolver, RedundancyCheck};
-use crate::program::FingerOutput;
 use crate::rotation::BodyFrame;
 use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
