@@ -1,8 +1,10 @@
 //! Per-stage time of the fast loop's tick, on the monotonic clock.
 //!
 //! A tick is cut into [`Stage`]s; [`StageClock`] reads `rt::clock`'s
-//! monotonic clock at the end of each (nine reads a tick, about 22 ns each on
-//! the development VM) and [`StageTimes`] keeps one HDR histogram per stage,
+//! monotonic clock at the start and at the end of each stage (eight reads a
+//! tick, about 22 ns each on the development VM; the whole of it, records
+//! included, is the `stage_clock/tick` bench in `benches/session.rs`) and
+//! [`StageTimes`] keeps one HDR histogram per stage,
 //! plus the whole tick and the tick without the device stages (what a
 //! simulator without a device, such as MuJoCo's step, would compare with).
 //! The monotonic clock is used whatever clock drives the loop, so a
