@@ -312,6 +312,79 @@ fn update(
     cols: &[u32],
     rel: &[u32],
 ) {
+    // A source supernode's width is its rows' length: with it known at
+    // compile time the dot products unroll (widths 1–16 cover the built-in
+    // mechanisms' supernodes but the sphere toys' largest few).
+    macro_rules! fixed {
+        ($($n:literal)*) => {
+            match wd {
+                $($n => update_fixed::<$n>(block, w, c0, slab, cols, rel),)*
+                _ => update_any(block, w, c0, slab, wd, cols, rel),
+            }
+        };
+    }
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// [`update`] for a source of width `W`.
+#[inline(always)]
+fn update_fixed<const W: usize>(
+    block: &mut [f64],
+    w: usize,
+    c0: usize,
+    slab: &[f64],
+    cols: &[u32],
+    rel: &[u32],
+) {
+    let rows: &[[f64; W]] = as_rows(slab);
+    let (nb, m) = (cols.len(), rel.len());
+    let dot = |a: &[f64; W], b: &[f64; W]| {
+        let mut s = 0.0;
+        for k in 0..W {
+            s += a[k] * b[k];
+        }
+        s
+    };
+    for ci in 0..nb {
+        let col = cols[ci] as usize - c0;
+        let b = &rows[ci];
+        let mut ri = ci;
+        while ri + 2 <= m {
+            let (r0, r1) = (&rows[ri], &rows[ri + 1]);
+            let (mut s0, mut s1) = (0.0, 0.0);
+            for k in 0..W {
+                s0 += r0[k] * b[k];
+                s1 += r1[k] * b[k];
+            }
+            block[rel[ri] as usize * w + col] -= s0;
+            block[rel[ri + 1] as usize * w + col] -= s1;
+            ri += 2;
+        }
+        if ri < m {
+            block[rel[ri] as usize * w + col] -= dot(&rows[ri], b);
+        }
+    }
+}
+
+/// `slab` (a whole number of rows of `W`) as rows.
+#[inline(always)]
+fn as_rows<const W: usize>(slab: &[f64]) -> &[[f64; W]] {
+    let (rows, rest) = slab.as_chunks::<W>();
+    debug_assert!(rest.is_empty());
+    rows
+}
+
+/// [`update`] for any width.
+#[inline]
+fn update_any(
+    block: &mut [f64],
+    w: usize,
+    c0: usize,
+    slab: &[f64],
+    wd: usize,
+    cols: &[u32],
+    rel: &[u32],
+) {
     let (nb, m) = (cols.len(), rel.len());
     let row = |i: usize| &slab[i * wd..i * wd + wd];
     let mut ci = 0;
@@ -384,6 +457,52 @@ fn dense_factor(
         inv[i] = 1.0 / row[i];
     }
     let (diag, below) = block.split_at_mut(w * w);
+    macro_rules! fixed {
+        ($($n:literal)*) => {
+            match w {
+                $($n => below_fixed::<$n>(diag, below, inv),)*
+                _ => below_any(diag, below, w, inv),
+            }
+        };
+    }
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+    Ok(replaced)
+}
+
+/// The rows below a factored diagonal block: each row x ← x L⁻ᵀ, two rows
+/// at a time, width `W` known at compile time.
+#[inline(always)]
+fn below_fixed<const W: usize>(diag: &[f64], below: &mut [f64], inv: &[f64]) {
+    let l: &[[f64; W]] = as_rows(diag);
+    let (rows, _) = below.as_chunks_mut::<W>();
+    let mut pairs = rows.chunks_exact_mut(2);
+    for pair in &mut pairs {
+        let (ra, rb) = pair.split_at_mut(1);
+        let (ra, rb) = (&mut ra[0], &mut rb[0]);
+        for j in 0..W {
+            let (mut sa, mut sb) = (ra[j], rb[j]);
+            for k in 0..j {
+                sa -= ra[k] * l[j][k];
+                sb -= rb[k] * l[j][k];
+            }
+            ra[j] = sa * inv[j];
+            rb[j] = sb * inv[j];
+        }
+    }
+    for r in pairs.into_remainder() {
+        for j in 0..W {
+            let mut s = r[j];
+            for k in 0..j {
+                s -= r[k] * l[j][k];
+            }
+            r[j] = s * inv[j];
+        }
+    }
+}
+
+/// [`below_fixed`] for any width.
+#[inline]
+fn below_any(diag: &[f64], below: &mut [f64], w: usize, inv: &[f64]) {
     let mut pairs = below.chunks_exact_mut(2 * w);
     for pair in &mut pairs {
         let (ra, rb) = pair.split_at_mut(w);
@@ -401,7 +520,6 @@ fn dense_factor(
             rest[j] = (rest[j] - dot(&rest[..j], rj)) * inv[j];
         }
     }
-    Ok(replaced)
 }
 
 #[cfg(test)]

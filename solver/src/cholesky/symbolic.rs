@@ -299,7 +299,7 @@ impl Symbolic {
     /// right-hand sides): the tail entries end as r_T − L_TL w.
     pub fn forward(&self, values: &[f64], work: &mut [f64], k: usize) {
         match k {
-            1 => self.forward_k::<1>(values, work),
+            1 => self.forward_one(values, work),
             2 => self.forward_k::<2>(values, work),
             3 => self.forward_k::<3>(values, work),
             4 => self.forward_k::<4>(values, work),
@@ -314,7 +314,7 @@ impl Symbolic {
     /// entries as they are (subtracting L_TLᵀ x_T).
     pub fn backward(&self, values: &[f64], work: &mut [f64], k: usize) {
         match k {
-            1 => self.backward_k::<1>(values, work),
+            1 => self.backward_one(values, work),
             2 => self.backward_k::<2>(values, work),
             3 => self.backward_k::<3>(values, work),
             4 => self.backward_k::<4>(values, work),
@@ -322,6 +322,43 @@ impl Symbolic {
             6 => self.backward_k::<6>(values, work),
             7 => self.backward_k::<7>(values, work),
             _ => self.backward_k::<8>(values, work),
+        }
+    }
+
+    /// [`forward`](Self::forward) for one right-hand side: per supernode a
+    /// kernel of its width (1–16 unrolled at compile time).
+    fn forward_one(&self, values: &[f64], work: &mut [f64]) {
+        for sn in &self.supernodes[..self.lead_supernodes] {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            macro_rules! fixed {
+                ($($n:literal)*) => {
+                    match w {
+                        $($n => forward_fixed::<$n>(block, below, c0, work),)*
+                        _ => forward_any(block, below, c0, w, work),
+                    }
+                };
+            }
+            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+        }
+    }
+
+    /// [`backward`](Self::backward) for one right-hand side.
+    fn backward_one(&self, values: &[f64], work: &mut [f64]) {
+        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            macro_rules! fixed {
+                ($($n:literal)*) => {
+                    match w {
+                        $($n => backward_fixed::<$n>(block, below, c0, work),)*
+                        _ => backward_any(block, below, c0, w, work),
+                    }
+                };
+            }
+            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
         }
     }
 
@@ -444,6 +481,90 @@ fn amalgamate(starts: &[usize], parent: &[usize], colpat: &[Vec<u32>]) -> Vec<us
     let mut out: Vec<usize> = runs.iter().map(|r| r.0).collect();
     out.push(end);
     out
+}
+
+/// One supernode of the forward substitution, width `W`: x_S ← L_SS⁻¹ x_S,
+/// then x_r −= L_rS x_S for each row r below.
+#[inline(always)]
+fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
+    let (rows, _) = block.as_chunks::<W>();
+    let (diag, under) = rows.split_at(W);
+    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    for j in 0..W {
+        let mut s = xs[j];
+        for l in 0..j {
+            s -= diag[j][l] * xs[l];
+        }
+        xs[j] = s / diag[j][j];
+    }
+    work[c0..c0 + W].copy_from_slice(&xs);
+    for (row, &r) in under.iter().zip(below) {
+        let mut s = 0.0;
+        for l in 0..W {
+            s += row[l] * xs[l];
+        }
+        work[r as usize] -= s;
+    }
+}
+
+/// [`forward_fixed`] for any width.
+#[inline]
+fn forward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
+    for jj in 0..w {
+        let row = &block[jj * w..jj * w + w];
+        let mut s = work[c0 + jj];
+        for (l, &lv) in row[..jj].iter().enumerate() {
+            s -= lv * work[c0 + l];
+        }
+        work[c0 + jj] = s / row[jj];
+    }
+    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+        let xs = &work[c0..c0 + w];
+        let s: f64 = row.iter().zip(xs).map(|(a, b)| a * b).sum();
+        work[r as usize] -= s;
+    }
+}
+
+/// One supernode of the backward substitution, width `W`:
+/// x_S ← L_SS⁻ᵀ (x_S − Σ_r L_rSᵀ x_r).
+#[inline(always)]
+fn backward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
+    let (rows, _) = block.as_chunks::<W>();
+    let (diag, under) = rows.split_at(W);
+    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    for (row, &r) in under.iter().zip(below) {
+        let xr = work[r as usize];
+        for l in 0..W {
+            xs[l] -= row[l] * xr;
+        }
+    }
+    for j in (0..W).rev() {
+        xs[j] /= diag[j][j];
+        let xj = xs[j];
+        for l in 0..j {
+            xs[l] -= diag[j][l] * xj;
+        }
+    }
+    work[c0..c0 + W].copy_from_slice(&xs);
+}
+
+/// [`backward_fixed`] for any width.
+#[inline]
+fn backward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
+    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+        let xr = work[r as usize];
+        for (l, &lv) in row.iter().enumerate() {
+            work[c0 + l] -= lv * xr;
+        }
+    }
+    for jj in (0..w).rev() {
+        let row = &block[jj * w..jj * w + w];
+        work[c0 + jj] /= row[jj];
+        let xj = work[c0 + jj];
+        for (l, &lv) in row[..jj].iter().enumerate() {
+            work[c0 + l] -= lv * xj;
+        }
+    }
 }
 
 /// Elimination tree (Liu) from each row's columns below the diagonal;
