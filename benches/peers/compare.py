@@ -118,7 +118,7 @@ def mujoco_round(s: mjcf.Scene, xml: str, meta: dict, ticks: int) -> dict:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=["four-bar", "stewart", "sphere-toy"])
-    ap.add_argument("--ticks", type=int, default=3000)
+    ap.add_argument("--ticks", type=int, default=5000)
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--print-mjcf", action="store_true", help="print each model and stop")
     ap.add_argument(
