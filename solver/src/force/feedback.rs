@@ -219,8 +219,8 @@ impl Feedback {
     ///
     /// # Real-time
     /// No allocation, no locks. Time: O(bodies + Σ_b rows_b²) assembly, one
-    /// numeric sparse Cholesky with the symbolic factor of `new`, 1 + m_f
-    /// solves, an m_f × m_f eigensolve.
+    /// numeric sparse Cholesky with the symbolic analysis of `new`, one
+    /// solve through it, an m_f × m_f Cholesky or eigensolve.
     #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
