@@ -2,6 +2,7 @@
 
 use super::probe::granted_lines;
 use super::summary::Summary;
+use crate::session::Stage;
 use haptloop_rt::probe::Percentiles;
 use std::fmt::Write as _;
 
@@ -9,7 +10,7 @@ fn row(out: &mut String, label: &str, p: &Percentiles) {
     let us = |ns: u64| ns as f64 / 1e3;
     let _ = writeln!(
         out,
-        "  {label:<14} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
+        "  {label:<16} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
         us(p.p50),
         us(p.p99),
         us(p.p999),
@@ -62,17 +63,31 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             );
         }
     }
+    let _ = writeln!(
+        out,
+        "\n  {:<16} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
+        "", "p50", "p99", "p99.9", "p99.99", "max"
+    );
     if !s.deterministic {
-        let _ = writeln!(
-            out,
-            "\n  {:<14} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
-            "", "p50", "p99", "p99.9", "p99.99", "max"
-        );
         row(&mut out, "lateness", &s.lateness_ns);
-        row(&mut out, "compute", &s.compute_ns);
-        row(&mut out, "read → write", &s.read_to_write_ns);
-        let _ = writeln!(out);
     }
+    row(&mut out, "compute", &s.compute_ns);
+    if !s.deterministic {
+        row(&mut out, "read → write", &s.read_to_write_ns);
+    }
+    for stage in Stage::ALL {
+        row(
+            &mut out,
+            &format!("  {}", stage.label()),
+            &s.stages_ns.get(stage),
+        );
+    }
+    row(
+        &mut out,
+        "tick w/o device",
+        &s.stages_ns.tick_without_device,
+    );
+    let _ = writeln!(out);
     let _ = writeln!(
         out,
         "ticks: {} of {} slots; misses: {} late, {} overrun, {} skipped",

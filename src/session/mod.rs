@@ -19,6 +19,7 @@ mod recorder;
 mod rig;
 mod slow;
 mod stats;
+mod timing;
 mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
@@ -29,6 +30,7 @@ pub use recorder::{Recorder, Series};
 pub use rig::{Rig, SessionDevice};
 pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
+pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, TrackSample};
 
 use crate::scenes::Scene;
@@ -255,6 +257,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         recorders,
         inbox,
         design,
+        timer: StageClock::default(),
+        rendered: vec![Vector3::zeros(); fingers],
+        commanded: vec![Vector3::zeros(); fingers],
     };
     let slow = SlowLoop {
         snapshots,
@@ -271,6 +276,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         // Every 100 ms of slow-loop steps (each about 5 ms).
         reference_every: 20,
         contact,
+        step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
     Ok(Built {
         fast,
