@@ -1,6 +1,7 @@
 //! Command-line parsing: flags become typed values here, then validated
 //! configuration objects of the library crates.
 
+mod bench;
 mod check;
 mod output;
 mod probe;
@@ -54,6 +55,15 @@ enum Command {
     /// one-second blocks with a bare absolute-sleep reference loop on the same
     /// core and priority, and prints both side by side.
     Probe(probe::ProbeArgs),
+    /// Time a scene's fast-loop tick per stage, on the mock clock.
+    ///
+    /// Runs the session as `run --deterministic` does (same inputs every
+    /// run, no sleeping, the slow loop in lockstep) and reports percentiles
+    /// of each stage of the tick, measured on the monotonic clock: device
+    /// read, update iterations, evaluation, the Eq. 7 force solve, safety +
+    /// write, bookkeeping, the whole tick and the tick without the device
+    /// stages; then the slow loop's step time and the constraint violation.
+    Bench(bench::BenchArgs),
     /// List the built-in scenes, one line each.
     Scenes,
     /// Validate a scene file (or built-in name) and print what it compiles to.
@@ -84,6 +94,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene }) => check::run(&scene),
+        Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Run(args)) => run::run(&args, &stop),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),

@@ -1,10 +1,12 @@
 //! `summary.json`: every figure of a session, machine-readable.
 //!
-//! In deterministic mode every field except `wall_clock_s` is bit-identical
-//! across runs (the mock clock makes every timing field a function of the
-//! tick count).
+//! In deterministic mode every field except the measured times is
+//! bit-identical across runs: `wall_clock_s`, `compute_ns`, `stages_ns` and
+//! `slow_loop.step_ns` are read from the monotonic clock (real compute time,
+//! see `session::timing`); the scheduler's own timing fields follow the mock
+//! clock and are functions of the tick count.
 
-use crate::session::SessionOutcome;
+use crate::session::{SessionOutcome, Stage, StageTimes};
 use haptloop_rt::probe::Percentiles;
 use haptloop_rt::schedule::MissCounts;
 use haptloop_rt::thread::Granted;
@@ -161,6 +163,42 @@ pub struct SlowLoop {
     /// reference's, N.
     #[serde(with = "super::figure")]
     pub reference_force_error_n: f64,
+    /// Wall time of one slow-loop step (about every 5 ms), monotonic clock.
+    pub step_ns: Percentiles,
+}
+
+/// The tick's time per stage (`session::timing`), monotonic clock, ns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stages {
+    /// The whole tick.
+    pub tick: Percentiles,
+    /// The tick without the device stages (device read, safety + write).
+    pub tick_without_device: Percentiles,
+    /// Mean of `tick_without_device`.
+    pub tick_without_device_mean: f64,
+    /// Per stage, by its key (`handover`, `device_read`, `update`,
+    /// `evaluation`, `force`, `safety_write`, `bookkeeping`).
+    pub stages: BTreeMap<String, Percentiles>,
+}
+
+impl Stages {
+    /// Percentiles of `times`.
+    pub fn of(times: &StageTimes) -> Stages {
+        Stages {
+            tick: times.tick.summary().into(),
+            tick_without_device: times.tick_without_device.summary().into(),
+            tick_without_device_mean: times.tick_without_device.summary().mean,
+            stages: Stage::ALL
+                .iter()
+                .map(|&s| (s.key().to_string(), times.stage(s).summary().into()))
+                .collect(),
+        }
+    }
+
+    /// The percentiles of `stage`.
+    pub fn get(&self, stage: Stage) -> Percentiles {
+        self.stages[stage.key()]
+    }
 }
 
 /// What the contact machinery saw and did (scenes whose shaped bodies can
@@ -302,8 +340,12 @@ pub struct Summary {
     pub misses: MissCounts,
     /// Wake-up lateness.
     pub lateness_ns: Percentiles,
-    /// Tick compute time.
+    /// Tick compute time: the scheduler's in real time; in deterministic mode
+    /// (whose scheduler runs on the mock clock) the monotonic clock's whole
+    /// tick, `stages_ns.tick`.
     pub compute_ns: Percentiles,
+    /// The tick's time per stage, monotonic clock.
+    pub stages_ns: Stages,
     /// Start-to-start period.
     pub period_ns: Percentiles,
     /// First device read → last force write, per tick.
@@ -379,7 +421,12 @@ impl Summary {
             missed: o.report.misses.total(),
             misses: o.report.misses,
             lateness_ns: o.report.lateness_ns.into(),
-            compute_ns: o.report.compute_ns.into(),
+            compute_ns: if o.plan.deterministic {
+                s.stages.tick.summary().into()
+            } else {
+                o.report.compute_ns.into()
+            },
+            stages_ns: Stages::of(&s.stages),
             period_ns: o.report.period_ns.into(),
             read_to_write_ns: s.read_to_write.summary().into(),
             violation: Violation {
@@ -470,6 +517,7 @@ impl Summary {
                 }),
                 reference_q_error_m: o.slow.reference_q_error_m,
                 reference_force_error_n: o.slow.reference_force_error_n,
+                step_ns: o.slow.step_ns.into(),
             },
             programs_swapped: s.programs_swapped,
             contact: o.slow.contact.map(|c| {

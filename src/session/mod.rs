@@ -20,6 +20,7 @@ mod rig;
 mod semantic;
 mod slow;
 mod stats;
+mod timing;
 mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
@@ -31,6 +32,7 @@ pub use rig::{Rig, SessionDevice};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
 pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
+pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, TrackSample};
 
 use crate::scenes::Scene;
@@ -279,6 +281,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         recorders,
         inbox,
         design,
+        timer: StageClock::default(),
+        rendered: vec![Vector3::zeros(); fingers],
+        commanded: vec![Vector3::zeros(); fingers],
     };
     let slow = SlowLoop {
         snapshots,
@@ -296,6 +301,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         reference_every: 20,
         contact,
         semantic,
+        step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
     Ok(Built {
         fast,

@@ -6,7 +6,9 @@
 //! and the queue.
 
 use super::fast::Snapshot;
+use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
+use haptloop_rt::hist::{LatencyHistogram, Summary};
 use haptloop_solver::{
     Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings, reference_finger_wrenches,
 };
@@ -104,6 +106,8 @@ pub struct SlowStats {
     pub reference_force_error_n: f64,
     /// The contact active set's figures (`None`: no contact machinery).
     pub contact: Option<super::contact::ContactSlowStats>,
+    /// Wall time of one step, ns (monotonic clock).
+    pub step_ns: Summary,
 }
 
 /// The slow loop's state.
@@ -132,6 +136,8 @@ pub struct SlowLoop {
     /// Semantic constraints and the hand's holds (scenes with areas or
     /// holds).
     pub(super) semantic: Option<super::semantic::SemanticLoop>,
+    /// Wall time of each step, ns.
+    pub(super) step_times: LatencyHistogram,
 }
 
 /// Whether `model` holds a joint (anything but quaternion norms and design
@@ -150,8 +156,16 @@ pub const REFERENCE_MAX_COORDS: usize = 300;
 
 impl SlowLoop {
     /// One pass: collect returned programs, read the newest snapshot, and
-    /// re-project if the fast loop has drifted past the threshold.
+    /// re-project if the fast loop has drifted past the threshold. Its wall
+    /// time goes into [`SlowStats::step_ns`].
     pub fn step(&mut self) {
+        let clock = MonotonicClock::new();
+        let start = clock.now();
+        self.step_untimed();
+        self.step_times.record((clock.now() - start).0);
+    }
+
+    fn step_untimed(&mut self) {
         self.stats.steps += 1;
         while let Some(spent) = self.programs.collect() {
             self.stats.programs_dropped += 1;
@@ -346,6 +360,7 @@ impl SlowLoop {
     pub fn stats(&self) -> SlowStats {
         let mut s = self.stats;
         s.contact = self.contact.as_ref().map(|c| c.stats());
+        s.step_ns = self.step_times.summary();
         s
     }
 }

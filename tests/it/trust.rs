@@ -291,9 +291,12 @@ fn reports_never_claim_a_tolerance_over_ticks_that_failed_or_never_ran() {
 #[test]
 fn check_refuses_what_run_refuses() {
     let dir = tempfile::tempdir().unwrap();
-    let text = haptloop::scenes::BUILTIN[0].text.replace(
-        "violation_tolerance = 1e-6",
-        "violation_tolerance = 1e-6\nstep = 1e9",
+    let text = haptloop::scenes::BUILTIN[0]
+        .text
+        .replace("step = 1.0", "step = 1e9");
+    assert!(
+        text.contains("step = 1e9"),
+        "the default scene sets its step"
     );
     let path = dir.path().join("step.toml");
     std::fs::write(&path, &text).unwrap();
