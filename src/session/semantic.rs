@@ -133,6 +133,8 @@ struct ActiveHold {
     body: BodyId,
     /// The fingertip's centre in the body's frame when it took hold.
     anchor: Vector3<f64>,
+    /// R_bodyᵀ R_tip when it took hold: the pinch keeps it.
+    relative: nalgebra::Matrix3<f64>,
 }
 
 /// The slow loop's semantic state (see the module docs).
@@ -223,6 +225,7 @@ impl SemanticLoop {
                 body: h.body,
                 tip_anchor_m: [0.0; 3],
                 body_anchor_m: [h.anchor.x, h.anchor.y, h.anchor.z],
+                orientation: Some(h.relative),
             })
             .collect();
         self.base
@@ -361,9 +364,17 @@ impl SemanticLoop {
         (b.r - a.r).norm() + radius * turn
     }
 
-    /// The hand's schedule: take hold when a hold's time has come and the
-    /// fingertip is within reach; let go when it ends.
-    fn update_holds(&mut self, t_s: f64) {
+    /// A cycle on a snapshot whose tick failed: its poses are not to be
+    /// trusted, so nothing is searched or grabbed, but holds whose time is
+    /// over end (a hand that lets go can only help a failing mechanism).
+    pub fn step_unsolved(&mut self, t_s: f64) {
+        if self.let_go(t_s) {
+            self.holds_changed();
+        }
+    }
+
+    /// Ends the holds whose time is over; true if any did.
+    fn let_go(&mut self, t_s: f64) -> bool {
         let mut changed = false;
         let mut k = 0;
         while k < self.holds.len() {
@@ -378,6 +389,20 @@ impl SemanticLoop {
                 k += 1;
             }
         }
+        changed
+    }
+
+    fn holds_changed(&mut self) {
+        let pairs: Vec<[BodyId; 2]> = self.holds.iter().map(|h| [h.tip, h.body]).collect();
+        self.scene.set_ignored(&pairs);
+        self.dirty = true;
+        self.check();
+    }
+
+    /// The hand's schedule: take hold when a hold's time has come and the
+    /// fingertip is within reach; let go when it ends.
+    fn update_holds(&mut self, t_s: f64) {
+        let mut changed = self.let_go(t_s);
         for i in 0..self.schedule.len() {
             let d = self.schedule[i];
             if self.done[i] || t_s < d.from_s || self.holds.iter().any(|h| h.decl == i) {
@@ -402,6 +427,7 @@ impl SemanticLoop {
                     tip,
                     body: d.body,
                     anchor: pose.local_point(&centre),
+                    relative: pose.rot.transpose() * self.scene.pose(tip).rot,
                 });
                 let finger = self.finger_name(i);
                 self.event(t_s, EventKind::Hold, d.body, &finger);
@@ -409,10 +435,7 @@ impl SemanticLoop {
             }
         }
         if changed {
-            let pairs: Vec<[BodyId; 2]> = self.holds.iter().map(|h| [h.tip, h.body]).collect();
-            self.scene.set_ignored(&pairs);
-            self.dirty = true;
-            self.check();
+            self.holds_changed();
         }
     }
 

@@ -316,6 +316,8 @@ impl SlowLoop {
         };
         if solved {
             sem.step(&q, &forces, t_s);
+        } else {
+            sem.step_unsolved(t_s);
         }
         if !sem.dirty() || self.programs.in_flight() > 0 {
             return false;

@@ -119,8 +119,14 @@ impl ContactManager {
 
     /// Takes back a program the fast loop handed back (it is replaced): kept
     /// for reuse when its set of pairs comes back (the oldest is dropped past
-    /// [`PROGRAM_CACHE`]). Allocates (slow thread).
+    /// [`PROGRAM_CACHE`]; one of a mechanism replaced by
+    /// [`rebase`](Self::rebase) is dropped). Allocates (slow thread).
     pub fn recycle(&mut self, program: Program) {
+        if program.model().semantic() != self.base.semantic() {
+            // A program of the mechanism before a rebase (other semantic
+            // rows or holds): never to be handed out again.
+            return;
+        }
         if program.model().contact().specs.is_empty() && self.pairs.is_empty() {
             // The bare mechanism's program: Program::new is cheap for it.
             return;

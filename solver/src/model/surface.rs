@@ -2,7 +2,7 @@
 //! (`crate::semantic` decides which; `constraint/surface.rs` evaluates
 //! them): [`Model::with_semantic`] derives a model from a mechanism without
 //! any (the scene's), with each surface's three plane rows and each hold's
-//! three rows inserted at the end of the equality rows (so equalities stay a
+//! three (spherical) or six (weld) rows inserted at the end of the equality rows (so equalities stay a
 //! prefix of C) and each surface's inclusion rows after every inequality.
 //! Joints keep their `ConstraintId`s, fingers theirs; the model has a new
 //! identity. Contact rows are derived afterwards ([`Model::with_contacts`]),
@@ -15,6 +15,7 @@ use super::{Model, next_model_id};
 use crate::constraint::block::{Pair, Param3};
 use crate::constraint::spherical::Spherical;
 use crate::constraint::surface::SurfaceRows;
+use crate::constraint::weld::Weld;
 use crate::constraint::witness::{PlaneWitness, WitnessType};
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, Sense};
 use crate::{BodyId, ConstraintId};
@@ -61,6 +62,12 @@ pub struct HoldSpec {
     pub tip_anchor_m: [f64; 3],
     /// Anchor in the held body's frame, m.
     pub body_anchor_m: [f64; 3],
+    /// `Some(R_bodyᵀ R_tip)` at the grab: the hold also keeps this relative
+    /// orientation (a pinch: 6 rows, a weld), so a body held off its centre
+    /// does not swing about the fingertip (least astonishment would turn a
+    /// light, long body rather than translate it); `None`: a spherical
+    /// joint (3 rows).
+    pub orientation: Option<nalgebra::Matrix3<f64>>,
 }
 
 /// How fast and how hard a snap may pull (the fast loop's ramp of the snap
@@ -226,7 +233,18 @@ impl Model {
                     finger: None,
                     limits: None,
                 },
-                Geometry::Spherical(Spherical { pair }),
+                match h.orientation {
+                    Some(relative) if relative.iter().all(|x| x.is_finite()) => {
+                        Geometry::Weld(Weld { pair, relative })
+                    }
+                    Some(_) => {
+                        return Err(BuildError::NonFinite {
+                            owner: owner(),
+                            field: "orientation",
+                        });
+                    }
+                    None => Geometry::Spherical(Spherical { pair }),
+                },
             );
             layout.holds.push((h.name.clone(), h.tip, h.body, id));
         }
