@@ -67,7 +67,8 @@ impl From<&SemanticReport> for Semantic {
         let (constraint, holds): (Vec<_>, Vec<_>) =
             r.events.iter().partition(|e| e.kind.is_constraint());
         let ev = |e: &crate::session::Event| SemanticEvent {
-            t_s: e.t_s,
+            // Session time on the tick grid: no float noise in the file.
+            t_s: (e.t_s * 1e6).round() / 1e6,
             kind: e.kind.as_str().to_owned(),
             binding_body: e.binding_body.clone(),
             offer_body: e.offer_body.clone(),
