@@ -11,5 +11,6 @@ mod design;
 mod docs;
 mod scene_format;
 mod scenes;
+mod semantic;
 mod session;
 mod trust;
