@@ -136,7 +136,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 let (table, _) = cells[k % cells.len()];
                 k += 1;
-                if k % cells.len() == 0 {
+                if k.is_multiple_of(cells.len()) {
                     sign = -sign;
                 }
                 let mv = Move {
