@@ -40,7 +40,8 @@ fn model() -> Model {
         body: haptloop_solver::BodyId(2),
         tip_anchor_m: [0.1, 0.0, 0.2],
         body_anchor_m: [0.0, 0.0, -0.03],
-        orientation: Some(nalgebra::Rotation3::from_euler_angles(0.2, -0.1, 0.3).into_inner()),
+        // A pinch (weld) taken at q0, where both bodies are unrotated.
+        orientation: Some(nalgebra::Matrix3::identity()),
     };
     base.with_semantic(&specs, &[hold], SnapSettings::default())
         .unwrap()
