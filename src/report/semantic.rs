@@ -159,11 +159,18 @@ pub fn check_lines(c: &CompiledScene) -> String {
                 .iter()
                 .filter(|a| a.kind == haptloop_solver::semantic::AreaKind::Offer)
                 .count();
+            let labels: std::collections::BTreeSet<&str> = s
+                .labels
+                .iter()
+                .map(String::as_str)
+                .chain(s.order.iter().flat_map(|(a, b)| [a.as_str(), b.as_str()]))
+                .chain(s.areas.iter().map(|a| a.label.as_str()))
+                .collect();
             format!(
                 "  semantic     {offers} offer and {} binding areas, {} labels; consistent at load; \
                  snap within {} m / {:.2} rad, break at {} N; {n} scheduled holds\n",
                 s.areas.len() - offers,
-                s.labels.len(),
+                labels.len(),
                 s.settings.snap_distance_m,
                 s.settings.snap_angle_rad,
                 s.settings.break_force_n
