@@ -233,18 +233,30 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         "summary.json",
         serde_json::to_string_pretty(summary)? + "\n",
     )?;
-    write(
-        "lateness.hgrm",
-        o.histograms.lateness.percentile_distribution(1000.0),
-    )?;
-    write(
-        "compute.hgrm",
-        o.histograms.compute.percentile_distribution(1000.0),
-    )?;
-    write(
-        "read-to-write.hgrm",
-        o.stats.read_to_write.percentile_distribution(1000.0),
-    )?;
+    // On the mock clock (deterministic mode) there is no lateness and no
+    // device-to-motor time to record: those files are not written, and
+    // compute.hgrm holds the monotonic clock's whole tick instead.
+    let timing_files = if o.plan.deterministic {
+        write(
+            "compute.hgrm",
+            o.stats.stages.tick.percentile_distribution(1000.0),
+        )?;
+        "compute.hgrm (µs, monotonic clock)"
+    } else {
+        write(
+            "lateness.hgrm",
+            o.histograms.lateness.percentile_distribution(1000.0),
+        )?;
+        write(
+            "compute.hgrm",
+            o.histograms.compute.percentile_distribution(1000.0),
+        )?;
+        write(
+            "read-to-write.hgrm",
+            o.stats.read_to_write.percentile_distribution(1000.0),
+        )?;
+        "lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs)"
+    };
     produce_atomic(&dir.join("latency.svg"), |p| plots::latency(p, o))?;
     produce_atomic(&dir.join("force.svg"), |p| plots::force(p, o))?;
     produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
@@ -261,7 +273,7 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         extra += ", design.svg";
     }
     super::emit(&format!(
-        "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg{extra}",
+        "wrote {}/: summary.json, trace.csv, {timing_files}, latency.svg, force.svg, violation.svg{extra}",
         dir.display()
     ));
     Ok(())

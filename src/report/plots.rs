@@ -42,18 +42,35 @@ fn percentile_points(h: &LatencyHistogram) -> Vec<(f64, f64)> {
 
 /// Lateness, compute and read → write time against percentile, log-log:
 /// the usual HdrHistogram percentile plot.
+///
+/// In deterministic mode the scheduler runs on the mock clock, which has no
+/// lateness and no compute time to show: the plot then shows the whole tick
+/// and the tick without the device read, both on the monotonic clock.
 pub fn latency(path: &Path, o: &SessionOutcome) -> Result<()> {
-    let series = [
-        (
-            "wake-up lateness",
-            percentile_points(&o.histograms.lateness),
-        ),
-        ("compute", percentile_points(&o.histograms.compute)),
-        (
-            "device read → force write",
-            percentile_points(&o.stats.read_to_write),
-        ),
-    ];
+    let series: Vec<(&str, Vec<(f64, f64)>)> = if o.plan.deterministic {
+        vec![
+            (
+                "whole tick (monotonic clock)",
+                percentile_points(&o.stats.stages.tick),
+            ),
+            (
+                "tick without device read",
+                percentile_points(&o.stats.stages.tick_without_device),
+            ),
+        ]
+    } else {
+        vec![
+            (
+                "wake-up lateness",
+                percentile_points(&o.histograms.lateness),
+            ),
+            ("compute", percentile_points(&o.histograms.compute)),
+            (
+                "device read → force write",
+                percentile_points(&o.stats.read_to_write),
+            ),
+        ]
+    };
     let xmax = series
         .iter()
         .flat_map(|(_, p)| p.iter().map(|x| x.0))

@@ -68,8 +68,8 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         "\n  {:<16} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
         "", "p50", "p99", "p99.9", "p99.99", "max"
     );
-    if !s.deterministic {
-        row(&mut out, "lateness", &s.lateness_ns);
+    if let Some(lateness) = &s.lateness_ns {
+        row(&mut out, "lateness", lateness);
     }
     row(&mut out, "compute", &s.compute_ns);
     if !s.deterministic {

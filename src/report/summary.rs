@@ -266,7 +266,8 @@ pub struct Contact {
     #[serde(with = "super::figure")]
     pub build_us_max: f64,
     /// Structure changes served from the cache by structure (a set of pairs
-    /// seen before), and preparing one of those, µs: mean and largest.
+    /// seen before), and preparing one of those, µs: mean and largest
+    /// (`"NaN"` when none was reused).
     pub reused: u64,
     /// Mean, µs.
     #[serde(with = "super::figure")]
@@ -338,8 +339,9 @@ pub struct Summary {
     pub missed: u64,
     /// Missed deadlines by kind.
     pub misses: MissCounts,
-    /// Wake-up lateness.
-    pub lateness_ns: Percentiles,
+    /// Wake-up lateness; `null` in deterministic mode, whose mock clock
+    /// has none to measure.
+    pub lateness_ns: Option<Percentiles>,
     /// Tick compute time: the scheduler's in real time; in deterministic mode
     /// (whose scheduler runs on the mock clock) the monotonic clock's whole
     /// tick, `stages_ns.tick`.
@@ -420,7 +422,7 @@ impl Summary {
             ticks: o.report.ticks,
             missed: o.report.misses.total(),
             misses: o.report.misses,
-            lateness_ns: o.report.lateness_ns.into(),
+            lateness_ns: (!o.plan.deterministic).then(|| o.report.lateness_ns.into()),
             compute_ns: if o.plan.deterministic {
                 s.stages.tick.summary().into()
             } else {
@@ -570,7 +572,11 @@ impl Summary {
                     build_us_max: c.build_ns_max as f64 / 1e3,
                     reused: c.reused,
                     reuse_us_mean: mean(c.reuse_ns_sum, c.reused) / 1e3,
-                    reuse_us_max: c.reuse_ns_max as f64 / 1e3,
+                    reuse_us_max: if c.reused == 0 {
+                        f64::NAN
+                    } else {
+                        c.reuse_ns_max as f64 / 1e3
+                    },
                 }
             }),
             semantic: o.semantic.as_ref().map(Into::into),
