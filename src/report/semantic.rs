@@ -32,10 +32,12 @@ pub struct Semantic {
     /// The grouping graph at the end: `[offer_body, binding_body]` edges,
     /// sorted.
     pub graph: Vec<[String; 2]>,
-    /// The hand taking hold (`hold`) and letting go (`let_go`), the finger
-    /// as `offer_body` (printed with the events; not constraint events).
+    /// What is not a constraint event, printed with them: an object at rest
+    /// starting to move (`move`, with the finger holding it if one does) and
+    /// the hand taking hold (`hold`) and letting go (`let_go`), the finger as
+    /// `offer_body`.
     #[serde(default)]
-    pub holds: Vec<SemanticEvent>,
+    pub other_events: Vec<SemanticEvent>,
     /// Constraints satisfied when the scene loaded.
     pub loaded: usize,
     /// consistent(s) evaluations (after loading and every operation).
@@ -64,7 +66,7 @@ pub struct Semantic {
 
 impl From<&SemanticReport> for Semantic {
     fn from(r: &SemanticReport) -> Self {
-        let (constraint, holds): (Vec<_>, Vec<_>) =
+        let (constraint, other): (Vec<_>, Vec<_>) =
             r.events.iter().partition(|e| e.kind.is_constraint());
         let ev = |e: &crate::session::Event| SemanticEvent {
             // Session time on the tick grid: no float noise in the file.
@@ -80,7 +82,7 @@ impl From<&SemanticReport> for Semantic {
                 .iter()
                 .map(|(a, b)| [a.clone(), b.clone()])
                 .collect(),
-            holds: holds.into_iter().map(ev).collect(),
+            other_events: other.into_iter().map(ev).collect(),
             loaded: r.loaded,
             consistency_checks: r.checks,
             inconsistent: r.inconsistent,
@@ -99,8 +101,8 @@ impl From<&SemanticReport> for Semantic {
     }
 }
 
-/// The lines of the end-of-run report: the events with their times (holds
-/// included), then the grouping graph.
+/// The lines of the end-of-run report: the events with their times (moves,
+/// holds and let-gos included), then the grouping graph.
 pub fn lines(out: &mut String, s: &Semantic) {
     let _ = writeln!(
         out,
@@ -118,14 +120,27 @@ pub fn lines(out: &mut String, s: &Semantic) {
         s.cycle_us_mean,
         s.cycle_us_max
     );
-    let mut all: Vec<&SemanticEvent> = s.events.iter().chain(&s.holds).collect();
-    all.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    let mut all: Vec<&SemanticEvent> = s.events.iter().chain(&s.other_events).collect();
+    // At one time: the hand's grab, then what moves, then the constraints.
+    let rank = |k: &str| match k {
+        "hold" => 0,
+        "move" => 1,
+        "let_go" => 3,
+        _ => 2,
+    };
+    all.sort_by(|a, b| {
+        a.t_s
+            .total_cmp(&b.t_s)
+            .then(rank(&a.kind).cmp(&rank(&b.kind)))
+    });
     for e in all {
         let what = match e.kind.as_str() {
             "snap" => format!("{} snaps onto {}", e.binding_body, e.offer_body),
             "group_move" => format!("{} carries {}", e.offer_body, e.binding_body),
             "break" => format!("{} pulled off {}", e.binding_body, e.offer_body),
             "release" => format!("{} clear of {}", e.binding_body, e.offer_body),
+            "move" if e.offer_body.is_empty() => format!("{} moves", e.binding_body),
+            "move" => format!("{} moves {}", e.offer_body, e.binding_body),
             "hold" => format!("{} takes hold of {}", e.offer_body, e.binding_body),
             "let_go" => format!("{} lets go of {}", e.offer_body, e.binding_body),
             other => format!("{other} {} {}", e.binding_body, e.offer_body),

@@ -50,6 +50,9 @@ pub enum EventKind {
     Break,
     /// A broken pair separated and left the exception list.
     Release,
+    /// An object at rest started moving on its own account (not carried by
+    /// a moving parent; not a constraint: printed only).
+    Move,
     /// The hand took hold of a body (not a constraint; printed only).
     Hold,
     /// The hand let go (printed only).
@@ -64,6 +67,7 @@ impl EventKind {
             Self::GroupMove => "group_move",
             Self::Break => "break",
             Self::Release => "release",
+            Self::Move => "move",
             Self::Hold => "hold",
             Self::LetGo => "let_go",
         }
@@ -71,7 +75,7 @@ impl EventKind {
 
     /// True for the constraint events `summary.json` lists.
     pub fn is_constraint(self) -> bool {
-        !matches!(self, Self::Hold | Self::LetGo)
+        !matches!(self, Self::Move | Self::Hold | Self::LetGo)
     }
 }
 
@@ -82,9 +86,10 @@ pub struct Event {
     pub t_s: f64,
     /// What happened.
     pub kind: EventKind,
-    /// The bound (or held) body.
+    /// The bound (held, moved) body.
     pub binding_body: String,
-    /// The offering body (for holds: the finger).
+    /// The offering body (for holds: the finger; for a move: the finger
+    /// holding the body, or empty).
     pub offer_body: String,
 }
 
@@ -533,7 +538,22 @@ impl SemanticLoop {
                 }
                 continue;
             }
+            let started = self.rest[i] >= REST_CYCLES;
             self.rest[i] = 0;
+            let tip = self.tips.iter().any(|t| t.1 == o);
+            let carried = self
+                .scene
+                .parents_of(o)
+                .into_iter()
+                .any(|p| self.moved(p) > MOVING_M);
+            if started && !tip && !carried {
+                let by = self
+                    .holds
+                    .iter()
+                    .find(|h| h.body == o)
+                    .map_or(String::new(), |h| self.finger_name(h.decl));
+                self.event(t_s, EventKind::Move, o, &by);
+            }
             for c in self.scene.children_of(o) {
                 if self.moved(c) > MOVING_M && !self.moving_edges.contains(&(o, c)) {
                     self.moving_edges.push((o, c));

@@ -151,6 +151,29 @@ fn the_room_is_furnished_as_scripted_and_felt_within_its_limits() {
         "{events:?}"
     );
     assert!(events.windows(2).all(|w| w[0].0 <= w[1].0));
+    // The hand's part, printed with them: it takes hold of each object,
+    // moves it and lets go.
+    let other: Vec<(&str, &str, &str)> = sem["other_events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["kind"].as_str().unwrap(),
+                e["binding_body"].as_str().unwrap(),
+                e["offer_body"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    for body in ["picture", "cup", "table"] {
+        for kind in ["hold", "move", "let_go"] {
+            assert!(
+                other.contains(&(kind, body, "index")),
+                "no {kind} of {body}: {other:?}"
+            );
+        }
+    }
+    assert!(stdout.contains("index moves table"), "{stdout}");
     assert_eq!(
         sem["loaded"], 4,
         "table, cup, lamp and chair stand on the floor"
