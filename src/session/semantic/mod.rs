@@ -7,6 +7,7 @@
 //!     a held object pulled off its offer harder than break_force ─► break (exception list)
 //!     exception pairs apart and out of snap range ─► release
 //!     moved objects' free bindings ─► Algorithm 1 (snap, pending until its ramp arrives)
+//!     an object at rest starting to move ─► move (printed only)
 //!     an offer object moving its bound successors ─► group_move
 //!     structure changed? ─► Model::with_semantic (surfaces + holds) ─► contact rebase or
 //!                           Program::new ─► program queue (the fast loop ramps and carries)
@@ -14,7 +15,8 @@
 //!
 //! The fast loop never waits for any of this and only ever sees rows; the
 //! mirrored scene is checked with consistent(s) after every operation and
-//! the result counted.
+//! the result counted. `holds.rs` runs the hand's schedule, `report.rs`
+//! holds the events and figures.
 
 use std::sync::Arc;
 
@@ -26,6 +28,12 @@ use haptloop_solver::semantic::{AreaId, SemanticScene};
 use haptloop_solver::{BodyId, HoldSpec, Model};
 use nalgebra::Vector3;
 
+mod holds;
+mod report;
+
+use holds::ActiveHold;
+pub use report::{Event, EventKind, SemanticReport};
+
 /// A displacement per slow-loop cycle above this counts as moving, m (a
 /// drag at 4 mm/s; the rotation counts at the body's radius).
 pub const MOVING_M: f64 = 2e-5;
@@ -33,114 +41,6 @@ pub const MOVING_M: f64 = 2e-5;
 /// Cycles an offer object must rest before its group's next motion is a new
 /// `group_move` event (100 ms at the 5 ms slow period).
 pub const REST_CYCLES: u32 = 20;
-
-/// A hold waits for the fingertip to come within this many fingertip radii
-/// of the body's surface.
-pub const HOLD_REACH_RADII: f64 = 2.0;
-
-/// What happened to a constraint (the kinds of `summary.json`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EventKind {
-    /// A constraint was satisfied (Algorithm 1): the fast loop pulls the
-    /// binding onto the offer.
-    Snap,
-    /// An offer object started moving and carried a bound object with it.
-    GroupMove,
-    /// A held object was pulled off its offer harder than `break_force`.
-    Break,
-    /// A broken pair separated and left the exception list.
-    Release,
-    /// An object at rest started moving on its own account (not carried by
-    /// a moving parent; not a constraint: printed only).
-    Move,
-    /// The hand took hold of a body (not a constraint; printed only).
-    Hold,
-    /// The hand let go (printed only).
-    LetGo,
-}
-
-impl EventKind {
-    /// The name in reports.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Snap => "snap",
-            Self::GroupMove => "group_move",
-            Self::Break => "break",
-            Self::Release => "release",
-            Self::Move => "move",
-            Self::Hold => "hold",
-            Self::LetGo => "let_go",
-        }
-    }
-
-    /// True for the constraint events `summary.json` lists.
-    pub fn is_constraint(self) -> bool {
-        !matches!(self, Self::Move | Self::Hold | Self::LetGo)
-    }
-}
-
-/// One event, with its time (the snapshot's session time).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Event {
-    /// Session time, s.
-    pub t_s: f64,
-    /// What happened.
-    pub kind: EventKind,
-    /// The bound (held, moved) body.
-    pub binding_body: String,
-    /// The offering body (for holds: the finger; for a move: the finger
-    /// holding the body, or empty).
-    pub offer_body: String,
-}
-
-/// What the semantic loop saw and did.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct SemanticReport {
-    /// Every event, in time order.
-    pub events: Vec<Event>,
-    /// The grouping graph at the end: (offer body, binding body), sorted.
-    pub graph: Vec<(String, String)>,
-    /// Constraints satisfied when the scene loaded.
-    pub loaded: usize,
-    /// consistent(s) evaluations (after loading and after every operation).
-    pub checks: u64,
-    /// Those that found the mirrored scene inconsistent.
-    pub inconsistent: u64,
-    /// The first inconsistency found, in words.
-    pub first_inconsistency: Option<String>,
-    /// Snaps whose pull had not arrived (aligned) by the end.
-    pub pending_at_end: usize,
-    /// Longest time from a snap to its arrival, s (NaN: none arrived).
-    pub arrival_max_s: f64,
-    /// Programs sent for a semantic change.
-    pub programs: u64,
-    /// Changes whose program could not be built (the fast loop kept the
-    /// old rows).
-    pub program_failures: u64,
-    /// Slow-loop cycles run, and their largest and total time, ns.
-    pub cycles: u64,
-    /// Largest cycle, ns.
-    pub cycle_ns_max: u64,
-    /// Total, ns.
-    pub cycle_ns_sum: u64,
-    /// Largest and total time to build a program for a change, ns.
-    pub build_ns_max: u64,
-    /// Total, ns.
-    pub build_ns_sum: u64,
-}
-
-/// A hold in effect.
-#[derive(Debug, Clone, Copy)]
-struct ActiveHold {
-    /// Index in the schedule.
-    decl: usize,
-    tip: BodyId,
-    body: BodyId,
-    /// The fingertip's centre in the body's frame when it took hold.
-    anchor: Vector3<f64>,
-    /// R_bodyᵀ R_tip when it took hold: the pinch keeps it.
-    relative: nalgebra::Matrix3<f64>,
-}
 
 /// The slow loop's semantic state (see the module docs).
 pub struct SemanticLoop {
@@ -367,86 +267,6 @@ impl SemanticLoop {
             .map_or(0.0, |c| c.radius_m);
         let turn = (a.rot.transpose() * b.rot - nalgebra::Matrix3::identity()).norm();
         (b.r - a.r).norm() + radius * turn
-    }
-
-    /// A cycle on a snapshot whose tick failed: its poses are not to be
-    /// trusted, so nothing is searched or grabbed, but holds whose time is
-    /// over end (a hand that lets go can only help a failing mechanism).
-    pub fn step_unsolved(&mut self, t_s: f64) {
-        if self.let_go(t_s) {
-            self.holds_changed();
-        }
-    }
-
-    /// Ends the holds whose time is over; true if any did.
-    fn let_go(&mut self, t_s: f64) -> bool {
-        let mut changed = false;
-        let mut k = 0;
-        while k < self.holds.len() {
-            let h = self.holds[k];
-            if t_s >= self.schedule[h.decl].until_s {
-                self.holds.remove(k);
-                self.done[h.decl] = true;
-                let finger = self.finger_name(h.decl);
-                self.event(t_s, EventKind::LetGo, h.body, &finger);
-                changed = true;
-            } else {
-                k += 1;
-            }
-        }
-        changed
-    }
-
-    fn holds_changed(&mut self) {
-        let pairs: Vec<[BodyId; 2]> = self.holds.iter().map(|h| [h.tip, h.body]).collect();
-        self.scene.set_ignored(&pairs);
-        self.dirty = true;
-        self.check();
-    }
-
-    /// The hand's schedule: take hold when a hold's time has come and the
-    /// fingertip is within reach; let go when it ends.
-    fn update_holds(&mut self, t_s: f64) {
-        let mut changed = self.let_go(t_s);
-        for i in 0..self.schedule.len() {
-            let d = self.schedule[i];
-            if self.done[i] || t_s < d.from_s || self.holds.iter().any(|h| h.decl == i) {
-                continue;
-            }
-            if t_s >= d.until_s {
-                self.done[i] = true;
-                continue;
-            }
-            let Some(&(_, tip, radius)) = self.tips.iter().find(|t| t.0 == d.finger.index()) else {
-                continue;
-            };
-            if self.holds.iter().any(|h| h.tip == tip) {
-                continue;
-            }
-            let centre = self.scene.pose(tip).r;
-            let gap = self.scene.ball_distance_m(d.body, &centre, radius);
-            let pose = self.scene.pose(d.body);
-            if gap <= HOLD_REACH_RADII * radius {
-                self.holds.push(ActiveHold {
-                    decl: i,
-                    tip,
-                    body: d.body,
-                    anchor: pose.local_point(&centre),
-                    relative: pose.rot.transpose() * self.scene.pose(tip).rot,
-                });
-                let finger = self.finger_name(i);
-                self.event(t_s, EventKind::Hold, d.body, &finger);
-                changed = true;
-            }
-        }
-        if changed {
-            self.holds_changed();
-        }
-    }
-
-    fn finger_name(&self, decl: usize) -> String {
-        let f = self.schedule[decl].finger.index();
-        self.base.fingers()[f].name.clone()
     }
 
     /// A held object pulled away from an offer it is bound to harder than
