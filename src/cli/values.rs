@@ -32,6 +32,18 @@ pub fn filter_ms(s: &str) -> Result<f64, String> {
     }
 }
 
+/// An update rule: `projected` (the default) or `gradient` (Nelson & Cohen
+/// Eq. 1–3).
+pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
+    match s.trim() {
+        "projected" => Ok(haptloop_solver::UpdateRule::Projected),
+        "gradient" => Ok(haptloop_solver::UpdateRule::Gradient),
+        other => Err(format!(
+            "unknown update rule `{other}` (expected `projected` or `gradient`)"
+        )),
+    }
+}
+
 fn number(s: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
@@ -57,5 +69,6 @@ mod tests {
         assert_eq!(positive("1e20"), Ok(1e20));
         assert_eq!(filter_ms("0"), Ok(0.0));
         assert!(filter_ms("1000.1").is_err() && filter_ms("x").is_err());
+        assert!(update_rule("gradient").is_ok() && update_rule("newton").is_err());
     }
 }

@@ -53,12 +53,14 @@
 //! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
 
 mod contact;
+mod converged;
 mod objective;
 mod report;
 mod state;
 mod tick;
 
 pub use contact::DYNAMIC_DAMPING_PER_S;
+pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use tick::MAX_ACTIVATIONS;
 
