@@ -7,6 +7,7 @@ mod probe;
 mod rt_args;
 mod run;
 mod scenes;
+mod sweep;
 mod values;
 
 use anyhow::Result;
@@ -36,6 +37,17 @@ enum Command {
     /// constraint violation, tracking error, force per finger, safety events.
     /// Files go to --out DIR (default runs/<scene>-<time>/).
     Run(run::RunArgs),
+    /// Measure the speed/accuracy trade of a scene over a grid of settings.
+    ///
+    /// Runs one deterministic session per point of the grid (iterations ×
+    /// update rule × gain × rate × velocity filter; in parallel), then times
+    /// each point's ticks alone on one thread. Per point: violation, force
+    /// error against the converged reference, tracking error, µs per tick,
+    /// ticks over the period, failed ticks. Prints a table with the Pareto
+    /// front (CPU load against force error) and the cheapest point within
+    /// the scene's tolerance; writes sweep.csv, sweep.json and front.svg to
+    /// --out DIR (default runs/sweep-<scene>-<time>/).
+    Sweep(sweep::SweepArgs),
     /// Measure this machine's timer and the scheduler's added jitter.
     ///
     /// Runs the hard-rate scheduler with a synthetic tick load, alternating in
@@ -73,6 +85,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene }) => check::run(&scene),
         Some(Command::Run(args)) => run::run(&args, &stop),
+        Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),
     }

@@ -110,7 +110,7 @@ impl Default for RunArgs {
 }
 
 /// `YYYYMMDD-HHMMSS` in UTC, for default run directories.
-fn utc_stamp() -> String {
+pub(super) fn utc_stamp() -> String {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs()) as i64;

@@ -20,6 +20,7 @@ mod reference;
 mod rig;
 mod slow;
 mod stats;
+pub mod timing;
 mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
@@ -181,6 +182,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let reference_unsupported = reference::unsupported(contact.is_some());
     let (capture, check) = match reference_unsupported {
         Some(_) => (None, None),
+        None if plan.reference_every_ticks == 0 => (None, None),
         None => {
             let (c, k) = reference::pair(&program, plan.reference_every_ticks)
                 .context("building the converged reference")?;

@@ -115,7 +115,7 @@ pub struct Plan {
     /// The contact active set's knobs (scenes with shapes).
     pub contact: ContactSettings,
     /// Ticks between comparisons with the converged reference (1: every
-    /// tick).
+    /// tick; 0: none).
     pub reference_every_ticks: u64,
 }
 

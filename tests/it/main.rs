@@ -12,4 +12,5 @@ mod reference;
 mod scene_format;
 mod scenes;
 mod session;
+mod sweep;
 mod trust;
