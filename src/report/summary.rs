@@ -44,8 +44,8 @@ pub struct Violation {
     /// Ticks whose solve failed (zero force written); not covered.
     pub ticks_failed: u64,
     /// What the figures show against the tolerance, in words: `kept`,
-    /// `EXCEEDED`, `kept over the N ticks that succeeded …`, or why nothing
-    /// was measured (the figures are then `"NaN"`).
+    /// `EXCEEDED`, `FAILED TICKS: …` (never `kept` when a tick failed), or
+    /// why nothing was measured (the figures are then `"NaN"`).
     pub verdict: String,
 }
 
@@ -67,17 +67,22 @@ impl Violation {
                 format!("not measured: all {failed} ticks failed")
             };
         }
-        let covered = if failed == 0 {
-            String::new()
-        } else {
-            format!(
-                " over the {measured} ticks that succeeded only ({failed} failed and are not covered)"
-            )
-        };
+        if failed > 0 {
+            // Never "kept" when ticks failed: those ticks wrote zero force
+            // and their violation is not a measurement.
+            let over = match tolerance {
+                Some(t) if max <= t => "within the tolerance",
+                Some(_) => "EXCEEDED",
+                None => "no tolerance stated",
+            };
+            return format!(
+                "FAILED TICKS: {failed} ticks failed and are not covered; over the {measured} that succeeded: {over}"
+            );
+        }
         match tolerance {
-            Some(t) if max <= t => format!("kept{covered}"),
-            Some(_) => format!("EXCEEDED{covered}"),
-            None => format!("no tolerance stated{covered}"),
+            Some(t) if max <= t => "kept".into(),
+            Some(_) => "EXCEEDED".into(),
+            None => "no tolerance stated".into(),
         }
     }
 }
@@ -543,23 +548,19 @@ impl Summary {
                 };
                 let max_pen = c.max_penetration_m.max(f.max_penetration_m);
                 let tol = o.plan.contact.penetration_tolerance_m;
-                let covered = if s.solver_failures == 0 {
-                    String::new()
-                } else {
-                    format!(
-                        " over the {measured} ticks that succeeded only ({} failed and are not covered)",
-                        s.solver_failures
-                    )
-                };
+                let failed = s.solver_failures;
+                let within = max_pen <= tol;
                 Contact {
                     max_penetration_m: max_pen,
                     tolerance_m: tol,
-                    verdict: if measured == 0 {
-                        "not measured: no tick succeeded".into()
-                    } else if max_pen <= tol {
-                        format!("kept{covered}")
-                    } else {
-                        format!("EXCEEDED{covered}")
+                    verdict: match (measured, failed, within) {
+                        (0, _, _) => "not measured: no tick succeeded".into(),
+                        (_, 0, true) => "kept".into(),
+                        (_, 0, false) => "EXCEEDED".into(),
+                        (_, f, w) => format!(
+                            "FAILED TICKS: {f} ticks failed and are not covered; over the {measured} that succeeded: {}",
+                            if w { "within the tolerance" } else { "EXCEEDED" }
+                        ),
                     },
                     max_penetration_exact_m: c.max_penetration_m,
                     max_penetration_rows_m: f.max_penetration_m,
