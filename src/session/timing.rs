@@ -30,7 +30,7 @@ use super::{Plan, SLOW_PERIOD, build};
 use crate::scenes::Scene;
 use anyhow::Result;
 use haptloop_rt::clock::{Clock, MockClock, MonotonicClock, Nanos};
-use haptloop_rt::schedule::{Tick, TickBody};
+use haptloop_rt::schedule::{SafetyEvent, Tick, TickBody, TickStatus};
 
 /// The measured cost of the ticks of one session, ns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,7 +75,10 @@ pub fn time_ticks(scene: &Scene, plan: &Plan) -> Result<TickTiming> {
             deadline: t,
             start: t,
         };
-        built.fast.tick(&tick);
+        // As the scheduler does: a faulted tick cuts the force.
+        if let TickStatus::Fault(f) = built.fast.tick(&tick) {
+            built.fast.on_safety(SafetyEvent::Fault(f));
+        }
         let targets = &built.fast.targets;
         let t0 = clock.now();
         shadow.program.tick(targets, plan.period());

@@ -8,8 +8,10 @@
 //! a failed tick is at least as cheap and at least as accurate, and better
 //! in one of the two.
 //!
-//! **The recommendation** is the cheapest point (ties: the more accurate)
-//! that meets every criterion, checked in this order:
+//! **The recommendation** is the cheapest point that meets every criterion
+//! (costs within [`COST_TIE`] of the cheapest count as equal: timings on
+//! this shared machine move by about that much between runs; among those the
+//! more accurate wins), checked in this order:
 //! 1. its session ran, and no tick failed;
 //! 2. its violation is within the scene's `violation_tolerance`;
 //! 3. its force error is within `force_tolerance` of the largest reference
@@ -20,6 +22,10 @@
 //!    (Colgate: k T/2 + B < b; without it a light hold buzzes).
 
 use super::Point;
+
+/// Costs within this fraction of the cheapest recommendable point's are
+/// treated as equal, and the most accurate of them is recommended.
+pub const COST_TIE: f64 = 0.1;
 
 /// What the front's accuracy axis is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -153,12 +159,20 @@ pub fn mark(points: &mut [Point], axis: Axis, c: &Criteria) -> Option<usize> {
                 .any(|&(oc, oa)| oc <= cost && oa <= acc && (oc < cost || oa < acc)),
         };
     }
-    let key = |i: usize| (points[i].load(), axis.value(&points[i]));
-    (0..points.len())
+    let ok: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].verdict == Verdict::Recommendable)
+        .collect();
+    let cheapest = ok
+        .iter()
+        .map(|&i| points[i].load())
+        .fold(f64::INFINITY, f64::min);
+    ok.into_iter()
+        .filter(|&i| points[i].load() <= cheapest * (1.0 + COST_TIE))
         .min_by(|&a, &b| {
-            let ((ca, va), (cb, vb)) = (key(a), key(b));
-            ca.total_cmp(&cb).then(va.total_cmp(&vb)).then(a.cmp(&b))
+            let (va, vb) = (axis.value(&points[a]), axis.value(&points[b]));
+            va.total_cmp(&vb)
+                .then(points[a].load().total_cmp(&points[b].load()))
+                .then(a.cmp(&b))
         })
 }
 
@@ -224,6 +238,11 @@ mod tests {
         assert_eq!(p[4].verdict, Verdict::FailedTicks);
         assert_eq!(p[5].verdict, Verdict::TooSlow);
         assert_eq!(r, Some(0));
+        // Within 10 % of the cheapest cost, the more accurate point wins.
+        p[1].timing.as_mut().unwrap().p50_ns = 10_500;
+        p[1].accuracy.as_mut().unwrap().force_error_n.max = 1e-4;
+        assert_eq!(mark(&mut p, Axis::ForceError, &c), Some(1));
+        p[1].timing.as_mut().unwrap().p50_ns = 20_000;
         // Not passive: excluded, the next cheapest is taken.
         p[0].passive = false;
         assert_eq!(mark(&mut p, Axis::ForceError, &c), Some(1));
