@@ -12,5 +12,6 @@ mod reference;
 mod scene_format;
 mod scenes;
 mod session;
+mod stability;
 mod sweep;
 mod trust;
