@@ -1,6 +1,8 @@
 //! Whole-session benchmarks: the cost of one fast-loop tick per built-in scene
 //! (devices + solver + safety layer + statistics + snapshot + trace queue),
-//! then the velocity-filter sweep behind the sessions' 10 ms default.
+//! the cost of timing a tick's stages (`stage_clock/tick`: a start, seven
+//! laps on the monotonic clock and the nine histogram records), then the
+//! velocity-filter sweep behind the sessions' 10 ms default.
 //!
 //! `cargo bench --bench session`
 //!
@@ -10,7 +12,7 @@
 
 use criterion::{BenchmarkId, Criterion};
 use haptloop::scenes::{BUILTIN, resolve};
-use haptloop::session::{self, Plan, SessionOptions};
+use haptloop::session::{self, Plan, SessionOptions, Stage, StageClock, StageTimes};
 use haptloop_rt::clock::{MockClock, Nanos};
 use haptloop_rt::schedule::{Tick, TickBody};
 use std::hint::black_box;
@@ -45,6 +47,22 @@ fn session_tick(c: &mut Criterion) {
         });
     }
     g.finish();
+}
+
+/// What timing the stages costs a tick: one start, a lap per stage, the
+/// records.
+fn stage_clock(c: &mut Criterion) {
+    let mut clock = StageClock::default();
+    let mut times = StageTimes::new();
+    c.bench_function("stage_clock/tick", |b| {
+        b.iter(|| {
+            clock.start();
+            for s in Stage::ALL {
+                clock.lap(s);
+            }
+            times.record(black_box(&clock));
+        })
+    });
 }
 
 /// Tick-to-tick change of the Eq. 7 (constraint) part of the finger force on
@@ -96,6 +114,7 @@ fn filter_sweep() {
 fn main() {
     let mut c = Criterion::default().configure_from_args();
     session_tick(&mut c);
+    stage_clock(&mut c);
     c.final_summary();
     filter_sweep();
 }

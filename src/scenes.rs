@@ -32,6 +32,10 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/sphere-toy.toml"),
     },
     Builtin {
+        name: "sphere-toy-400",
+        text: include_str!("../scenes/sphere-toy-400.toml"),
+    },
+    Builtin {
         name: "grasp-2",
         text: include_str!("../scenes/grasp-2.toml"),
     },

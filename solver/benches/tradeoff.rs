@@ -21,6 +21,9 @@
 //! - norm F₇: largest Eq. 7 force on the finger, newtons;
 //! - µs/tick: mean wall time of `Program::tick` (median of 5 runs).
 //!
+//! The first table also has the projected rule with full steps (`step` 1.0,
+//! the built-in scenes' setting) at 1–4 iterations.
+//!
 //! A last table compares the two solvers of Eq. 7's joint block (sparse
 //! Cholesky vs warm-started CG at several caps) on all three mechanisms, each
 //! finger on a 5 mm, 1 Hz circle for 1 s with the gradient rule: µs per tick,
@@ -182,6 +185,16 @@ fn main() {
         for n in [1u32, 2, 4, 8, 16] {
             rows.push((format!("{name}, {n} it."), rule(u, n)));
         }
+    }
+    // Full Gauss–Newton steps (the built-in scenes' setting since issue 10).
+    for n in [1u32, 2, 3, 4] {
+        rows.push((
+            format!("projected, step 1.0, {n} it."),
+            SolverSettings {
+                step: 1.0,
+                ..rule(UpdateRule::Projected, n)
+            },
+        ));
     }
     table(
         &circle,

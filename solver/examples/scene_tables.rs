@@ -12,7 +12,9 @@ fn main() {
     let (name, device) = match args.as_slice() {
         [n, d] => (n.as_str(), d.clone()),
         _ => {
-            eprintln!("usage: scene_tables <four-bar|stewart|sphere-toy|cluttered> <device-name>");
+            eprintln!(
+                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered> <device-name>"
+            );
             std::process::exit(2);
         }
     };
@@ -21,9 +23,20 @@ fn main() {
         "stewart" => mechanisms::stewart_builder(),
         "sphere-toy" => mechanisms::sphere_toy_builder(),
         "cluttered" => mechanisms::cluttered_builder(100),
+        sized if sized.starts_with("sphere-toy-") => {
+            let shape = sized["sphere-toy-".len()..]
+                .parse()
+                .ok()
+                .and_then(mechanisms::sphere_toy_shape);
+            let Some((rings, per_ring)) = shape else {
+                eprintln!("sized sphere toys: sphere-toy-33, sphere-toy-132, sphere-toy-400");
+                std::process::exit(2);
+            };
+            mechanisms::sphere_toy_sized(rings, per_ring)
+        }
         other => {
             eprintln!(
-                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy or cluttered"
+                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N or cluttered"
             );
             std::process::exit(2);
         }

@@ -83,6 +83,7 @@
 //! for non-unit e, with one quaternion-norm row per moving body.
 
 pub mod al;
+mod cholesky;
 pub mod constraint;
 pub mod contact;
 mod evaluate;

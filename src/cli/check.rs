@@ -26,7 +26,7 @@ pub fn run(arg: &str) -> Result<ExitCode> {
         eprintln!("{e}");
         return Ok(ExitCode::from(1));
     }
-    print!("{}", summary(&scene));
+    super::emit(summary(&scene).trim_end_matches('\n'));
     Ok(ExitCode::SUCCESS)
 }
 

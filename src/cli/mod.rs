@@ -1,6 +1,7 @@
 //! Command-line parsing: flags become typed values here, then validated
 //! configuration objects of the library crates.
 
+mod bench;
 mod check;
 mod output;
 mod probe;
@@ -14,6 +15,18 @@ use anyhow::Result;
 use clap::{CommandFactory, Parser, Subcommand};
 use haptloop_rt::schedule::StopFlag;
 use std::process::ExitCode;
+
+/// Writes `text` and a newline to stdout. A closed stdout (`haptloop run |
+/// head`) is not an error: the run still writes its files, where `println!`
+/// would panic halfway.
+pub(crate) fn emit(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out
+        .write_all(text.as_bytes())
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+}
 
 /// Real-time haptic interaction with constrained virtual mechanisms.
 ///
@@ -54,6 +67,15 @@ enum Command {
     /// one-second blocks with a bare absolute-sleep reference loop on the same
     /// core and priority, and prints both side by side.
     Probe(probe::ProbeArgs),
+    /// Time a scene's fast-loop tick per stage, on the mock clock.
+    ///
+    /// Runs the session as `run --deterministic` does (same inputs every
+    /// run, no sleeping, the slow loop in lockstep) and reports percentiles
+    /// of each stage of the tick, measured on the monotonic clock: device
+    /// read, update iterations, evaluation, the Eq. 7 force solve, safety +
+    /// write, bookkeeping, the whole tick and the tick without the device
+    /// stages; then the slow loop's step time and the constraint violation.
+    Bench(bench::BenchArgs),
     /// List the built-in scenes, one line each.
     Scenes,
     /// Validate a scene file (or built-in name) and print what it compiles to.
@@ -84,6 +106,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene }) => check::run(&scene),
+        Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         // The main job: the default scene on a simulated PHANToM, with a report.

@@ -85,7 +85,7 @@ pub fn run(args: &ProbeArgs, stop: &StopFlag) -> Result<ExitCode> {
     }
     eprintln!("{}", report::probe::banner(&config));
     let outcome = run_probe(&config, stop).context("probe failed")?;
-    println!("{}", report::probe::render(&outcome.report));
+    super::emit(&report::probe::render(&outcome.report));
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)?;
         write_atomic(path, (text + "\n").as_bytes())?;

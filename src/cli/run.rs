@@ -213,7 +213,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         .cloned()
         .zip(outcome.finger_devices.iter().cloned())
         .collect();
-    println!("{}", text::render(&summary, &fingers));
+    super::emit(&text::render(&summary, &fingers));
     if let Some(dir) = run_dir {
         write_files(dir.path(), &outcome, &summary)?;
         dir.release()?;
@@ -268,9 +268,9 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
         extra += ", design.svg";
     }
-    println!(
+    super::emit(&format!(
         "wrote {}/: summary.json, trace.csv, lateness.hgrm, compute.hgrm, read-to-write.hgrm (µs), latency.svg, force.svg, violation.svg{extra}",
         dir.display()
-    );
+    ));
     Ok(())
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 /// Prints each built-in scene's name, size and description.
 pub fn run() -> Result<ExitCode> {
+    let width = BUILTIN.iter().map(|b| b.name.len()).max().unwrap_or(0);
     for b in BUILTIN {
         let scene =
             resolve(b.name).map_err(|e| anyhow::anyhow!("built-in scene is broken: {e}"))?;
@@ -15,8 +16,8 @@ pub fn run() -> Result<ExitCode> {
         } else {
             ""
         };
-        println!(
-            "{:<12} {:>3} bodies {:>4} coords {:>4} rows {} device{}  {}{default}",
+        super::emit(&format!(
+            "{:<width$} {:>3} bodies {:>4} coords {:>4} rows {} device{}  {}{default}",
             b.name,
             c.model.bodies().len(),
             c.model.n_coords(),
@@ -24,7 +25,7 @@ pub fn run() -> Result<ExitCode> {
             c.devices.len(),
             if c.devices.len() == 1 { " " } else { "s" },
             c.description
-        );
+        ));
     }
     Ok(ExitCode::SUCCESS)
 }

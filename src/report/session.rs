@@ -2,6 +2,7 @@
 
 use super::probe::granted_lines;
 use super::summary::Summary;
+use crate::session::Stage;
 use haptloop_rt::probe::Percentiles;
 use std::fmt::Write as _;
 
@@ -9,7 +10,7 @@ fn row(out: &mut String, label: &str, p: &Percentiles) {
     let us = |ns: u64| ns as f64 / 1e3;
     let _ = writeln!(
         out,
-        "  {label:<14} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
+        "  {label:<16} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
         us(p.p50),
         us(p.p99),
         us(p.p999),
@@ -62,17 +63,31 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             );
         }
     }
+    let _ = writeln!(
+        out,
+        "\n  {:<16} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
+        "", "p50", "p99", "p99.9", "p99.99", "max"
+    );
     if !s.deterministic {
-        let _ = writeln!(
-            out,
-            "\n  {:<14} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
-            "", "p50", "p99", "p99.9", "p99.99", "max"
-        );
         row(&mut out, "lateness", &s.lateness_ns);
-        row(&mut out, "compute", &s.compute_ns);
-        row(&mut out, "read → write", &s.read_to_write_ns);
-        let _ = writeln!(out);
     }
+    row(&mut out, "compute", &s.compute_ns);
+    if !s.deterministic {
+        row(&mut out, "read → write", &s.read_to_write_ns);
+    }
+    for stage in Stage::ALL {
+        row(
+            &mut out,
+            &format!("  {}", stage.label()),
+            &s.stages_ns.get(stage),
+        );
+    }
+    row(
+        &mut out,
+        "tick w/o device",
+        &s.stages_ns.tick_without_device,
+    );
+    let _ = writeln!(out);
     let _ = writeln!(
         out,
         "ticks: {} of {} slots; misses: {} late, {} overrun, {} skipped",
@@ -153,15 +168,24 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             c.max_active,
             c.max_tracked_pairs
         );
+        // Mean and max only over programs that were built (or reused).
+        let timed = |n: u64, what: &str, mean: f64, max: f64| {
+            if n == 0 {
+                format!("none {what}")
+            } else {
+                format!("{n} {what}: mean {mean:.0} µs, max {max:.0} µs")
+            }
+        };
+        let built = c.structure_changes - c.reused;
         let _ = writeln!(
             out,
-            "  {} witness changes, {} tables, {} new programs (build mean {:.0} µs, max {:.0} µs), {} backups, \
-             {} expansions, {} in-tick activations ({} ticks at the limit)",
+            "  {} witness changes, {} tables, {} new programs ({}; {}), \
+             {} backups, {} expansions, {} in-tick activations ({} ticks at the limit)",
             c.witness_changes,
             c.witness_tables,
             c.structure_changes,
-            c.build_us_mean,
-            c.build_us_max,
+            timed(built, "built", c.build_us_mean, c.build_us_max),
+            timed(c.reused, "reused", c.reuse_us_mean, c.reuse_us_max),
             c.backups,
             c.expansions,
             c.activations,

@@ -1,10 +1,12 @@
 //! `summary.json`: every figure of a session, machine-readable.
 //!
-//! In deterministic mode every field except `wall_clock_s` is bit-identical
-//! across runs (the mock clock makes every timing field a function of the
-//! tick count).
+//! In deterministic mode every field except the measured times is
+//! bit-identical across runs: `wall_clock_s`, `compute_ns`, `stages_ns` and
+//! `slow_loop.step_ns` are read from the monotonic clock (real compute time,
+//! see `session::timing`); the scheduler's own timing fields follow the mock
+//! clock and are functions of the tick count.
 
-use crate::session::SessionOutcome;
+use crate::session::{SessionOutcome, Stage, StageTimes};
 use haptloop_rt::probe::Percentiles;
 use haptloop_rt::schedule::MissCounts;
 use haptloop_rt::thread::Granted;
@@ -154,6 +156,8 @@ pub struct SlowLoop {
     /// Largest violation the slow loop saw in a snapshot, m.
     #[serde(with = "super::figure")]
     pub max_seen_violation_m: f64,
+    /// Wall time of one slow-loop step (about every 5 ms), monotonic clock.
+    pub step_ns: Percentiles,
 }
 
 /// The fast loop's force against the converged reference: the same tick,
@@ -257,6 +261,40 @@ impl Reference {
     }
 }
 
+/// The tick's time per stage (`session::timing`), monotonic clock, ns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stages {
+    /// The whole tick.
+    pub tick: Percentiles,
+    /// The tick without the device stages (device read, safety + write).
+    pub tick_without_device: Percentiles,
+    /// Mean of `tick_without_device`.
+    pub tick_without_device_mean: f64,
+    /// Per stage, by its key (`handover`, `device_read`, `update`,
+    /// `evaluation`, `force`, `safety_write`, `bookkeeping`).
+    pub stages: BTreeMap<String, Percentiles>,
+}
+
+impl Stages {
+    /// Percentiles of `times`.
+    pub fn of(times: &StageTimes) -> Stages {
+        Stages {
+            tick: times.tick.summary().into(),
+            tick_without_device: times.tick_without_device.summary().into(),
+            tick_without_device_mean: times.tick_without_device.summary().mean,
+            stages: Stage::ALL
+                .iter()
+                .map(|&s| (s.key().to_string(), times.stage(s).summary().into()))
+                .collect(),
+        }
+    }
+
+    /// The percentiles of `stage`.
+    pub fn get(&self, stage: Stage) -> Percentiles {
+        self.stages[stage.key()]
+    }
+}
+
 /// What the contact machinery saw and did (scenes whose shaped bodies can
 /// touch; absent otherwise).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -321,6 +359,15 @@ pub struct Contact {
     /// Same, largest.
     #[serde(with = "super::figure")]
     pub build_us_max: f64,
+    /// Structure changes served from the cache by structure (a set of pairs
+    /// seen before), and preparing one of those, µs: mean and largest.
+    pub reused: u64,
+    /// Mean, µs.
+    #[serde(with = "super::figure")]
+    pub reuse_us_mean: f64,
+    /// Largest, µs.
+    #[serde(with = "super::figure")]
+    pub reuse_us_max: f64,
 }
 
 /// How one design-variable component (m) or objective value moved over the
@@ -387,8 +434,12 @@ pub struct Summary {
     pub misses: MissCounts,
     /// Wake-up lateness.
     pub lateness_ns: Percentiles,
-    /// Tick compute time.
+    /// Tick compute time: the scheduler's in real time; in deterministic mode
+    /// (whose scheduler runs on the mock clock) the monotonic clock's whole
+    /// tick, `stages_ns.tick`.
     pub compute_ns: Percentiles,
+    /// The tick's time per stage, monotonic clock.
+    pub stages_ns: Stages,
     /// Start-to-start period.
     pub period_ns: Percentiles,
     /// First device read → last force write, per tick.
@@ -462,7 +513,12 @@ impl Summary {
             missed: o.report.misses.total(),
             misses: o.report.misses,
             lateness_ns: o.report.lateness_ns.into(),
-            compute_ns: o.report.compute_ns.into(),
+            compute_ns: if o.plan.deterministic {
+                s.stages.tick.summary().into()
+            } else {
+                o.report.compute_ns.into()
+            },
+            stages_ns: Stages::of(&s.stages),
             period_ns: o.report.period_ns.into(),
             read_to_write_ns: s.read_to_write.summary().into(),
             violation: Violation {
@@ -534,6 +590,7 @@ impl Summary {
                 recoveries: o.slow.recoveries,
                 placements_not_converged: o.slow.placements_not_converged,
                 max_seen_violation_m: o.slow.max_seen_violation_m,
+                step_ns: o.slow.step_ns.into(),
             },
             reference: Reference::of(o),
             programs_swapped: s.programs_swapped,
@@ -579,8 +636,11 @@ impl Summary {
                     latency_ticks_max: f.latency_max_ticks,
                     cycle_us_mean: mean(c.cycle_ns_sum, c.cycles) / 1e3,
                     cycle_us_max: c.cycle_ns_max as f64 / 1e3,
-                    build_us_mean: mean(c.build_ns_sum, c.structure_changes) / 1e3,
+                    build_us_mean: mean(c.build_ns_sum, c.structure_changes - c.reused) / 1e3,
                     build_us_max: c.build_ns_max as f64 / 1e3,
+                    reused: c.reused,
+                    reuse_us_mean: mean(c.reuse_ns_sum, c.reused) / 1e3,
+                    reuse_us_max: c.reuse_ns_max as f64 / 1e3,
                 }
             }),
             trace_dropped: o.trace_dropped,

@@ -69,6 +69,13 @@ pub struct ContactSlowStats {
     pub build_ns_max: u64,
     /// Total build time, ns (mean = this / structure_changes).
     pub build_ns_sum: u64,
+    /// Programs for a new structure taken from the cache by structure (a set
+    /// of pairs seen before: no model, no symbolic analysis).
+    pub reused: u64,
+    /// Largest and total time to prepare a reused program, ns.
+    pub reuse_ns_max: u64,
+    /// Total, ns (mean = this / reused).
+    pub reuse_ns_sum: u64,
     /// Largest and total time of one active-set cycle, ns.
     pub cycle_ns_max: u64,
     /// Total cycle time, ns.
@@ -126,6 +133,12 @@ impl ContactLoop {
         &self.track
     }
 
+    /// Keeps a program the fast loop handed back for reuse (the cache by
+    /// structure, see `ContactManager::recycle`).
+    pub fn recycle(&mut self, program: Program) {
+        self.manager.recycle(program);
+    }
+
     /// A program for the model the fast loop runs, with its current witness
     /// table (a re-projection's hand-over).
     pub fn program_for_current(&self) -> Option<Program> {
@@ -156,8 +169,14 @@ impl ContactLoop {
             }
             ContactUpdate::Program { program, reset } => {
                 let ns = (clock.now() - start).0;
-                self.stats.build_ns_max = self.stats.build_ns_max.max(ns);
-                self.stats.build_ns_sum += ns;
+                if self.manager.builds().last_reused {
+                    self.stats.reused += 1;
+                    self.stats.reuse_ns_max = self.stats.reuse_ns_max.max(ns);
+                    self.stats.reuse_ns_sum += ns;
+                } else {
+                    self.stats.build_ns_max = self.stats.build_ns_max.max(ns);
+                    self.stats.build_ns_sum += ns;
+                }
                 self.stats.structure_changes += 1;
                 let correction = match reset {
                     Some(q) => {

@@ -1,12 +1,14 @@
 //! The fast loop's tick body: device → program → force, every period.
 //!
 //! ```text
-//!  swap in a new program (if the slow loop sent one; the old one goes back)
-//!  read every device (scene frame) → finger targets
-//!  Program::tick (AL iterations + Eq. 7–8 force + coupling)
-//!  write each finger's force through its device's safety layer
-//!  record statistics; publish a snapshot; queue one trace row per finger
+//!  swap in a new program (if the slow loop sent one; the old one goes back)    handover
+//!  read every device (scene frame) → finger targets                            device read
+//!  Program::tick (AL iterations + Eq. 7–8 force + coupling)    update, evaluation, force
+//!  write each finger's force through its device's safety layer                 safety + write
+//!  record statistics; publish a snapshot; queue one trace row per finger       bookkeeping
 //! ```
+//!
+//! Each stage on the right is timed on the monotonic clock (`timing`).
 //!
 //! # Real-time
 //! `FastLoop::tick` allocates nothing, takes no lock and does no I/O: every
@@ -18,6 +20,7 @@
 use super::rig::Rig;
 use super::slow::Handover;
 use super::stats::{FingerStats, RunStats};
+use super::timing::{Stage, StageClock};
 use crossbeam::queue::ArrayQueue;
 use haptloop_devices::{FaultKind, Health, TraceRecorder, TraceRow};
 use haptloop_rt::clock::Clock;
@@ -115,6 +118,12 @@ pub struct FastLoop<C: Clock> {
     pub(super) reference: Option<super::reference::ReferenceCapture>,
     /// The last tick was sampled for the reference.
     pub(super) sampled: bool,
+    /// Times the stages of the tick (monotonic clock, whatever `clock` is).
+    pub(super) timer: StageClock,
+    /// Per finger: the force its device's motors produced this tick, scene frame.
+    pub(super) rendered: Vec<Vector3<f64>>,
+    /// Per finger: the force commanded this tick, scene frame.
+    pub(super) commanded: Vec<Vector3<f64>>,
 }
 
 impl<C: Clock> FastLoop<C> {
@@ -171,6 +180,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
     type Fault = SessionFault;
 
     fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
+        self.timer.start();
         let now = self.session_time(tick);
         let read_start = self.clock.now();
         let swapped = self
@@ -191,6 +201,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 .contact
                 .record_latency(tick.index.saturating_sub(at));
         }
+        self.timer.lap(Stage::Handover);
 
         for i in 0..self.targets.len() {
             let dev = &mut self.rig.devices[self.rig.finger_device[i]];
@@ -201,6 +212,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
             self.orientations[d] = [q.w, q.i, q.j, q.k];
             self.targets[i] = self.rig.target(i, r.tip_m_scene, r.orientation_scene);
         }
+        self.timer.lap(Stage::DeviceRead);
         let steps = self
             .last_index
             .map_or(1, |last| tick.index.saturating_sub(last).max(1));
@@ -208,8 +220,13 @@ impl<C: Clock> TickBody for FastLoop<C> {
         let dt = self.periods(steps);
         if let Some(r) = &mut self.reference {
             r.before(tick.index, &self.program.program);
+            // Saving the state is bookkeeping, not the update's time.
+            self.timer.lap(Stage::Bookkeeping);
         }
-        let report = self.program.program.tick(&self.targets, dt);
+        let report = self
+            .program
+            .program
+            .tick_marked(&self.targets, dt, &mut self.timer);
         // A finite but absurd violation (a linkage that came apart) is a
         // failure too: never render forces computed from it.
         let solved =
@@ -229,7 +246,8 @@ impl<C: Clock> TickBody for FastLoop<C> {
             let written = dev.write_scene(command, now);
             // What the user feels: the motors' output after the safety layer
             // and the device's own limits (saturation, thermal cut).
-            let rendered = dev.mount.force_to_scene(&written.motor.force_n_device);
+            self.rendered[i] = dev.mount.force_to_scene(&written.motor.force_n_device);
+            self.commanded[i] = command;
             if let Some(rec) = self.recorders.get_mut(d) {
                 rec.record(TraceRow {
                     time: now,
@@ -250,6 +268,15 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 });
             }
             self.health[d] = health;
+        }
+        self.stats
+            .read_to_write
+            .record((self.clock.now() - read_start).0);
+        self.timer.lap(Stage::SafetyWrite);
+
+        let t_s = now.as_secs_f64();
+        for i in 0..self.targets.len() {
+            let out = &self.program.program.finger_outputs()[i];
             let fs: &mut FingerStats = &mut self.stats.fingers[i];
             // A failed solve's attachment point means nothing: its tracking
             // error is not a measurement (the tick is counted as failed).
@@ -258,19 +285,16 @@ impl<C: Clock> TickBody for FastLoop<C> {
             } else {
                 f64::NAN
             };
-            fs.record(&command, &rendered, tracking);
+            fs.record(&self.commanded[i], &self.rendered[i], tracking);
             let _ = self.trace.push(TraceSample {
                 t_s,
                 finger: i as u16,
                 target_m: self.targets[i].position_m.into(),
                 position_m: out.attachment_m.into(),
-                force_n: rendered.into(),
+                force_n: self.rendered[i].into(),
                 violation_m: report.max_violation_m,
             });
         }
-        self.stats
-            .read_to_write
-            .record((self.clock.now() - read_start).0);
         self.stats.record_tick(&report, solved);
         if let Some(r) = &mut self.reference {
             let p = &self.program.program;
@@ -287,6 +311,8 @@ impl<C: Clock> TickBody for FastLoop<C> {
             s.max_violation_rad = report.max_violation_rad;
             s.solved = solved;
         });
+        self.timer.lap(Stage::Bookkeeping);
+        self.stats.stages.record(&self.timer);
 
         match (solved, fault) {
             (false, _) => TickStatus::Fault(SessionFault::Solver),

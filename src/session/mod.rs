@@ -35,6 +35,7 @@ pub use reference::{
 pub use rig::{Rig, SessionDevice};
 pub use slow::{Correction, Handover, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
+pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, TrackSample};
 
 use crate::scenes::Scene;
@@ -274,6 +275,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         design,
         reference: capture,
         sampled: false,
+        timer: StageClock::default(),
+        rendered: vec![Vector3::zeros(); fingers],
+        commanded: vec![Vector3::zeros(); fingers],
     };
     let slow = SlowLoop {
         snapshots,
@@ -292,6 +296,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         },
         reference: check,
         contact,
+        step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
     Ok(Built {
         fast,
@@ -632,11 +637,17 @@ fn report_live(
                 })
                 .collect();
             let t = recorder.latest.first().map_or(0.0, |s| s.t_s);
+            // No joint rows: nothing to violate, and no 0 that says otherwise.
+            let violation = if plan.joint_rows > 0 {
+                let v = recorder.latest.first().map_or(f64::NAN, |s| s.violation_m);
+                format!("{v:8.2e} m")
+            } else {
+                "    none".to_string()
+            };
             on_status(&format!(
-                "t {t:5.1}/{:.0} s | {rate:6.0} Hz | misses {misses} | lateness p99 {:6.1} µs | violation {:8.2e} m | {}",
+                "t {t:5.1}/{:.0} s | {rate:6.0} Hz | misses {misses} | lateness p99 {:6.1} µs | violation {violation} | {}",
                 plan.seconds,
                 iv.lateness.quantile(0.99) as f64 / 1e3,
-                recorder.latest.first().map_or(0.0, |s| s.violation_m),
                 force.join(", ")
             ));
         }

@@ -117,6 +117,9 @@ pub struct Plan {
     /// Ticks between comparisons with the converged reference (1: every
     /// tick; 0: none).
     pub reference_every_ticks: u64,
+    /// Translational joint rows (violation is measured on these; 0: the
+    /// status line and report say there is nothing to violate).
+    pub joint_rows: usize,
 }
 
 impl Plan {
@@ -214,6 +217,7 @@ impl Plan {
                 * f64::from(rate_hz))
             .round()
             .max(1.0) as u64,
+            joint_rows: super::joint_length_rows(&scene.compiled.model),
         })
     }
 

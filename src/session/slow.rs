@@ -6,7 +6,9 @@
 //! and the queue.
 
 use super::fast::Snapshot;
+use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
+use haptloop_rt::hist::{LatencyHistogram, Summary};
 use haptloop_solver::{Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings};
 use std::sync::Arc;
 
@@ -90,6 +92,8 @@ pub struct SlowStats {
     pub reference_unsupported: Option<&'static str>,
     /// The contact active set's figures (`None`: no contact machinery).
     pub contact: Option<super::contact::ContactSlowStats>,
+    /// Wall time of one step, ns (monotonic clock).
+    pub step_ns: Summary,
 }
 
 /// The slow loop's state.
@@ -115,15 +119,30 @@ pub struct SlowLoop {
     pub(super) reference: Option<super::reference::ReferenceCheck>,
     /// The contact active set, for scenes with shapes that can touch.
     pub(super) contact: Option<super::contact::ContactLoop>,
+    /// Wall time of each step, ns.
+    pub(super) step_times: LatencyHistogram,
 }
 
 impl SlowLoop {
     /// One pass: collect returned programs, read the newest snapshot, and
-    /// re-project if the fast loop has drifted past the threshold.
+    /// re-project if the fast loop has drifted past the threshold. Its wall
+    /// time goes into [`SlowStats::step_ns`].
     pub fn step(&mut self) {
+        let clock = MonotonicClock::new();
+        let start = clock.now();
+        self.step_untimed();
+        self.step_times.record((clock.now() - start).0);
+    }
+
+    fn step_untimed(&mut self) {
         self.stats.steps += 1;
         self.check_reference();
-        self.stats.programs_dropped += self.programs.collect_all() as u64;
+        while let Some(spent) = self.programs.collect() {
+            self.stats.programs_dropped += 1;
+            if let Some(c) = &mut self.contact {
+                c.recycle(spent.program);
+            }
+        }
         if !self.snapshots.refresh() {
             return;
         }
@@ -221,6 +240,7 @@ impl SlowLoop {
         if let Some(r) = &self.reference {
             s.reference = r.stats();
         }
+        s.step_ns = self.step_times.summary();
         s
     }
 }

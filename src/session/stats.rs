@@ -4,6 +4,7 @@
 //! Every `record*` method is a handful of arithmetic operations on
 //! preallocated fields: no allocation, no lock.
 
+use super::timing::StageTimes;
 use haptloop_rt::hist::LatencyHistogram;
 use haptloop_solver::{Divergence, TickOutcome, TickReport};
 use nalgebra::Vector3;
@@ -93,6 +94,8 @@ pub struct RunStats {
     pub contact: ContactStats,
     /// Failed ticks by why they failed ([`FailureKind`] order).
     pub failure_kinds: [u64; FailureKind::ALL.len()],
+    /// Time per stage of the tick, monotonic clock.
+    pub stages: StageTimes,
 }
 
 /// Why a tick counted as failed.
@@ -209,6 +212,7 @@ impl RunStats {
             programs_swapped: 0,
             contact: ContactStats::default(),
             failure_kinds: [0; FailureKind::ALL.len()],
+            stages: StageTimes::new(),
         }
     }
 

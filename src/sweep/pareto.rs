@@ -209,7 +209,6 @@ mod tests {
                 p99_ns: p50_ns,
                 max_ns: p50_ns,
                 over_period: 0,
-                replay_exact: true,
             }),
             passive: true,
             pareto: false,

@@ -231,6 +231,12 @@ fn the_pinch_lifts_only_with_friction() {
         "not back on the table"
     );
     assert!(s.contact.as_ref().unwrap().max_sticking >= 2);
+    // Contact rows: the converged replay does not cover them, so the force
+    // error is not measured, and says why (never a trivial 0).
+    assert_eq!(s.reference.compared, 0);
+    assert!(s.reference.force_error_n.max.is_nan());
+    let why = s.reference.missing.as_deref().unwrap_or("");
+    assert!(why.contains("contact rows"), "{why}");
     // Frictionless fingertips: the same file with `friction = 0.0`.
     let text =
         include_str!("../../scenes/pinch-lift.toml").replace("friction = 0.8", "friction = 0.0");

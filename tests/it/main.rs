@@ -5,6 +5,7 @@
 #[global_allocator]
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
+mod bench;
 mod contact;
 mod design;
 mod docs;

@@ -73,6 +73,10 @@ fn mechanism_scenes_are_exactly_the_solver_builders() {
             "cluttered",
             mechanisms::cluttered_builder(100).build().unwrap(),
         ),
+        (
+            "sphere-toy-400",
+            mechanisms::sphere_toy_sized(20, 20).build().unwrap(),
+        ),
     ] {
         let scene = resolve(name).unwrap();
         let m = &scene.compiled.model;

@@ -291,9 +291,12 @@ fn reports_never_claim_a_tolerance_over_ticks_that_failed_or_never_ran() {
 #[test]
 fn check_refuses_what_run_refuses() {
     let dir = tempfile::tempdir().unwrap();
-    let text = haptloop::scenes::BUILTIN[0].text.replace(
-        "violation_tolerance = 1e-6",
-        "violation_tolerance = 1e-6\nstep = 1e9",
+    let text = haptloop::scenes::BUILTIN[0]
+        .text
+        .replace("step = 1.0", "step = 1e9");
+    assert!(
+        text.contains("step = 1e9"),
+        "the default scene sets its step"
     );
     let path = dir.path().join("step.toml");
     std::fs::write(&path, &text).unwrap();
@@ -361,4 +364,51 @@ fn ctrl_c_during_building_exits_at_once() {
         "{err}"
     );
     assert!(!out.exists(), "the claimed directory was left behind");
+}
+
+/// A closed stdout (`haptloop run … | head -1`) does not stop a run from
+/// writing its files, and nothing panics: the report's print used to panic
+/// on the broken pipe before the files were written. `scenes` too.
+#[test]
+fn a_closed_stdout_still_writes_the_run_and_does_not_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut child = haptloop()
+        .args([
+            "run",
+            "pinch-lift",
+            "--deterministic",
+            "--seconds",
+            "0.5",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{:?}: {stderr}", result.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let summary: Summary = serde_json::from_str(&summary).unwrap();
+    assert!(summary.ticks >= 499, "{} ticks", summary.ticks);
+    for name in ["trace.csv", "bodies.csv", "contact.svg"] {
+        assert!(out.join(name).exists(), "{name} missing");
+    }
+
+    let mut child = haptloop()
+        .arg("scenes")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{:?}: {stderr}", result.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }

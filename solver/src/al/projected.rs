@@ -54,8 +54,7 @@
 use super::design::DesignStep;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
-use crate::program::TickOutcome;
-use crate::{Evaluation, FingerTarget, Model};
+use crate::{EvalError, Evaluation, FingerTarget, Model};
 
 /// A predicted violation below this (metres) makes an inactive inequality
 /// row active within the tick (10 nm: round-off of a step that slides along
@@ -74,11 +73,26 @@ pub(crate) enum Step {
     Activate,
 }
 
+/// Why a projected step failed (the program turns it into its tick outcome).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum StepError {
+    /// C could not be evaluated at q (a non-finite q or target).
+    Eval(EvalError),
+    /// A product produced a NaN or infinity.
+    NonFinite,
+    /// The solve with the force factor failed.
+    Solve,
+}
+
 /// Buffers of the projected step.
 #[derive(Debug, Clone)]
 pub(crate) struct Projected {
     d: Vec<f64>,
+    /// C_q d with the chord C_q, kept up to date across the steps of one
+    /// sequence (see [`Projected::begin`]).
     jd: Vec<f64>,
+    /// `jd` holds C_q (q − q_ref) for the current q.
+    jd_current: bool,
     jm: Vec<f64>,
     r: Vec<f64>,
     y: Vec<f64>,
@@ -152,6 +166,7 @@ impl Projected {
         Self {
             d: vec![0.0; n],
             jd: vec![0.0; m],
+            jd_current: false,
             jm: vec![0.0; m],
             r: vec![0.0; m],
             y: vec![0.0; m],
@@ -171,6 +186,17 @@ impl Projected {
             moved_m: 0.0,
             design: None,
         }
+    }
+
+    /// Starts a sequence of steps with one chord Jacobian and one q_ref:
+    /// the next step forms C_q (q − q_ref) afresh; the later ones update it
+    /// (a taken step moves q by −s (d + M̃⁻¹ g), so C_q d moves by
+    /// −s (C_q d + C_q M̃⁻¹ g), and C_q M̃⁻¹ g is formed anyway for the
+    /// inequality rows' prediction): one product per step saved. With design
+    /// columns, d is pinned and corrected per step, so it is formed afresh
+    /// every step.
+    pub fn begin(&mut self) {
+        self.jd_current = false;
     }
 
     /// Lets the design columns of `model` move, with metric `w_kg` each (see
@@ -211,18 +237,28 @@ impl Projected {
         contact_step_m: f64,
         coupling: &CouplingStep,
         lambda: &mut [f64],
-    ) -> Result<Step, TickOutcome> {
+    ) -> Result<Step, StepError> {
         ev.evaluate_values(model, q, targets)
-            .map_err(TickOutcome::Eval)?;
+            .map_err(StepError::Eval)?;
+        let mut moved = false;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
             *d = a - b;
+            moved |= *d != 0.0;
         }
         if let Some(design) = &self.design {
             design.pin(q, &mut self.d);
+            self.jd_current = false;
         }
         let jac = ev.jacobian();
-        jac.mul_vec(&self.d, &mut self.jd)
-            .map_err(|_| TickOutcome::NonFinite)?;
+        if !self.jd_current {
+            if moved || self.design.is_some() {
+                jac.mul_vec(&self.d, &mut self.jd)
+                    .map_err(|_| StepError::NonFinite)?;
+            } else {
+                self.jd.fill(0.0);
+            }
+            self.jd_current = true;
+        }
         let (c, scale) = (ev.values(), fb.row_scale());
         for i in 0..c.len() {
             self.r[i] = scale[i] * (c[i] - self.jd[i]);
@@ -262,19 +298,19 @@ impl Projected {
             }
         }
         fb.project(&self.r, &self.k_inv, &mut self.y)
-            .map_err(|_| TickOutcome::ForceSolve)?;
+            .map_err(|_| StepError::Solve)?;
         let mut d_changed = false;
         if let Some(design) = &mut self.design {
             d_changed = design
                 .correct(ev, fb, &self.k_inv, q, &mut self.d, &mut self.y, step)
-                .map_err(|()| TickOutcome::ForceSolve)?;
+                .map_err(|()| StepError::Solve)?;
         }
         let scale = fb.row_scale();
         for (y, sc) in self.y.iter_mut().zip(scale) {
             *y *= sc;
         }
         jac.mul_t_vec(&self.y, &mut self.g)
-            .map_err(|_| TickOutcome::NonFinite)?;
+            .map_err(|_| StepError::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
         if let Some(design) = &self.design {
             for (&c, &mg) in design.cols.iter().zip(&design.mg) {
@@ -282,7 +318,7 @@ impl Projected {
             }
             if d_changed {
                 jac.mul_vec(&self.d, &mut self.jd)
-                    .map_err(|_| TickOutcome::NonFinite)?;
+                    .map_err(|_| StepError::NonFinite)?;
             }
         }
         let mut step = step;
@@ -321,9 +357,10 @@ impl Projected {
         } else {
             self.moved_m = 0.0;
         }
-        // Predicted values of the inactive inequality rows after the step.
+        // Predicted values of the inactive inequality rows after the step
+        // (and the update of C_q d).
         jac.mul_vec(&self.mg, &mut self.jm)
-            .map_err(|_| TickOutcome::NonFinite)?;
+            .map_err(|_| StepError::NonFinite)?;
         let c = ev.values();
         let mut activate = false;
         for (i, &ci) in c.iter().enumerate() {
@@ -340,6 +377,9 @@ impl Projected {
         }
         for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
             *qc -= step * (d + mg);
+        }
+        for (jd, jm) in self.jd.iter_mut().zip(&self.jm) {
+            *jd -= step * (*jd + jm);
         }
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {

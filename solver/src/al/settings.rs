@@ -20,9 +20,9 @@ pub enum UpdateRule {
 /// How Eq. 7's joint block C_q M⁻¹ C_qᵀ is solved each tick.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ForceSolver {
-    /// faer sparse Cholesky: AMD ordering and symbolic factorisation once per
-    /// program, a numeric refactorisation per tick. Exact; its factor also
-    /// serves the projected update.
+    /// Sparse Cholesky (the crate's supernodal factor): AMD ordering and
+    /// symbolic analysis once per program, a numeric refactorisation per
+    /// tick. Exact; its factor also serves the projected update.
     Cholesky,
     /// Warm-started, Jacobi-preconditioned conjugate gradients, at most
     /// `max_iterations` per right-hand side. Gradient update only.
@@ -80,6 +80,10 @@ pub struct SolverSettings {
     /// eigenvalue of the scaled Gram matrix D C_q W⁻¹ C_qᵀ D, measured by
     /// [`Program::new`](crate::Program::new) at the model's configuration.
     /// Projected rule: the fraction of the Gauss–Newton step taken (1 = full).
+    /// A damped step converges by about a decade per step, a full one
+    /// roughly quadratically: the built-in mechanism scenes take full steps,
+    /// 2–3 a tick (BENCHMARKS.md, issue 10), but near a singular pose (the
+    /// Peaucellier linkage's dead point) full steps quadrupled the transient.
     ///
     /// Why relative: σ_max is 11.5, 14.3 and 27.1 on the four-bar, Stewart
     /// platform and sphere toy (the absolute h used is

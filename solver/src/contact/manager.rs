@@ -65,7 +65,29 @@ pub struct ContactManager {
     /// q of the last snapshot without a penetration beyond the tolerance.
     last_clean: Option<Vec<f64>>,
     poses: Vec<Pose3>,
+    /// Programs the fast loop handed back, by the pairs their model holds
+    /// (most recently returned last), for reuse when the same set of pairs
+    /// comes back: no model to build, no symbolic analysis.
+    cache: Vec<Program>,
+    /// How the last programs were obtained.
+    builds: BuildCounts,
 }
+
+/// How many contact programs were built new and how many taken from the
+/// cache by structure.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BuildCounts {
+    /// Built: model with contact rows, program, symbolic analysis.
+    pub built: u64,
+    /// Reused from the cache (a set of pairs seen before).
+    pub reused: u64,
+    /// Whether the last program was reused.
+    pub last_reused: bool,
+}
+
+/// Programs kept for reuse: contacts that flicker between a few sets of pairs
+/// find theirs; a cluttered scene's stream of new sets does not grow memory.
+pub const PROGRAM_CACHE: usize = 8;
 
 impl ContactManager {
     /// The contact manager of `base` (`None` when fewer than two bodies have
@@ -90,7 +112,30 @@ impl ContactManager {
             published: Vec::new(),
             last_clean: None,
             poses: Vec::new(),
+            cache: Vec::new(),
+            builds: BuildCounts::default(),
         })
+    }
+
+    /// Takes back a program the fast loop handed back (it is replaced): kept
+    /// for reuse when its set of pairs comes back (the oldest is dropped past
+    /// [`PROGRAM_CACHE`]). Allocates (slow thread).
+    pub fn recycle(&mut self, program: Program) {
+        if program.model().contact().specs.is_empty() && self.pairs.is_empty() {
+            // The bare mechanism's program: Program::new is cheap for it.
+            return;
+        }
+        self.cache
+            .retain(|p| p.model().contact().specs != program.model().contact().specs);
+        self.cache.push(program);
+        if self.cache.len() > PROGRAM_CACHE {
+            self.cache.remove(0);
+        }
+    }
+
+    /// How the contact programs so far were obtained.
+    pub fn builds(&self) -> BuildCounts {
+        self.builds
     }
 
     /// The first cycle, at `q` (before the clock starts): the program the
@@ -219,14 +264,33 @@ impl ContactManager {
         self.active.update(&self.poses)
     }
 
-    /// A program for the active set's pairs, its table applied.
+    /// A program for the active set's pairs, its table applied: reused from
+    /// the cache when one for exactly these pairs came back, else built.
     fn build_program(&mut self) -> Result<Program, ContactError> {
         let pairs = self.active.pairs();
-        let model = Arc::new(self.base.with_contacts(&pairs)?);
         self.active.fill(&mut self.table);
-        let mut program = Program::new(model.clone(), self.settings)?;
-        program.apply_witnesses(&self.table);
-        self.current = model;
+        let cached = self
+            .cache
+            .iter()
+            .position(|p| p.model().contact().specs == pairs);
+        let program = match cached {
+            Some(k) => {
+                let mut program = self.cache.remove(k);
+                program.reset_witnesses(&self.table);
+                self.builds.reused += 1;
+                self.builds.last_reused = true;
+                program
+            }
+            None => {
+                let model = Arc::new(self.base.with_contacts(&pairs)?);
+                let mut program = Program::new(model, self.settings)?;
+                program.reset_witnesses(&self.table);
+                self.builds.built += 1;
+                self.builds.last_reused = false;
+                program
+            }
+        };
+        self.current = program.model_arc().clone();
         self.pairs = pairs;
         self.published.clone_from(&self.table);
         Ok(program)

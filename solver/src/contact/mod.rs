@@ -16,4 +16,4 @@ mod bodies;
 mod manager;
 
 pub use bodies::{contact_bodies, jointed_pairs};
-pub use manager::{ContactError, ContactManager, ContactUpdate};
+pub use manager::{BuildCounts, ContactError, ContactManager, ContactUpdate, PROGRAM_CACHE};

@@ -8,13 +8,13 @@ use super::friction::FrictionPair;
 use super::gram::{Gram, Slot};
 use super::inertia::BodyMass;
 use super::motion::Motion;
+use super::output::FingerOutput;
 use super::redundancy::{self, Redundancy};
 use super::reference::INEQUALITY_ACTIVE_BAND;
 use super::solve::{FactorError, MultiplierSolve};
 use super::wrench::on_finger;
 use crate::al::scaling::{Role, Scaling};
 use crate::al::{ForceSolver, RedundancyCheck};
-use crate::program::FingerOutput;
 use crate::rotation::BodyFrame;
 use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
@@ -281,8 +281,8 @@ impl Feedback {
     ///
     /// # Real-time
     /// No allocation, no locks. Time: O(bodies + Σ_b rows_b²) assembly, one
-    /// numeric sparse Cholesky with the symbolic factor of `new`, 1 + m_f
-    /// solves, an m_f × m_f eigensolve.
+    /// numeric sparse Cholesky with the symbolic analysis of `new`, one
+    /// solve through it, an m_f × m_f Cholesky or eigensolve.
     #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
@@ -327,7 +327,7 @@ impl Feedback {
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if matches!(s.role[row], Role::Inequality | Role::Contact)
                 && self.scale[row] != 0.0
-                && self.solve.joint_multiplier(self.gram.n_j, j) > 0.0
+                && self.solve.joint_multiplier(j) > 0.0
             {
                 self.scale[row] = 0.0;
                 released = true;
@@ -343,7 +343,7 @@ impl Feedback {
             let mut lt2 = 0.0;
             for &row in &p.rows {
                 if let super::gram::Slot::J(j) = self.gram.slot[row] {
-                    lt2 += (s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).powi(2);
+                    lt2 += (s.ell[row] * self.solve.joint_multiplier(j)).powi(2);
                 }
             }
             let proxy = p.finger.is_none_or(|f| self.fingers[f].proxy);
@@ -352,9 +352,9 @@ impl Feedback {
                 (p.normal_rows[0]..p.normal_rows[1])
                     .filter(|&row| self.scale[row] != 0.0)
                     .filter_map(|row| match self.gram.slot[row] {
-                        super::gram::Slot::J(j) => Some(
-                            (-s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).max(0.0),
-                        ),
+                        super::gram::Slot::J(j) => {
+                            Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0))
+                        }
                         _ => None,
                     })
                     .sum()
@@ -405,9 +405,7 @@ impl Feedback {
             self.normal_force_n[k] = (p.normal_rows[0]..p.normal_rows[1])
                 .filter(|&row| self.scale[row] != 0.0)
                 .filter_map(|row| match self.gram.slot[row] {
-                    Slot::J(j) => {
-                        Some((-s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j)).max(0.0))
-                    }
+                    Slot::J(j) => Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0)),
                     _ => None,
                 })
                 .sum();
@@ -420,7 +418,7 @@ impl Feedback {
         let mut pull: f64 = 0.0;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if s.role[row] == Role::Contact && self.scale[row] != 0.0 {
-                pull = pull.max(s.ell[row] * self.solve.joint_multiplier(self.gram.n_j, j));
+                pull = pull.max(s.ell[row] * self.solve.joint_multiplier(j));
             }
         }
         pull

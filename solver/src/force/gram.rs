@@ -40,14 +40,6 @@ struct Entry {
     width: usize,
 }
 
-/// One product c_a · u_b of two local entries of a body, and where it goes.
-#[derive(Debug, Clone, Copy)]
-struct Product {
-    a: u32,
-    b: u32,
-    dest: u32,
-}
-
 #[derive(Debug, Clone)]
 struct BodyRows {
     mass: usize,
@@ -71,11 +63,15 @@ pub(crate) struct Gram {
     pub diag: Vec<usize>,
     bodies: Vec<BodyRows>,
     entries: Vec<Entry>,
-    products: Vec<Product>,
+    /// Where each product c_a · u_b of two local entries of a body goes, per
+    /// body in the order (a, b) for a = 0, 1, … and b = 0..=a.
+    products: Vec<u32>,
     /// `[A_JJ lower (nnz) | A_FJ (m_f × n_J) | A_FF (m_f × m_f)]`.
     pub values: Vec<f64>,
     /// c and u of one body's entries (14 per entry).
     cu: Vec<f64>,
+    /// Per entry of the body being assembled: its row takes part (scale ≠ 0).
+    live: Vec<bool>,
     /// M̃_e⁻¹ of each body (layout order) at the last assembly.
     minv_e: Vec<Matrix4<f64>>,
 }
@@ -147,7 +143,7 @@ impl Gram {
         let diag = (0..n_j).map(|j| find(j, j)).collect();
         let products = pairs
             .iter()
-            .map(|&(a, b, ra, rb)| {
+            .map(|&(_, _, ra, rb)| {
                 let dest = match (slot[ra], slot[rb]) {
                     (Slot::J(x), Slot::J(y)) => find(x.max(y), x.min(y)),
                     (Slot::F(f), Slot::J(j)) | (Slot::J(j), Slot::F(f)) => nnz + f * n_j + j,
@@ -156,11 +152,7 @@ impl Gram {
                         unreachable!("excluded rows have no entries")
                     }
                 };
-                Product {
-                    a,
-                    b,
-                    dest: dest as u32,
-                }
+                dest as u32
             })
             .collect();
         let max_entries = bodies.iter().map(|b| b.entries.len()).max().unwrap_or(0);
@@ -178,6 +170,7 @@ impl Gram {
             products,
             values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
             cu: vec![0.0; 14 * max_entries],
+            live: vec![false; max_entries],
             minv_e: vec![Matrix4::zeros(); masses.len()],
         }
     }
@@ -185,6 +178,36 @@ impl Gram {
     /// Number of stored values of A_JJ's lower triangle.
     pub fn nnz(&self) -> usize {
         self.pattern.row_idx().len()
+    }
+
+    /// The whole (n_J + m_f)-square matrix's lower triangle as (row, column,
+    /// index in `values`), J rows first then F rows: A_JJ's pattern, the
+    /// entries of A_FJ the assembly can write (rows sharing a body with a
+    /// finger), and all of A_FF's lower triangle. Allocates.
+    pub fn factor_entries(&self) -> Vec<(usize, usize, usize)> {
+        let (nnz, n_j, m_f) = (self.nnz(), self.n_j, self.m_f);
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let mut e: Vec<(usize, usize, usize)> = (0..n_j)
+            .flat_map(|c| (cp[c]..cp[c + 1]).map(move |p| (ri[p], c, p)))
+            .collect();
+        let mut fj: Vec<usize> = self
+            .products
+            .iter()
+            .map(|&d| d as usize)
+            .filter(|&d| d >= nnz && d < nnz + m_f * n_j)
+            .collect();
+        fj.sort_unstable();
+        fj.dedup();
+        e.extend(
+            fj.iter()
+                .map(|&d| (n_j + (d - nnz) / n_j, (d - nnz) % n_j, d)),
+        );
+        for f in 0..m_f {
+            for g in 0..=f {
+                e.push((n_j + f, n_j + g, nnz + m_f * n_j + f * m_f + g));
+            }
+        }
+        e
     }
 
     /// out = M̃⁻¹ g at the configuration of the last assembly (zero on
@@ -208,7 +231,8 @@ impl Gram {
     /// inactive row), and y = M̃⁻¹ b (design-variable entries 0).
     ///
     /// # Real-time
-    /// No allocation; O(Σ_bodies rows_b²) products of length 7.
+    /// No allocation; O(Σ_bodies rows_b²) products of length 7, fewer when
+    /// rows are dropped (inactive limits and contacts cost nothing).
     pub fn assemble(
         &mut self,
         q: &[f64],
@@ -236,8 +260,14 @@ impl Gram {
             }
             let be = Vector4::new(b[o + 3], b[o + 4], b[o + 5], b[o + 6]);
             y[o + 3..o + 7].copy_from_slice((minv * be).as_slice());
-            for (k, ent) in self.entries[body.entries.clone()].iter().enumerate() {
+            let entries = &self.entries[body.entries.clone()];
+            for (k, ent) in entries.iter().enumerate() {
                 let s = scale[ent.row];
+                // A dropped row (scale 0) contributes nothing: no products.
+                self.live[k] = s != 0.0;
+                if s == 0.0 {
+                    continue;
+                }
                 let cu = &mut self.cu[14 * k..14 * k + 14];
                 let src = &vals[ent.pos..ent.pos + ent.width];
                 let (c, u) = cu.split_at_mut(7);
@@ -251,13 +281,29 @@ impl Gram {
                 let ue = minv * Vector4::new(c[3], c[4], c[5], c[6]);
                 u[3..].copy_from_slice(ue.as_slice());
             }
-            for p in &self.products[body.products.clone()] {
-                let (a, b) = (14 * p.a as usize, 14 * p.b as usize);
-                let mut acc = 0.0;
-                for i in 0..7 {
-                    acc += self.cu[a + i] * self.cu[b + 7 + i];
+            // Products in the order `new` listed them: (a, b) for b ≤ a.
+            let products = &self.products[body.products.clone()];
+            let mut first = 0;
+            for a in 0..entries.len() {
+                if self.live[a] {
+                    let ca: &[f64; 7] = self.cu[14 * a..14 * a + 7]
+                        .try_into()
+                        .expect("seven values");
+                    for (b, &dest) in products[first..=first + a].iter().enumerate() {
+                        if !self.live[b] {
+                            continue;
+                        }
+                        let ub: &[f64; 7] = self.cu[14 * b + 7..14 * b + 14]
+                            .try_into()
+                            .expect("seven values");
+                        let mut acc = 0.0;
+                        for i in 0..7 {
+                            acc += ca[i] * ub[i];
+                        }
+                        self.values[dest as usize] += acc;
+                    }
                 }
-                self.values[p.dest as usize] += acc;
+                first += a + 1;
             }
         }
         let (nnz, m_f, n_j) = (self.nnz(), self.m_f, self.n_j);

@@ -51,12 +51,14 @@ pub mod friction;
 mod gram;
 mod inertia;
 mod motion;
+mod output;
 mod redundancy;
 mod reference;
 pub(crate) mod small;
 mod solve;
 mod wrench;
 
+pub use output::FingerOutput;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
     FingerWrench, INEQUALITY_ACTIVE_BAND, ReferenceError, reference_finger_wrenches,

@@ -11,24 +11,26 @@
 //! S⁺ (minimum norm) makes the finger carry only what the joints cannot: the
 //! component of −M q̈ + Q along the mechanism's free motions. In directions
 //! the mechanism cannot move, the joints hold; the user feels those through
-//! the virtual coupling instead. A_JJ is factored by a faer sparse Cholesky
-//! (LLᵀ) whose symbolic analysis (AMD ordering, elimination tree, supernodes)
-//! is done once; each tick refactors the values and solves 1 + m_f
-//! right-hand sides. Sequential (`Par::Seq`), so the result is bit-identical
-//! run to run.
-
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::SparseColMatRef;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
-};
-use faer::{Conj, MatMut, Par, Side};
+//! the virtual coupling instead.
+//!
+//! The whole matrix [A_JJ A_JF; A_FJ A_FF] goes to the crate's supernodal
+//! sparse Cholesky (`crate::cholesky`) with the finger rows as an unfactored
+//! tail: the factorisation of A_JJ (AMD order, symbolic analysis once)
+//! carries the finger rows along as L_FJ = A_FJ L_JJ⁻ᵀ and leaves
+//! S = A_FF − L_FJ L_FJᵀ in the tail's block. One solve then does everything:
+//! the forward substitution leaves s = r_F − L_FJ L_JJ⁻¹ r_J in the finger
+//! entries, S⁺ s replaces it, and the backward substitution gives the joint
+//! multipliers A_JJ⁻¹ (r_J − A_JF λ̃_F): one right-hand side where solving
+//! for A_JJ⁻¹ [r_J A_JF] took 1 + m_f. Sequential, so the result is
+//! bit-identical run to run.
+//!
+//! `ForceSolver::ConjugateGradient` keeps the explicit form: CG solves
+//! A_JJ X = [r_J A_JF] and S is formed from X.
 
 use super::cg::Cg;
-use super::gram::Gram;
+use super::gram::{Gram, Slot};
 use super::small::{cholesky_solve, min_norm_solve};
+use crate::cholesky::{Cholesky, Regularization};
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
@@ -37,19 +39,19 @@ pub(crate) struct FactorError;
 
 /// Symbolic factor and every buffer of the solve.
 pub(crate) struct MultiplierSolve {
-    symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
-    mem: MemBuffer,
-    /// n_J × (1 + m_f), column-major: r_J, then A_JF's columns; solved in place.
+    llt: Cholesky,
+    /// n_J + m_f: the right-hand side in J then F order, solved in place.
+    x: Vec<f64>,
+    /// Scaled joint multipliers λ̃_J of the last solve.
+    lambda_j: Vec<f64>,
+    /// CG only: n_J × (1 + m_f), column-major: r_J, then A_JF's columns.
     rhs: Vec<f64>,
     schur: Vec<f64>,
-    /// S as assembled (the eigensolve destroys `schur`), for `project`.
+    /// S (full, symmetric) of the last solve (the eigensolve destroys
+    /// `schur`), for `project`.
     schur_keep: Vec<f64>,
     schur_rhs: Vec<f64>,
-    /// Scratch of `project`: A_JJ⁻¹ r_J, then (S + K⁻¹) and its right-hand side.
-    proj: Vec<f64>,
     small: Vec<f64>,
-    small_rhs: Vec<f64>,
     eig: Vec<f64>,
     /// Scaled finger multipliers λ̃_F.
     pub lambda_f: Vec<f64>,
@@ -62,62 +64,119 @@ pub(crate) struct MultiplierSolve {
 impl std::fmt::Debug for MultiplierSolve {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("MultiplierSolve")
-            .field("n", &self.symbolic.nrows())
-            .field("factor_nnz", &self.l_values.len())
+            .field("n", &self.x.len())
+            .field("factor_nnz", &self.llt.len_values())
             .field("rank", &self.rank)
             .finish_non_exhaustive()
     }
 }
 
 impl MultiplierSolve {
-    /// Symbolic analysis of `gram`'s A_JJ pattern; with `cg_iterations`, a
-    /// capped conjugate-gradient solve replaces the numeric Cholesky.
-    /// Allocates.
+    /// Symbolic analysis of `gram`'s pattern (A_JJ and the finger rows as
+    /// the tail); with `cg_iterations`, a capped conjugate-gradient solve
+    /// replaces the numeric Cholesky in [`solve`](Self::solve). Allocates.
     pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
-        let symbolic = factorize_symbolic_cholesky(
-            gram.pattern.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )?;
         let (n, m) = (gram.n_j, gram.m_f);
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1 + m, Par::Seq),
-        ]);
+        let llt = Cholesky::analyze_with_tail(n + m, m, &gram.factor_entries(), 1)?;
+        let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
         Ok(Self {
-            l_values: vec![0.0; symbolic.len_val()],
-            symbolic,
-            mem: MemBuffer::new(req),
-            rhs: vec![0.0; n * (1 + m)],
+            llt,
+            x: vec![0.0; n + m],
+            lambda_j: vec![0.0; n],
+            rhs: if cg.is_some() {
+                vec![0.0; n * (1 + m)]
+            } else {
+                Vec::new()
+            },
             schur: vec![0.0; m * m],
             schur_keep: vec![0.0; m * m],
             schur_rhs: vec![0.0; m],
-            proj: vec![0.0; n],
             small: vec![0.0; m * m],
-            small_rhs: vec![0.0; m],
             eig: vec![0.0; m * m],
             lambda_f: vec![0.0; m],
             rank: 0,
-            cg: cg_iterations.map(|it| Cg::new(n, 1 + m, it)),
+            cg,
         })
     }
 
-    /// Number of stored values of the Cholesky factor L.
+    /// Number of stored values of the Cholesky factor L (its supernodes'
+    /// dense blocks).
     pub fn factor_nnz(&self) -> usize {
-        self.l_values.len()
+        self.llt.len_values()
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
-    /// λ̃_F given the scaled right-hand side `r` (one entry per row of C);
-    /// `known` (F order): finger multipliers fixed in advance (proxies'
-    /// coupling forces), the others solved for.
+    /// λ̃_F and λ̃_J given the scaled right-hand side `r` (one entry per row
+    /// of C); `known` (F order): finger multipliers fixed in advance
+    /// (proxies' coupling forces), the others solved for.
     ///
     /// # Real-time
-    /// No allocation (faer runs in the preallocated `MemBuffer`), no locks;
-    /// time bounded by the symbolic factor: one numeric LLᵀ, 1 + m_f
-    /// triangular solve pairs, and an m_f × m_f Jacobi eigensolve.
+    /// No allocation, no locks; time bounded by the symbolic factor: one
+    /// numeric LLᵀ, one triangular solve pair, and an m_f × m_f Cholesky
+    /// (a Jacobi eigensolve when S is rank deficient).
     pub fn solve(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        known: &[Option<f64>],
+    ) -> Result<(), FactorError> {
+        if self.cg.is_some() {
+            return self.solve_cg(gram, r, known);
+        }
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        self.factor(gram)?;
+        // S from the tail block (lower triangle), mirrored.
+        let block = self.llt.tail_block();
+        for f in 0..m {
+            for g in 0..=f {
+                let v = block[f * m + g];
+                self.schur_keep[f * m + g] = v;
+                self.schur_keep[g * m + f] = v;
+            }
+        }
+        self.gather(gram, r);
+        let a_ff = &gram.values[nnz + m * n..];
+        let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
+        let Self {
+            llt,
+            x,
+            schur,
+            schur_keep,
+            lambda_f,
+            eig,
+            ..
+        } = self;
+        let rank = llt.solve_with_tail(x, |_, s| {
+            schur.copy_from_slice(schur_keep);
+            let n_known = take_known_out(schur, s, known, reference);
+            let rank = min_norm_solve(schur, s, lambda_f, eig, reference).saturating_sub(n_known);
+            put_known_in(lambda_f, known);
+            s.copy_from_slice(lambda_f);
+            rank
+        });
+        self.rank = rank;
+        self.lambda_j.copy_from_slice(&self.x[..n]);
+        if self.lambda_f.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(FactorError)
+        }
+    }
+
+    /// x ← r in J then F order.
+    fn gather(&mut self, gram: &Gram, r: &[f64]) {
+        let n = gram.n_j;
+        for (row, slot) in r.iter().zip(&gram.slot) {
+            match *slot {
+                Slot::J(j) => self.x[j] = *row,
+                Slot::F(f) => self.x[n + f] = *row,
+                Slot::Out => {}
+            }
+        }
+    }
+
+    /// [`solve`](Self::solve) with conjugate gradients on A_JJ X = [r_J A_JF].
+    fn solve_cg(
         &mut self,
         gram: &Gram,
         r: &[f64],
@@ -127,21 +186,13 @@ impl MultiplierSolve {
         let a_fj = &gram.values[nnz..nnz + m * n];
         let a_ff = &gram.values[nnz + m * n..];
         for (row, slot) in r.iter().zip(&gram.slot) {
-            if let super::gram::Slot::J(j) = *slot {
+            if let Slot::J(j) = *slot {
                 self.rhs[j] = *row;
             }
         }
         self.rhs[n..].copy_from_slice(a_fj);
         if let Some(cg) = &mut self.cg {
             cg.solve(gram, &mut self.rhs);
-        } else {
-            self.factor(gram)?;
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1 + m),
-                Par::Seq,
-                MemStack::new(&mut self.mem),
-            );
         }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
@@ -160,31 +211,23 @@ impl MultiplierSolve {
             }
         }
         self.schur_keep.copy_from_slice(&self.schur);
-        // Rows whose multiplier is known (a proxy's coupling force): move
-        // their part to the right-hand side and take them out of S.
-        for (f, k) in known.iter().enumerate() {
-            let Some(v) = *k else { continue };
-            for (g, kg) in known.iter().enumerate() {
-                if kg.is_none() {
-                    self.schur_rhs[g] -= self.schur[g * m + f] * v;
-                }
-                self.schur[g * m + f] = 0.0;
-                self.schur[f * m + g] = 0.0;
-            }
-            self.schur_rhs[f] = 0.0;
-        }
         let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
+        let n_known = take_known_out(&mut self.schur, &mut self.schur_rhs, known, reference);
         self.rank = min_norm_solve(
             &mut self.schur,
             &self.schur_rhs,
             &mut self.lambda_f,
             &mut self.eig,
             reference,
-        );
-        for (f, k) in known.iter().enumerate() {
-            if let Some(v) = *k {
-                self.lambda_f[f] = v;
+        )
+        .saturating_sub(n_known);
+        put_known_in(&mut self.lambda_f, known);
+        for j in 0..n {
+            let mut v = self.rhs[j];
+            for (f, l) in self.lambda_f.iter().enumerate() {
+                v -= self.rhs[(1 + f) * n + j] * l;
             }
+            self.lambda_j[j] = v;
         }
         if self.lambda_f.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -196,39 +239,27 @@ impl MultiplierSolve {
 
 impl MultiplierSolve {
     /// Numeric LLᵀ of `gram`'s (assembled, regularised) A_JJ into the
-    /// factor's buffers, with faer's dynamic regularisation: a pivot below
-    /// 1e-14 × the largest diagonal entry is replaced by 1e-10 × it. That
-    /// keeps the factorisation alive through a round-off pivot; it does not
-    /// make a singular A_JJ well-posed (masking redundant rows does, see
+    /// factor's buffers, carrying the finger rows (their block ends as the
+    /// Schur complement), with faer's rule of dynamic regularisation: a pivot
+    /// below 1e-14 × the largest diagonal entry is replaced by 1e-10 × it.
+    /// That keeps the factorisation alive through a round-off pivot; it does
+    /// not make a singular A_JJ well-posed (masking redundant rows does, see
     /// `redundancy`).
     ///
     /// # Real-time
     /// No allocation; one numeric sparse Cholesky with the fixed symbolic
     /// factor.
     pub fn factor(&mut self, gram: &Gram) -> Result<(), FactorError> {
-        let nnz = gram.nnz();
-        let a = SparseColMatRef::new(gram.pattern.as_ref(), &gram.values[..nnz]);
         let max_diag = gram
             .diag
             .iter()
             .map(|&d| gram.values[d])
             .fold(0.0, f64::max);
-        let reg = LltRegularization {
-            dynamic_regularization_delta: 1e-10 * max_diag,
-            dynamic_regularization_epsilon: 1e-14 * max_diag,
+        let reg = Regularization {
+            delta: 1e-10 * max_diag,
+            epsilon: 1e-14 * max_diag,
         };
-        self.symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                a,
-                Side::Lower,
-                reg,
-                Par::Seq,
-                MemStack::new(&mut self.mem),
-                Default::default(),
-            )
-            .map(|_| ())
-            .map_err(|_| FactorError)
+        self.llt.factor(&gram.values, reg).map_err(|_| FactorError)
     }
 
     /// x ← A_JJ⁻¹ x (n_J entries, J order) with the last [`factor`](Self::factor).
@@ -236,29 +267,24 @@ impl MultiplierSolve {
     /// # Real-time
     /// No allocation; one pair of sparse triangular solves.
     pub fn solve_joint(&mut self, x: &mut [f64]) {
-        let n = x.len();
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(x, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
+        self.llt.solve(x, 1);
     }
 
     /// Solves the regularised normal equations of the projected update with
-    /// the factor and Schur data of the last [`solve`](Self::solve):
+    /// the factor and Schur complement of the last [`solve`](Self::solve):
     ///
     /// ```text
     /// [A_JJ  A_JF             ] [y_J]   [r_J]
     /// [A_FJ  A_FF + diag(k_inv)] [y_F] = [r_F]
     /// ```
     ///
-    /// by y_F = (S + diag(k_inv))⁻¹ (r_F − A_FJ A_JJ⁻¹ r_J), y_J = A_JJ⁻¹ r_J −
-    /// X y_F. `r`, `y`: one entry per row of C; `k_inv`: one per finger row.
+    /// by y_F = (S + diag(k_inv))⁻¹ (r_F − A_FJ A_JJ⁻¹ r_J) and
+    /// y_J = A_JJ⁻¹ (r_J − A_JF y_F), in one solve through the factor's tail.
+    /// `r`, `y`: one entry per row of C; `k_inv`: one per finger row.
     ///
     /// # Real-time
-    /// No allocation; one pair of sparse triangular solves, an m_f × m_f
-    /// Cholesky, O(n_J m_f).
+    /// No allocation; one pair of sparse triangular solves and an m_f × m_f
+    /// Cholesky.
     pub fn project(
         &mut self,
         gram: &Gram,
@@ -266,55 +292,235 @@ impl MultiplierSolve {
         k_inv: &[f64],
         y: &mut [f64],
     ) -> Result<(), FactorError> {
-        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        let (n, m) = (gram.n_j, gram.m_f);
         if self.cg.is_some() {
             // The projected update needs the factor (checked by Program::new).
             return Err(FactorError);
         }
-        for (j, &row) in gram.j_rows.iter().enumerate() {
-            self.proj[j] = r[row];
-        }
-        let llt = LltRef::new(&self.symbolic, &self.l_values);
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.proj, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
-        let a_fj = &gram.values[nnz..nnz + m * n];
-        self.small.copy_from_slice(&self.schur_keep);
-        for f in 0..m {
-            self.small[f * m + f] += k_inv[f];
-            self.small_rhs[f] = r[gram.finger_rows[f]] - dot(&a_fj[f * n..(f + 1) * n], &self.proj);
-        }
-        if !cholesky_solve(&mut self.small, &mut self.small_rhs) {
+        self.gather(gram, r);
+        let Self {
+            llt,
+            x,
+            schur_keep,
+            small,
+            ..
+        } = self;
+        let ok = llt.solve_with_tail(x, |_, s| {
+            small.copy_from_slice(schur_keep);
+            for f in 0..m {
+                small[f * m + f] += k_inv[f];
+            }
+            cholesky_solve(small, s)
+        });
+        if !ok {
             return Err(FactorError);
         }
         for (j, &row) in gram.j_rows.iter().enumerate() {
-            let mut v = self.proj[j];
-            for (f, yf) in self.small_rhs.iter().enumerate() {
-                v -= self.rhs[(1 + f) * n + j] * yf;
-            }
-            y[row] = v;
+            y[row] = self.x[j];
         }
         for (f, &row) in gram.finger_rows.iter().enumerate() {
-            y[row] = self.small_rhs[f];
+            y[row] = self.x[n + f];
         }
         Ok(())
     }
 
     /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:
-    /// A_JJ⁻¹ (r_J − A_JF λ̃_F) = z_j − Σ_f X_jf λ̃_f.
-    pub fn joint_multiplier(&self, n_j: usize, j: usize) -> f64 {
-        let mut v = self.rhs[j];
-        for (f, l) in self.lambda_f.iter().enumerate() {
-            v -= self.rhs[(1 + f) * n_j + j] * l;
+    /// A_JJ⁻¹ (r_J − A_JF λ̃_F).
+    pub fn joint_multiplier(&self, j: usize) -> f64 {
+        self.lambda_j[j]
+    }
+}
+
+/// Rows whose multiplier is known (a proxy's coupling force): their part
+/// moves to the right-hand side of the unknown rows, and each becomes the
+/// decoupled row `reference · λ = 0` (so S stays full rank and takes the
+/// Cholesky path; [`put_known_in`] then writes the known value). Returns how
+/// many rows were known.
+fn take_known_out(
+    schur: &mut [f64],
+    rhs: &mut [f64],
+    known: &[Option<f64>],
+    reference: f64,
+) -> usize {
+    let m = rhs.len();
+    let mut n_known = 0;
+    for (f, k) in known.iter().enumerate() {
+        let Some(v) = *k else { continue };
+        n_known += 1;
+        for (g, kg) in known.iter().enumerate() {
+            if kg.is_none() {
+                rhs[g] -= schur[g * m + f] * v;
+            }
+            schur[g * m + f] = 0.0;
+            schur[f * m + g] = 0.0;
         }
-        v
+        schur[f * m + f] = if reference > 0.0 { reference } else { 1.0 };
+        rhs[f] = 0.0;
+    }
+    n_known
+}
+
+/// Writes the known multipliers over the solved ones.
+fn put_known_in(lambda_f: &mut [f64], known: &[Option<f64>]) {
+    for (l, k) in lambda_f.iter_mut().zip(known) {
+        if let Some(v) = *k {
+            *l = v;
+        }
     }
 }
 
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod timing {
+    //! `cargo test --release -p haptloop-solver --lib force::solve::timing -- --ignored --nocapture`:
+    //! the supernodal factor against faer's on the built-in mechanisms'
+    //! Eq. 7 matrices, interleaved. Prints; asserts only agreement.
+    use super::super::gram::Gram;
+    use super::super::inertia::BodyMass;
+    use crate::cholesky::{Cholesky, Regularization};
+    use crate::mechanisms::{four_bar, sphere_toy, stewart};
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::cholesky::llt::factor::LltRegularization;
+    use faer::sparse::SparseColMatRef;
+    use faer::sparse::linalg::cholesky::{
+        CholeskySymbolicParams, SymmetricOrdering, factorize_symbolic_cholesky,
+    };
+    use faer::{Conj, MatMut, Par, Side};
+    use std::time::Instant;
+
+    #[test]
+    #[ignore]
+    fn supernodal_against_faer() {
+        for (name, model) in [
+            ("four-bar", four_bar()),
+            ("stewart", stewart()),
+            ("sphere-toy", sphere_toy()),
+        ] {
+            let mut ev = model.evaluation();
+            ev.evaluate(&model, model.q0(), &model.initial_targets())
+                .unwrap();
+            let masses = BodyMass::of_model(&model);
+            let mut gram = Gram::new(&model, ev.jacobian(), &masses, &[]);
+            let scale = vec![1.0; model.n_rows()];
+            let b = vec![0.1; model.n_coords()];
+            let mut y = vec![0.0; model.n_coords()];
+            gram.assemble(model.q0(), ev.jacobian(), &scale, &masses, &b, &mut y);
+            let (n, k) = (gram.n_j, 1 + gram.m_f);
+            let a = &gram.values[..gram.nnz()];
+            let max_diag = gram.diag.iter().map(|&d| a[d]).fold(0.0, f64::max);
+            let reg = Regularization {
+                epsilon: 1e-14 * max_diag,
+                delta: 1e-10 * max_diag,
+            };
+            let mut ours =
+                Cholesky::analyze(n, gram.pattern.col_ptr(), gram.pattern.row_idx(), k).unwrap();
+            let sym = factorize_symbolic_cholesky(
+                gram.pattern.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                CholeskySymbolicParams::default(),
+            )
+            .unwrap();
+            let mut l = vec![0.0; sym.len_val()];
+            let mut mem = MemBuffer::new(StackReq::any_of(&[
+                sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                sym.solve_in_place_scratch::<f64>(k, Par::Seq),
+            ]));
+            let rhs: Vec<f64> = (0..n * k).map(|i| (i % 7) as f64 - 3.0).collect();
+            let (mut x1, mut x2) = (rhs.clone(), rhs.clone());
+            let reps = (20_000 / n).max(20);
+            let mut t = [[0f64; 2]; 4];
+            for _round in 0..6 {
+                let s = Instant::now();
+                for _ in 0..reps {
+                    ours.factor(a, reg).unwrap();
+                }
+                t[0][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x1.copy_from_slice(&rhs);
+                    ours.solve(&mut x1, k);
+                }
+                t[1][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    sym.factorize_numeric_llt::<f64>(
+                        &mut l,
+                        SparseColMatRef::new(gram.pattern.as_ref(), a),
+                        Side::Lower,
+                        LltRegularization {
+                            dynamic_regularization_delta: reg.delta,
+                            dynamic_regularization_epsilon: reg.epsilon,
+                        },
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                        Default::default(),
+                    )
+                    .unwrap();
+                }
+                t[0][1] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x2.copy_from_slice(&rhs);
+                    faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(&mut x2, n, k),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                }
+                t[1][1] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x1[..n].copy_from_slice(&rhs[..n]);
+                    ours.solve(&mut x1[..n], 1);
+                }
+                t[2][0] += s.elapsed().as_secs_f64();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    x2[..n].copy_from_slice(&rhs[..n]);
+                    faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(&mut x2[..n], n, 1),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                }
+                t[2][1] += s.elapsed().as_secs_f64();
+            }
+            let per = |x: f64| x / (6 * reps) as f64 * 1e6;
+            x1.copy_from_slice(&rhs);
+            ours.solve(&mut x1, k);
+            x2.copy_from_slice(&rhs);
+            faer::sparse::linalg::cholesky::LltRef::new(&sym, &l).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(&mut x2, n, k),
+                Par::Seq,
+                MemStack::new(&mut mem),
+            );
+            let diff = x1
+                .iter()
+                .zip(&x2)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let big = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(diff <= 1e-9 * big, "{name}: {diff:e} vs {big:e}");
+            println!(
+                "{name}: n {n}, k {k}: factor ours {:.2} µs faer {:.2} µs ({:.2}×); solve×{k} ours {:.2} faer {:.2} ({:.2}×); solve×1 ours {:.2} faer {:.2} ({:.2}×)",
+                per(t[0][0]),
+                per(t[0][1]),
+                t[0][1] / t[0][0],
+                per(t[1][0]),
+                per(t[1][1]),
+                t[1][1] / t[1][0],
+                per(t[2][0]),
+                per(t[2][1]),
+                t[2][1] / t[2][0],
+            );
+        }
+    }
 }

@@ -57,6 +57,8 @@ pub struct Polyhedron {
     /// The distinct edge directions (unit, up to sign): the edge factors of
     /// the separating-axis test (a box has three).
     pub edge_directions: Vec<Vector3<f64>>,
+    /// Corners of its axis-aligned bounding box, body frame.
+    pub aabb: [Vector3<f64>; 2],
 }
 
 /// Why a point set has no usable hull.
@@ -170,7 +172,16 @@ impl Polyhedron {
                 edge_directions.push(d);
             }
         }
+        let aabb = [
+            vertices
+                .iter()
+                .fold(Vector3::repeat(f64::INFINITY), |a, v| a.inf(v)),
+            vertices
+                .iter()
+                .fold(Vector3::repeat(f64::NEG_INFINITY), |a, v| a.sup(v)),
+        ];
         Ok(Self {
+            aabb,
             edge_directions,
             hull,
             vertices,
@@ -185,6 +196,12 @@ impl Polyhedron {
     /// parry's hull (the GJK support map).
     pub fn parry(&self) -> &ConvexPolyhedron {
         &self.hull
+    }
+
+    /// True when the box from `lo` to `hi` (body frame) comes within `d`
+    /// metres of the bounding box.
+    pub fn near_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>, d: f64) -> bool {
+        (0..3).all(|k| lo[k] <= self.aabb[1][k] + d && hi[k] >= self.aabb[0][k] - d)
     }
 
     /// The other endpoint of `edge` than `v`.

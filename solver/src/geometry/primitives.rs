@@ -346,6 +346,9 @@ pub fn expand(view: &PairView, reach: f64, depth_m: f64, out: &mut Vec<Witness>)
         };
         for (v, vertex) in pp.vertices.iter().enumerate() {
             let local = pose_s.local_point(&pose_p.point(vertex));
+            if !ps.near_box(&local, &local, reach + m) {
+                continue;
+            }
             // Among the faces whose prism holds the vertex (a face it could
             // land on), the one it is farthest outside; a vertex over no face
             // (beyond an edge) is left to the edge guards. Two equal boxes
@@ -410,13 +413,32 @@ fn edge_guards(
 ) {
     let m = view.margin();
     let a_to_b = view.a_to_b();
+    // Only edges near the other body's bounding box can come within reach
+    // (a hull of 20 vertices has ~50 edges: all pairs cost 30 µs).
+    let near_b: Vec<usize> = (0..pb.edges.len())
+        .filter(|&eb| {
+            let f = pb.edges[eb];
+            let (b0, b1) = (
+                view.b_in_a(&pb.vertices[f.vertices[0] as usize]),
+                view.b_in_a(&pb.vertices[f.vertices[1] as usize]),
+            );
+            pa.near_box(&b0.inf(&b1), &b0.sup(&b1), reach + m)
+        })
+        .collect();
+    if near_b.is_empty() {
+        return;
+    }
     for (ea, e) in pa.edges.iter().enumerate() {
         let a = [
             pa.vertices[e.vertices[0] as usize],
             pa.vertices[e.vertices[1] as usize],
         ];
         let (a0, a1) = (view.a_in_b(&a[0]), view.a_in_b(&a[1]));
-        for (eb, f) in pb.edges.iter().enumerate() {
+        if !pb.near_box(&a0.inf(&a1), &a0.sup(&a1), reach + m) {
+            continue;
+        }
+        for &eb in &near_b {
+            let f = pb.edges[eb];
             let b = [
                 pb.vertices[f.vertices[0] as usize],
                 pb.vertices[f.vertices[1] as usize],

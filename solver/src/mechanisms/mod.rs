@@ -19,7 +19,9 @@ mod stewart;
 
 pub use cluttered::{CLUTTER_SPACING_M, DRAGGED_HALF_M, clutter_side, cluttered_builder};
 pub use four_bar::{four_bar, four_bar_builder};
-pub use sphere_toy::{SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder};
+pub use sphere_toy::{
+    SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder, sphere_toy_shape, sphere_toy_sized,
+};
 pub use stewart::{STROKE_M as STEWART_STROKE_M, stewart, stewart_builder};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};

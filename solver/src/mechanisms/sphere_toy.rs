@@ -21,6 +21,11 @@
 //! (Grübler, 6 of them rigid motion) and the Jacobian has full row rank at q0
 //! (tested), so the structure is a floppy closed-loop toy, not overconstrained.
 //! Finger `index`: point grasp on the outer surface of bead (0, 0). Gravity −z.
+//!
+//! [`sphere_toy_sized`] builds the same family with any number of rings and
+//! beads per ring (ring k at polar angle 180°·(k + 1)/(rings + 1), ring
+//! joints on the even rings): the scaling benchmarks' 33-, 132- and 400-body
+//! structures (3 × 11, 11 × 12, 20 × 20).
 
 use std::f64::consts::PI;
 
@@ -34,6 +39,18 @@ pub const SPHERE_TOY_RADIUS_M: f64 = 0.1;
 
 const RINGS: usize = 11;
 const PER_RING: usize = 12;
+
+/// Rings and beads per ring of [`sphere_toy_sized`] for about `bodies`
+/// bodies, as the scaling benchmarks use them: 33 → 3 × 11, 132 → 11 × 12,
+/// 400 → 20 × 20.
+pub fn sphere_toy_shape(bodies: usize) -> Option<(usize, usize)> {
+    match bodies {
+        33 => Some((3, 11)),
+        132 => Some((RINGS, PER_RING)),
+        400 => Some((20, 20)),
+        _ => None,
+    }
+}
 
 fn bead(k: usize, m: usize) -> String {
     format!("bead{k}.{m}")
@@ -57,22 +74,33 @@ pub fn sphere_toy() -> Model {
 /// The specs of [`sphere_toy`] before building (bodies, body-frame joints, fingers,
 /// gravity), e.g. to write them as a scene file.
 pub fn sphere_toy_builder() -> ModelBuilder {
-    let polar = |k: usize| PI * (k + 1) as f64 / 12.0;
-    let longitude = |m: usize| 2.0 * PI * m as f64 / PER_RING as f64;
+    sphere_toy_sized(RINGS, PER_RING)
+}
+
+/// The specs of a sphere toy of `rings` latitude rings of `per_ring` beads
+/// (at least 1 and 3), built as [`sphere_toy`] (which is 11 × 12):
+/// `rings · per_ring` bodies, universal meridian joints between rings,
+/// spherical ring joints around the even rings, the finger on bead (0, 0).
+/// Closed loops for `rings` ≥ 2 (and around each even ring).
+pub fn sphere_toy_sized(rings: usize, per_ring: usize) -> ModelBuilder {
+    let (rings, per_ring) = (rings.max(1), per_ring.max(3));
+    let polar = |k: usize| PI * (k + 1) as f64 / (rings + 1) as f64;
+    let half_gap = PI / (2.0 * (rings + 1) as f64);
+    let longitude = |m: usize| 2.0 * PI * m as f64 / per_ring as f64;
     let mut t = Assembly::new();
     let centre = |k: usize, m: usize| frame(polar(k), longitude(m))[0] * SPHERE_TOY_RADIUS_M;
-    for k in 0..RINGS {
-        for m in 0..PER_RING {
+    for k in 0..rings {
+        for m in 0..per_ring {
             let [radial, east, north] = frame(polar(k), longitude(m));
             let spec = BodySpec::new(bead(k, m)).mass(0.01).inertia([4e-7; 3]);
             t.body(spec, centre(k, m), from_columns(east, north, radial));
         }
     }
     let mut joints = Vec::new();
-    for k in 0..RINGS - 1 {
-        for m in 0..PER_RING {
+    for k in 0..rings - 1 {
+        for m in 0..per_ring {
             let mid = (centre(k, m) + centre(k + 1, m)) / 2.0;
-            let [_, east, north] = frame(polar(k) + PI / 24.0, longitude(m));
+            let [_, east, north] = frame(polar(k) + half_gap, longitude(m));
             let j = t.joint(
                 K::Universal,
                 &bead(k, m),
@@ -83,9 +111,9 @@ pub fn sphere_toy_builder() -> ModelBuilder {
             joints.push(j.named(format!("m{k}.{m}")));
         }
     }
-    for k in (0..RINGS).step_by(2) {
-        for m in 0..PER_RING {
-            let n = (m + 1) % PER_RING;
+    for k in (0..rings).step_by(2) {
+        for m in 0..per_ring {
+            let n = (m + 1) % per_ring;
             let mid = (centre(k, m) + centre(k, n)) / 2.0;
             let j = t.joint(K::Spherical, &bead(k, m), &bead(k, n), mid, None);
             joints.push(j.named(format!("r{k}.{m}")));

@@ -45,6 +45,9 @@ pub struct ContactLayout {
     /// Index of the first contact constraint (all later ones are contact
     /// constraints).
     pub first_constraint: usize,
+    /// The pairs it was built from, in order (the key of a program cache by
+    /// structure).
+    pub specs: Vec<PairSpec>,
 }
 
 impl Model {
@@ -76,6 +79,7 @@ impl Model {
             pairs: Vec::with_capacity(pairs.len()),
             slots: 0,
             first_constraint: keep,
+            specs: pairs.to_vec(),
         };
         for p in pairs {
             let [a, b] = p.bodies.map(|i| i as usize);

@@ -52,6 +52,26 @@ impl Program {
         true
     }
 
+    /// Replaces the whole witness table, friction anchors included, and
+    /// clears every stick flag: a program taken back into use for another
+    /// moment (a recycled one, see `contact::ContactManager`) must carry
+    /// nothing of its last use. `false` when the length is not this model's.
+    /// Friction that survives the hand-over is then carried from the program
+    /// it replaces by [`adopt_state`](Self::adopt_state).
+    ///
+    /// # Real-time
+    /// No allocation; as [`apply_witnesses`](Self::apply_witnesses).
+    pub fn reset_witnesses(&mut self, table: &[Witness]) -> bool {
+        let own = self.ev.witnesses_mut();
+        if table.len() != own.len() {
+            return false;
+        }
+        own.copy_from_slice(table);
+        self.feedback.stick.fill(false);
+        let _ = self.refresh();
+        true
+    }
+
     /// The witness table in use.
     pub fn witnesses(&self) -> &[Witness] {
         self.ev.witnesses()

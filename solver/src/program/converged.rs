@@ -46,7 +46,7 @@ use nalgebra::Vector3;
 
 use super::{FingerOutput, Program, ProgramError, TickOutcome};
 use crate::FingerTarget;
-use crate::al::projected::{CouplingStep, Step};
+use crate::al::projected::{CouplingStep, Step, StepError};
 use crate::al::update::Violation;
 
 /// A step below this (scaled metres) that is not at most half the one
@@ -222,6 +222,8 @@ impl Program {
                 damping_n_s_per_m: self.settings.coupling_damping_n_s_per_m,
                 prev_error: &before.prev_error,
             };
+            // A fresh Jacobian and factor each iteration: a fresh sequence.
+            self.projected.begin();
             let step = self.projected.step(
                 &self.model,
                 &self.scaling,
@@ -259,7 +261,12 @@ impl Program {
                     fail(self, &mut r, TickOutcome::ForceSolve);
                     return Ok(r);
                 }
-                Err(status) => {
+                Err(e) => {
+                    let status = match e {
+                        StepError::Eval(e) => TickOutcome::Eval(e),
+                        StepError::NonFinite => TickOutcome::NonFinite,
+                        StepError::Solve => TickOutcome::ForceSolve,
+                    };
                     fail(self, &mut r, status);
                     return Ok(r);
                 }

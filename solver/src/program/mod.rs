@@ -40,28 +40,33 @@
 //! # Real-time
 //! `tick`, `adopt_state` and `set_q` never allocate, lock or make syscalls
 //! (a counting-allocator test proves it on all three built-in mechanisms and
-//! on a masked linkage) and are deterministic: sequential faer, no hashing,
-//! no clock. A tick costs `iterations` update steps (gradient: one fused
-//! pass over the constraints; projected: a value-only evaluation, C_q·v,
-//! C_qᵀ·v and one pair of sparse triangular solves), one evaluation of C and
-//! C_q, one assembly of C_q M⁻¹ C_qᵀ, one numeric sparse Cholesky (symbolic
-//! factor fixed at construction; a second, and with the projected rule a
-//! third, only when a limit must be released) with 1 + m_f solves, an
-//! m_f × m_f eigensolve (m_f = 3 per point finger, 6 per rigid one), and the
-//! guards' O(coordinates + rows) passes. All are bounded by the model's
-//! size; nothing iterates to a tolerance. Measured: four-bar 8 µs, Stewart
-//! 51 µs, sphere toy 0.64 ms (BENCHMARKS.md).
+//! on a masked linkage) and are deterministic: sequential arithmetic, no
+//! hashing, no clock. A tick costs `iterations` update steps (gradient: one
+//! fused pass over the constraints; projected: a value-only evaluation,
+//! C_q·v, C_qᵀ·v and one pair of sparse triangular solves), one evaluation
+//! of C and C_q, one assembly of C_q M⁻¹ C_qᵀ, one numeric factorisation
+//! with the crate's supernodal Cholesky (symbolic analysis fixed at
+//! construction; a second, and with the projected rule a third, only when a
+//! limit must be released) and one solve through it with the fingers' Schur
+//! complement (an m_f × m_f Cholesky when it has full rank, else a Jacobi
+//! eigensolve; m_f = 3 per point finger, 6 per rigid one), and the guards'
+//! O(coordinates + rows) passes. All are bounded by the model's size;
+//! nothing iterates to a tolerance. Measured (BENCHMARKS.md, issue 10,
+//! whole session tick without the devices, the scenes' settings): four-bar
+//! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
 mod contact;
 mod converged;
 mod objective;
 mod report;
+mod stages;
 mod state;
 mod tick;
 
 pub use contact::DYNAMIC_DAMPING_PER_S;
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
+pub use stages::{SolverStage, StageMarks};
 pub use tick::MAX_ACTIVATIONS;
 
 pub use report::{

@@ -4,8 +4,9 @@ use std::cmp::Ordering;
 use std::time::Duration;
 
 use super::report::max_tracking;
+use super::stages::{Ordered, SolverStage, StageMarks};
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
-use crate::al::projected::{CouplingStep, Step};
+use crate::al::projected::{CouplingStep, Step, StepError};
 use crate::al::update::Violation;
 use crate::{FingerTarget, UpdateRule};
 
@@ -104,13 +105,29 @@ impl Program {
     /// [module docs](super)): (iterations + 1) evaluations, a fixed-pattern
     /// sparse Cholesky, no tolerance-driven loops.
     pub fn tick(&mut self, targets: &[FingerTarget], dt: Duration) -> TickReport {
+        self.tick_marked(targets, dt, &mut ())
+    }
+
+    /// [`tick`](Self::tick), telling `marks` when each [`SolverStage`] ends
+    /// (for a caller that times them; the solver reads no clock).
+    ///
+    /// # Real-time
+    /// As `tick`, plus one `marks.end` per stage.
+    pub fn tick_marked<M: StageMarks>(
+        &mut self,
+        targets: &[FingerTarget],
+        dt: Duration,
+        marks: &mut M,
+    ) -> TickReport {
         let n = self.settings.iterations;
         let dt_s = dt.as_secs_f64();
+        let mut marks = Ordered::new(marks);
         self.report = if dt_s > 0.0 {
-            self.run_tick(targets, dt_s, n)
+            self.run_tick(targets, dt_s, n, &mut marks)
         } else {
             self.failed(TickOutcome::ZeroDt, 0)
         };
+        marks.finish();
         self.report
     }
 
@@ -167,6 +184,7 @@ impl Program {
         self.activations = 0;
         // The contact speed limit is a budget for the whole tick.
         self.step_budget_m = self.contact_step_m;
+        self.projected.begin();
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
@@ -238,7 +256,13 @@ impl Program {
         }
     }
 
-    fn run_tick(&mut self, targets: &[FingerTarget], dt_s: f64, n: u32) -> TickReport {
+    fn run_tick<M: StageMarks>(
+        &mut self,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        n: u32,
+        marks: &mut Ordered<'_, M>,
+    ) -> TickReport {
         self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
@@ -251,6 +275,7 @@ impl Program {
         if let Some(d) = self.diverged_state() {
             return self.failed(TickOutcome::Diverged(d), n);
         }
+        marks.end(SolverStage::Update);
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
@@ -261,6 +286,7 @@ impl Program {
         if !within(v.max_scaled_m, self.limits.violation_m) {
             return self.failed(TickOutcome::Diverged(Divergence::Violation), n);
         }
+        marks.end(SolverStage::Evaluation);
         let solved = self.feedback.compute(
             &self.model,
             &self.scaling,
@@ -420,7 +446,7 @@ impl Program {
             damping_n_s_per_m: self.settings.coupling_damping_n_s_per_m,
             prev_error: &self.prev_error_buf,
         };
-        self.projected.step(
+        let outcome = self.projected.step(
             &self.model,
             &self.scaling,
             &mut self.ev,
@@ -433,7 +459,12 @@ impl Program {
             self.step_budget_m,
             &coupling,
             &mut self.lambda,
-        )
+        );
+        outcome.map_err(|e| match e {
+            StepError::Eval(e) => TickOutcome::Eval(e),
+            StepError::NonFinite => TickOutcome::NonFinite,
+            StepError::Solve => TickOutcome::ForceSolve,
+        })
     }
 
     /// One assembly iteration from q (= `q_ref`): a gradient step, or a full
@@ -449,6 +480,7 @@ impl Program {
                 }
                 // Assembly is not a motion: no speed limit.
                 self.step_budget_m = f64::INFINITY;
+                self.projected.begin();
                 for _ in 0..=MAX_ACTIVATIONS {
                     match self.projected_step(targets, 1.0, f64::INFINITY)? {
                         Step::Activate => {

@@ -83,6 +83,9 @@ pub struct Lockstep {
     pub last_cycle: haptloop_solver::geometry::Cycle,
     /// The configuration the last cycle saw.
     pub last_snapshot_q: Vec<f64>,
+    /// Hand replaced programs back to the manager for reuse, as the
+    /// session's slow loop does (on unless a test turns it off).
+    pub recycle: bool,
 }
 
 impl Lockstep {
@@ -114,6 +117,7 @@ impl Lockstep {
             max_penetration_m: 0.0,
             last_cycle: Default::default(),
             last_snapshot_q: Vec::new(),
+            recycle: true,
         }
     }
 
@@ -142,7 +146,10 @@ impl Lockstep {
                         program.set_q(&q).expect("reset");
                         self.backups += 1;
                     }
-                    self.program = *program;
+                    let old = std::mem::replace(&mut self.program, *program);
+                    if self.recycle {
+                        self.manager.recycle(old);
+                    }
                     self.programs += 1;
                 }
             }

@@ -9,6 +9,7 @@ mod common;
 mod drags;
 mod friction;
 mod pinch;
+mod recycle;
 mod rest;
 mod witness_fd;
 mod witness_kinds;

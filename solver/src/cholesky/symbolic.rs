@@ -1,0 +1,624 @@
+//! The pattern-only half of [`Cholesky`](super::Cholesky): ordering,
+//! elimination tree, supernodes, the block layout, the update plan; and the
+//! triangular solves, which only walk that structure.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::amd;
+
+/// Columns `c0 .. c0 + w` of L, whose rows below the diagonal block are the
+/// same `nrows` rows (`rows[rows .. rows + nrows]`, ascending). Its block is
+/// `values[val ..]`: (w + nrows) rows of w entries, row-major; the first w
+/// rows are the lower-triangular diagonal block.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Supernode {
+    pub c0: u32,
+    pub w: u32,
+    pub rows: u32,
+    pub nrows: u32,
+    pub val: u32,
+    /// This supernode's incoming updates: `updates[.0 .. .1]`.
+    pub updates: (u32, u32),
+}
+
+/// Supernode `src` updates the supernode it is listed under: its below rows
+/// `a .. b` fall in the target's columns, and its `m` below rows from `a` on
+/// land in the target's block at local rows `rel[rel .. rel + m]`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Update {
+    pub src: u32,
+    pub a: u32,
+    pub b: u32,
+    pub m: u32,
+    pub rel: u32,
+}
+
+#[derive(Debug, Clone)]
+pub(super) struct Symbolic {
+    pub n: usize,
+    /// Trailing rows and columns ordered last and not factored.
+    pub tail: usize,
+    /// Supernodes before the tail's (all of them without a tail).
+    pub lead_supernodes: usize,
+    /// iperm[original index] = index in the factor's order.
+    pub iperm: Vec<u32>,
+    /// (value index in the input, index in `values`) of every entry.
+    pub load: Vec<(u32, u32)>,
+    pub supernodes: Vec<Supernode>,
+    pub rows: Vec<u32>,
+    pub updates: Vec<Update>,
+    pub rel: Vec<u32>,
+    len_values: usize,
+}
+
+/// Relaxed amalgamation (as CHOLMOD's `nrelax`/`zrelax`): a merged
+/// supernode of at most `w` columns is kept when at most `frac` of its block
+/// is explicit zeros. A block of width 1 (a body's quaternion-norm row) pays
+/// the loop overhead of a block without its benefit; wide merges with many
+/// zeros speed the factorisation up but slow every solve down (measured on
+/// the sphere toy's Eq. 7 matrix: (4, 1.0), (16, 0.8), (48, 0.1) gave 64
+/// supernodes of width up to 52 and 1.3× the stored values, the
+/// factorisation 20 % slower and the solves 10 % slower than these).
+const RELAX: [(usize, f64); 2] = [(2, 1.0), (8, 0.3)];
+
+impl Symbolic {
+    pub fn len_values(&self) -> usize {
+        self.len_values
+    }
+
+    /// `entries`: (row, column, value index) of the lower triangle of the
+    /// n × n matrix (row ≥ column; every diagonal entry present); its last
+    /// `tail` rows and columns are ordered last and left unfactored.
+    pub fn analyze(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let lead = n - tail;
+        // 1. Fill-reducing order of the leading block (AMD on the pattern of
+        //    A + Aᵀ); the tail keeps its place at the end.
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead {
+                cols[c].push(r);
+            }
+        }
+        let mut col_ptr = vec![0usize];
+        let mut row_idx = Vec::new();
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let mut perm = vec![0usize; lead];
+        let mut perm_inv = vec![0usize; lead];
+        if lead > 0 {
+            let nnz = row_idx.len();
+            let pattern =
+                SymbolicSparseColMatRef::new_checked(lead, lead, &col_ptr, None, &row_idx);
+            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(lead, nnz))
+                .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
+            amd::order_maybe_unsorted(
+                &mut perm,
+                &mut perm_inv,
+                pattern,
+                amd::Control::default(),
+                MemStack::new(&mut mem),
+            )?;
+        }
+        // 2. Elimination tree, then a postorder of the leading block's tree
+        //    (every subtree a contiguous range of columns), the tail after it:
+        //    a topological order of the whole tree.
+        let rows_of = |iperm: &[usize], size: usize| -> Vec<Vec<usize>> {
+            // Row k of the permuted lower triangle: columns j < k.
+            let mut r = vec![Vec::new(); size];
+            for &(rr, c, _) in entries {
+                if rr >= size || c >= size {
+                    continue;
+                }
+                let (i, j) = (iperm[rr], iperm[c]);
+                let (hi, lo) = (i.max(j), i.min(j));
+                if hi != lo {
+                    r[hi].push(lo);
+                }
+            }
+            for row in &mut r {
+                row.sort_unstable();
+                row.dedup();
+            }
+            r
+        };
+        let parent = etree(&rows_of(&perm_inv, lead));
+        let post = postorder(&parent);
+        // post[new] = old (in the AMD order); compose.
+        let mut post_inv = vec![0usize; lead];
+        for (new, &old) in post.iter().enumerate() {
+            post_inv[old] = new;
+        }
+        let mut iperm: Vec<usize> = perm_inv.iter().map(|&v| post_inv[v]).collect();
+        iperm.extend(lead..n);
+        let rows = rows_of(&iperm, n);
+        let parent = etree(&rows);
+        // 3. Pattern of L, column by column (rows strictly below the
+        //    diagonal, ascending): row k's pattern is the union of the tree
+        //    paths from its entries up to k.
+        let mut colpat: Vec<Vec<u32>> = vec![Vec::new(); n];
+        let mut mark = vec![usize::MAX; n];
+        for (k, row) in rows.iter().enumerate() {
+            mark[k] = k;
+            for &i in row {
+                let mut j = i;
+                while mark[j] != k {
+                    mark[j] = k;
+                    colpat[j].push(k as u32);
+                    j = parent[j];
+                    if j == usize::MAX {
+                        break;
+                    }
+                }
+            }
+        }
+        // 4. Fundamental supernodes (a column joins its only child's run
+        //    when its pattern is the child's minus the child itself), then
+        //    relaxed amalgamation: a supernode absorbs the child that ends
+        //    right before it when the explicit zeros that adds stay few.
+        let mut children = vec![0u32; n];
+        for &p in &parent {
+            if p != usize::MAX {
+                children[p] += 1;
+            }
+        }
+        let mut starts = vec![0usize];
+        for j in 1..lead {
+            let same = parent[j - 1] == j
+                && children[j] == 1
+                && colpat[j - 1].len() == colpat[j].len() + 1;
+            if !same {
+                starts.push(j);
+            }
+        }
+        starts.push(lead);
+        let mut starts = if lead > 0 {
+            amalgamate(&starts, &parent, &colpat)
+        } else {
+            vec![0]
+        };
+        // The tail is one supernode of its own.
+        if tail > 0 {
+            starts.push(n);
+        }
+        // A relaxed supernode's columns take the union of their patterns
+        // (the last column's rows plus the explicit zeros of the earlier
+        // ones): below rows = ∪ colpat[j] minus the supernode's own columns.
+        let mut supernodes = Vec::with_capacity(starts.len());
+        let mut all_rows: Vec<u32> = Vec::new();
+        let mut col_sn = vec![0u32; n];
+        let mut val = 0usize;
+        for win in starts.windows(2) {
+            let (c0, c1) = (win[0], win[1]);
+            let mut below: Vec<u32> = (c0..c1)
+                .flat_map(|j| colpat[j].iter().copied())
+                .filter(|&r| r as usize >= c1)
+                .collect();
+            below.sort_unstable();
+            below.dedup();
+            let w = c1 - c0;
+            for c in &mut col_sn[c0..c1] {
+                *c = supernodes.len() as u32;
+            }
+            supernodes.push(Supernode {
+                c0: c0 as u32,
+                w: w as u32,
+                rows: all_rows.len() as u32,
+                nrows: below.len() as u32,
+                val: val as u32,
+                updates: (0, 0),
+            });
+            val += (w + below.len()) * w;
+            all_rows.extend_from_slice(&below);
+        }
+        if val > u32::MAX as usize || all_rows.len() > u32::MAX as usize {
+            return Err(faer::sparse::FaerError::IndexOverflow);
+        }
+        // Local row of global row r in supernode s (r ≥ its first column).
+        let local = |s: &Supernode, r: usize| -> usize {
+            let c0 = s.c0 as usize;
+            if r < c0 + s.w as usize {
+                r - c0
+            } else {
+                let below = &all_rows[s.rows as usize..(s.rows + s.nrows) as usize];
+                s.w as usize
+                    + below
+                        .binary_search(&(r as u32))
+                        .expect("a row of L's pattern is in its supernode's rows")
+            }
+        };
+        // 5. Load map: entry (r, c) → its place in L's blocks.
+        let mut load = Vec::with_capacity(entries.len());
+        for &(rr, c, src) in entries {
+            let (i, j) = (iperm[rr], iperm[c]);
+            let (r, cc) = (i.max(j), i.min(j));
+            let s = &supernodes[col_sn[cc] as usize];
+            let lr = local(s, r);
+            let dst = s.val as usize + lr * s.w as usize + (cc - s.c0 as usize);
+            load.push((src as u32, dst as u32));
+        }
+        // 6. Update plan: each supernode d updates the supernodes that own
+        //    its below rows; the rows falling in one target's columns are a
+        //    contiguous run of d's ascending rows.
+        let mut incoming: Vec<Vec<Update>> = vec![Vec::new(); supernodes.len()];
+        let mut rel = Vec::new();
+        for (d, sd) in supernodes.iter().enumerate() {
+            let below = &all_rows[sd.rows as usize..(sd.rows + sd.nrows) as usize];
+            let mut a = 0;
+            while a < below.len() {
+                let t = col_sn[below[a] as usize] as usize;
+                let st = &supernodes[t];
+                let end_col = (st.c0 + st.w) as usize;
+                let mut b = a;
+                while b < below.len() && (below[b] as usize) < end_col {
+                    b += 1;
+                }
+                let r0 = rel.len();
+                for &r in &below[a..] {
+                    rel.push(local(st, r as usize) as u32);
+                }
+                incoming[t].push(Update {
+                    src: d as u32,
+                    a: a as u32,
+                    b: b as u32,
+                    m: (below.len() - a) as u32,
+                    rel: r0 as u32,
+                });
+                a = b;
+            }
+        }
+        let mut updates = Vec::new();
+        for (s, inc) in incoming.into_iter().enumerate() {
+            let first = updates.len() as u32;
+            updates.extend(inc);
+            supernodes[s].updates = (first, updates.len() as u32);
+        }
+        let lead_supernodes = supernodes.len() - usize::from(tail > 0);
+        Ok(Self {
+            n,
+            tail,
+            lead_supernodes,
+            iperm: iperm.iter().map(|&v| v as u32).collect(),
+            load,
+            supernodes,
+            rows: all_rows,
+            updates,
+            rel,
+            len_values: val,
+        })
+    }
+
+    /// work ← L⁻¹ work over the leading block's columns (`k` interleaved
+    /// right-hand sides): the tail entries end as r_T − L_TL w.
+    pub fn forward(&self, values: &[f64], work: &mut [f64], k: usize) {
+        match k {
+            1 => self.forward_one(values, work),
+            2 => self.forward_k::<2>(values, work),
+            3 => self.forward_k::<3>(values, work),
+            4 => self.forward_k::<4>(values, work),
+            5 => self.forward_k::<5>(values, work),
+            6 => self.forward_k::<6>(values, work),
+            7 => self.forward_k::<7>(values, work),
+            _ => self.forward_k::<8>(values, work),
+        }
+    }
+
+    /// work ← L⁻ᵀ work over the leading block's columns, with the tail
+    /// entries as they are (subtracting L_TLᵀ x_T).
+    pub fn backward(&self, values: &[f64], work: &mut [f64], k: usize) {
+        match k {
+            1 => self.backward_one(values, work),
+            2 => self.backward_k::<2>(values, work),
+            3 => self.backward_k::<3>(values, work),
+            4 => self.backward_k::<4>(values, work),
+            5 => self.backward_k::<5>(values, work),
+            6 => self.backward_k::<6>(values, work),
+            7 => self.backward_k::<7>(values, work),
+            _ => self.backward_k::<8>(values, work),
+        }
+    }
+
+    /// [`forward`](Self::forward) for one right-hand side: per supernode a
+    /// kernel of its width (1–16 unrolled at compile time).
+    fn forward_one(&self, values: &[f64], work: &mut [f64]) {
+        for sn in &self.supernodes[..self.lead_supernodes] {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            macro_rules! fixed {
+                ($($n:literal)*) => {
+                    match w {
+                        $($n => forward_fixed::<$n>(block, below, c0, work),)*
+                        _ => forward_any(block, below, c0, w, work),
+                    }
+                };
+            }
+            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+        }
+    }
+
+    /// [`backward`](Self::backward) for one right-hand side.
+    fn backward_one(&self, values: &[f64], work: &mut [f64]) {
+        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            macro_rules! fixed {
+                ($($n:literal)*) => {
+                    match w {
+                        $($n => backward_fixed::<$n>(block, below, c0, work),)*
+                        _ => backward_any(block, below, c0, w, work),
+                    }
+                };
+            }
+            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+        }
+    }
+
+    fn forward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
+        for sn in &self.supernodes[..self.lead_supernodes] {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let (head, tail) = work.split_at_mut((c0 + w) * K);
+            let xs = &mut head[c0 * K..];
+            for jj in 0..w {
+                let row = &block[jj * w..jj * w + w];
+                let mut acc = [0.0; K];
+                acc.copy_from_slice(&xs[jj * K..jj * K + K]);
+                for (l, &lv) in row[..jj].iter().enumerate() {
+                    let xl = &xs[l * K..l * K + K];
+                    for t in 0..K {
+                        acc[t] -= lv * xl[t];
+                    }
+                }
+                let inv = 1.0 / row[jj];
+                for t in 0..K {
+                    xs[jj * K + t] = acc[t] * inv;
+                }
+            }
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            let base = c0 + w;
+            for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+                let mut acc = [0.0; K];
+                for (l, &lv) in row.iter().enumerate() {
+                    let xl = &xs[l * K..l * K + K];
+                    for t in 0..K {
+                        acc[t] += lv * xl[t];
+                    }
+                }
+                let at = (r as usize - base) * K;
+                let xr = &mut tail[at..at + K];
+                for t in 0..K {
+                    xr[t] -= acc[t];
+                }
+            }
+        }
+    }
+
+    fn backward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
+        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
+            let (c0, w) = (sn.c0 as usize, sn.w as usize);
+            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
+            let base = c0 + w;
+            let (head, tail) = work.split_at_mut(base * K);
+            let xs = &mut head[c0 * K..];
+            for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+                let at = (r as usize - base) * K;
+                let mut xr = [0.0; K];
+                xr.copy_from_slice(&tail[at..at + K]);
+                for (l, &lv) in row.iter().enumerate() {
+                    let xl = &mut xs[l * K..l * K + K];
+                    for t in 0..K {
+                        xl[t] -= lv * xr[t];
+                    }
+                }
+            }
+            for jj in (0..w).rev() {
+                let row = &block[jj * w..jj * w + w];
+                let inv = 1.0 / row[jj];
+                let mut xj = [0.0; K];
+                for t in 0..K {
+                    xj[t] = xs[jj * K + t] * inv;
+                    xs[jj * K + t] = xj[t];
+                }
+                for (l, &lv) in row[..jj].iter().enumerate() {
+                    let xl = &mut xs[l * K..l * K + K];
+                    for t in 0..K {
+                        xl[t] -= lv * xj[t];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Relaxed amalgamation of the fundamental supernodes `starts` (first
+/// columns, then the end): walking them in order (a postorder of the supernodal
+/// tree), each absorbs the merged supernode just before it while that one
+/// is its child and the merged block stays within [`RELAX`].
+fn amalgamate(starts: &[usize], parent: &[usize], colpat: &[Vec<u32>]) -> Vec<usize> {
+    let end = *starts.last().expect("starts end with the last column + 1");
+    // True entries of column j of L (diagonal included).
+    let count = |j: usize| colpat[j].len() + 1;
+    // Merged runs so far: (first column, last column + 1, true entries).
+    let mut runs: Vec<(usize, usize, usize)> = Vec::new();
+    for win in starts.windows(2) {
+        let (mut c0, c1) = (win[0], win[1]);
+        let mut entries: usize = (c0..c1).map(count).sum();
+        // Rows below the run: those of its last column minus the run.
+        let below = colpat[c1 - 1].len();
+        while let Some(&(p0, p1, pe)) = runs.last() {
+            // The previous run is a child iff its last column's parent is in
+            // this run.
+            let par = parent[p1 - 1];
+            if par == usize::MAX || par < c0 || par >= c1 {
+                break;
+            }
+            let w = c1 - p0;
+            let block = w * (w + 1) / 2 + w * below;
+            let zeros = block.saturating_sub(entries + pe);
+            let ok = RELAX
+                .iter()
+                .any(|&(max_w, frac)| w <= max_w && zeros as f64 <= frac * block as f64)
+                || zeros as f64 <= 0.05 * block as f64;
+            if !ok {
+                break;
+            }
+            runs.pop();
+            c0 = p0;
+            entries += pe;
+        }
+        runs.push((c0, c1, entries));
+    }
+    let mut out: Vec<usize> = runs.iter().map(|r| r.0).collect();
+    out.push(end);
+    out
+}
+
+/// One supernode of the forward substitution, width `W`: x_S ← L_SS⁻¹ x_S,
+/// then x_r −= L_rS x_S for each row r below.
+#[inline(always)]
+fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
+    let (rows, _) = block.as_chunks::<W>();
+    let (diag, under) = rows.split_at(W);
+    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    for j in 0..W {
+        let mut s = xs[j];
+        for l in 0..j {
+            s -= diag[j][l] * xs[l];
+        }
+        xs[j] = s / diag[j][j];
+    }
+    work[c0..c0 + W].copy_from_slice(&xs);
+    for (row, &r) in under.iter().zip(below) {
+        let mut s = 0.0;
+        for l in 0..W {
+            s += row[l] * xs[l];
+        }
+        work[r as usize] -= s;
+    }
+}
+
+/// [`forward_fixed`] for any width.
+#[inline]
+fn forward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
+    for jj in 0..w {
+        let row = &block[jj * w..jj * w + w];
+        let mut s = work[c0 + jj];
+        for (l, &lv) in row[..jj].iter().enumerate() {
+            s -= lv * work[c0 + l];
+        }
+        work[c0 + jj] = s / row[jj];
+    }
+    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+        let xs = &work[c0..c0 + w];
+        let s: f64 = row.iter().zip(xs).map(|(a, b)| a * b).sum();
+        work[r as usize] -= s;
+    }
+}
+
+/// One supernode of the backward substitution, width `W`:
+/// x_S ← L_SS⁻ᵀ (x_S − Σ_r L_rSᵀ x_r).
+#[inline(always)]
+fn backward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
+    let (rows, _) = block.as_chunks::<W>();
+    let (diag, under) = rows.split_at(W);
+    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    for (row, &r) in under.iter().zip(below) {
+        let xr = work[r as usize];
+        for l in 0..W {
+            xs[l] -= row[l] * xr;
+        }
+    }
+    for j in (0..W).rev() {
+        xs[j] /= diag[j][j];
+        let xj = xs[j];
+        for l in 0..j {
+            xs[l] -= diag[j][l] * xj;
+        }
+    }
+    work[c0..c0 + W].copy_from_slice(&xs);
+}
+
+/// [`backward_fixed`] for any width.
+#[inline]
+fn backward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
+    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
+        let xr = work[r as usize];
+        for (l, &lv) in row.iter().enumerate() {
+            work[c0 + l] -= lv * xr;
+        }
+    }
+    for jj in (0..w).rev() {
+        let row = &block[jj * w..jj * w + w];
+        work[c0 + jj] /= row[jj];
+        let xj = work[c0 + jj];
+        for (l, &lv) in row[..jj].iter().enumerate() {
+            work[c0 + l] -= lv * xj;
+        }
+    }
+}
+
+/// Elimination tree (Liu) from each row's columns below the diagonal;
+/// `usize::MAX` marks a root.
+fn etree(rows: &[Vec<usize>]) -> Vec<usize> {
+    let n = rows.len();
+    let mut parent = vec![usize::MAX; n];
+    let mut ancestor = vec![usize::MAX; n];
+    for (k, row) in rows.iter().enumerate() {
+        for &i in row {
+            let mut j = i;
+            while ancestor[j] != usize::MAX && ancestor[j] != k {
+                let next = ancestor[j];
+                ancestor[j] = k;
+                j = next;
+            }
+            if ancestor[j] == usize::MAX {
+                ancestor[j] = k;
+                parent[j] = k;
+            }
+        }
+    }
+    parent
+}
+
+/// A postorder of the forest `parent`: post[new] = old, children before
+/// parents, each subtree contiguous, children in increasing order.
+fn postorder(parent: &[usize]) -> Vec<usize> {
+    let n = parent.len();
+    let mut head = vec![usize::MAX; n];
+    let mut next = vec![usize::MAX; n];
+    for j in (0..n).rev() {
+        if parent[j] != usize::MAX {
+            next[j] = head[parent[j]];
+            head[parent[j]] = j;
+        }
+    }
+    let mut post = Vec::with_capacity(n);
+    let mut stack = Vec::new();
+    for (root, &p) in parent.iter().enumerate() {
+        if p != usize::MAX {
+            continue;
+        }
+        stack.push(root);
+        while let Some(&top) = stack.last() {
+            let child = head[top];
+            if child == usize::MAX {
+                post.push(top);
+                stack.pop();
+            } else {
+                head[top] = next[child];
+                stack.push(child);
+            }
+        }
+    }
+    post
+}

@@ -1,0 +1,201 @@
+//! `haptloop bench SCENE`: the session tick of a scene on the mock clock
+//! (deterministic inputs, no sleeping), timed per stage on the monotonic
+//! clock (`session::timing`).
+
+use super::output::{check_writable, write_atomic};
+use crate::report::summary::{Stages, Summary};
+use crate::scenes::resolve;
+use crate::session::{self, Plan, SessionOptions, Stage};
+use anyhow::{Result, bail};
+use clap::Args;
+use haptloop_rt::probe::Percentiles;
+use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, StopFlag};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Flags of `haptloop bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// A built-in scene (see `haptloop scenes`) or a scene file (TOML).
+    pub scene: String,
+    /// Ticks to run (1–10000000). The slow loop steps in lockstep every
+    /// 5 ms of session time, as in `run --deterministic`.
+    #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub ticks: u64,
+    /// Write the figures as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Fast-loop rate in Hz (100–20000); default: the scene's, else 1000.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(i64::from(MIN_RATE_HZ)..=i64::from(MAX_RATE_HZ)))]
+    pub rate: Option<u32>,
+    /// Update iterations per tick (1–10000); default: the scene's, else the
+    /// solver's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub iterations: Option<u32>,
+}
+
+/// p50, p99, p99.9 and max of one figure, ns.
+#[derive(Debug, Clone, Copy, Serialize)]
+struct Quantiles {
+    p50: u64,
+    p99: u64,
+    p999: u64,
+    max: u64,
+}
+
+impl From<Percentiles> for Quantiles {
+    fn from(p: Percentiles) -> Self {
+        Quantiles {
+            p50: p.p50,
+            p99: p.p99,
+            p999: p.p999,
+            max: p.max,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Serialize)]
+struct Violation {
+    /// Largest length-row violation of any tick, m.
+    max: f64,
+    /// RMS over ticks of the length rows' RMS, m.
+    rms: f64,
+}
+
+/// What `--json` writes.
+#[derive(Debug, Serialize)]
+struct BenchJson {
+    scene: String,
+    ticks: u64,
+    rate_hz: u32,
+    iterations: u32,
+    tick_ns: Quantiles,
+    tick_without_device_ns: Quantiles,
+    /// Mean of `tick_without_device_ns`.
+    tick_without_device_mean_ns: f64,
+    stages: BTreeMap<&'static str, Quantiles>,
+    /// One slow-loop step (every 5 ms of session time), ns.
+    slow_step_ns: Quantiles,
+    slow_steps: u64,
+    violation: Violation,
+    solver_failures: u64,
+}
+
+/// Runs the bench and prints (and writes) its figures.
+pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
+    let scene = match resolve(&args.scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::from(1));
+        }
+    };
+    if let Some(path) = &args.json {
+        check_writable(path)?;
+    }
+    let rate = args
+        .rate
+        .or(scene.compiled.settings.rate_hz)
+        .unwrap_or(1000);
+    let seconds = args.ticks as f64 / f64::from(rate);
+    if seconds > 86_400.0 {
+        bail!("--ticks {} at {rate} Hz is more than a day", args.ticks);
+    }
+    let options = SessionOptions {
+        seconds,
+        rate_hz: Some(rate),
+        iterations: args.iterations,
+        deterministic: true,
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options)?;
+    let outcome = session::run(&scene, plan, stop, &mut |_| {})?;
+    let s = Summary::of(&outcome);
+    let json = BenchJson {
+        scene: s.scene.clone(),
+        ticks: s.ticks,
+        rate_hz: s.rate_hz,
+        iterations: s.iterations,
+        tick_ns: s.stages_ns.tick.into(),
+        tick_without_device_ns: s.stages_ns.tick_without_device.into(),
+        tick_without_device_mean_ns: s.stages_ns.tick_without_device_mean,
+        stages: Stage::ALL
+            .iter()
+            .map(|&st| (st.key(), s.stages_ns.get(st).into()))
+            .collect(),
+        slow_step_ns: s.slow_loop.step_ns.into(),
+        slow_steps: outcome.slow.steps,
+        violation: Violation {
+            max: s.violation.max,
+            rms: s.violation.rms,
+        },
+        solver_failures: s.safety.solver_failures,
+    };
+    println!("{}", render(&json, &s.stages_ns));
+    if let Some(path) = &args.json {
+        write_atomic(
+            path,
+            (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn render(b: &BenchJson, stages: &Stages) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} update iteration{} per tick",
+        b.scene,
+        b.ticks,
+        b.rate_hz,
+        b.iterations,
+        if b.iterations == 1 { "" } else { "s" }
+    );
+    let _ = writeln!(
+        out,
+        "\n  {:<18} {:>9} {:>9} {:>9} {:>10}   (µs, monotonic clock)",
+        "", "p50", "p99", "p99.9", "max"
+    );
+    let row = |out: &mut String, label: &str, q: Quantiles| {
+        let us = |ns: u64| ns as f64 / 1e3;
+        let _ = writeln!(
+            out,
+            "  {label:<18} {:>9.1} {:>9.1} {:>9.1} {:>10.1}",
+            us(q.p50),
+            us(q.p99),
+            us(q.p999),
+            us(q.max)
+        );
+    };
+    row(&mut out, "tick", b.tick_ns);
+    for st in Stage::ALL {
+        row(
+            &mut out,
+            &format!("  {}", st.label()),
+            stages.get(st).into(),
+        );
+    }
+    row(&mut out, "tick w/o device", b.tick_without_device_ns);
+    let _ = writeln!(
+        out,
+        "  (tick w/o device: mean {:.1} µs)",
+        b.tick_without_device_mean_ns / 1e3
+    );
+    let _ = writeln!(
+        out,
+        "\nslow loop: {} steps (every 5 ms of session time), p50 {:.1} µs, max {:.1} µs a step",
+        b.slow_steps,
+        b.slow_step_ns.p50 as f64 / 1e3,
+        b.slow_step_ns.max as f64 / 1e3
+    );
+    let _ = write!(
+        out,
+        "constraint violation: max {:.2e} m, RMS {:.2e} m; solver failures: {}",
+        b.violation.max, b.violation.rms, b.solver_failures
+    );
+    out
+}

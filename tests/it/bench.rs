@@ -1,0 +1,109 @@
+//! `haptloop bench` and the per-stage tick timing behind it: the JSON it
+//! writes, figures that add up, real compute time in deterministic runs, and
+//! clear errors for bad input. Structure and consistency only: speed belongs
+//! to benches/ and BENCHMARKS.md.
+
+use haptloop::report::summary::Summary;
+use haptloop::scenes::resolve;
+use haptloop::session::{self, Plan, SessionOptions, Stage};
+use haptloop_rt::schedule::StopFlag;
+use std::process::Command;
+
+fn haptloop() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_haptloop"))
+}
+
+#[test]
+fn bench_writes_every_figure_and_they_add_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("fb.json");
+    let out = haptloop()
+        .args(["bench", "four-bar", "--ticks", "300", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for label in ["tick w/o device", "force (Eq. 7)", "constraint violation"] {
+        assert!(text.contains(label), "{text}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).expect("valid JSON");
+    assert_eq!(v["scene"], "four-bar");
+    assert_eq!(v["ticks"], 300);
+    let keys = ["p50", "p99", "p999", "max"];
+    for figure in ["tick_ns", "tick_without_device_ns"] {
+        for k in keys {
+            assert!(v[figure][k].as_u64().is_some(), "{figure}.{k}");
+        }
+    }
+    let q = |f: &serde_json::Value, k: &str| f[k].as_u64().unwrap();
+    let (tick, without) = (&v["tick_ns"], &v["tick_without_device_ns"]);
+    assert!(
+        q(tick, "p50") > 0,
+        "a tick takes time even on the mock clock"
+    );
+    assert!(q(without, "max") <= q(tick, "max"));
+    assert!(q(tick, "p50") <= q(tick, "p99") && q(tick, "p99") <= q(tick, "max"));
+    for s in Stage::ALL {
+        let st = &v["stages"][s.key()];
+        for k in keys {
+            assert!(st[k].as_u64().is_some(), "stages.{}.{k}", s.key());
+        }
+        assert!(q(st, "max") <= q(tick, "max"), "{}", s.key());
+    }
+    // The solver stages run every tick and take time.
+    for s in ["update", "evaluation", "force"] {
+        assert!(q(&v["stages"][s], "p50") > 0, "{s}");
+    }
+    let viol = v["violation"]["max"].as_f64().unwrap();
+    assert!(viol.is_finite() && viol < 1e-6, "{viol}");
+    assert!(v["violation"]["rms"].as_f64().unwrap() <= viol);
+}
+
+/// `run --deterministic` reports the monotonic clock's compute time, not the
+/// mock clock's zeros, and the stage figures cover every tick.
+#[test]
+fn deterministic_runs_report_real_compute_time_per_stage() {
+    let scene = resolve("stewart").unwrap();
+    let options = SessionOptions {
+        seconds: 0.3,
+        deterministic: true,
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options).unwrap();
+    let o = session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap();
+    let s = Summary::of(&o);
+    assert!(s.compute_ns.p50 > 0 && s.compute_ns == s.stages_ns.tick);
+    assert_eq!(o.stats.stages.tick.count(), o.stats.ticks);
+    for stage in Stage::ALL {
+        assert_eq!(o.stats.stages.stage(stage).count(), o.stats.ticks);
+    }
+    // The scheduler's own compute histogram follows the mock clock.
+    assert_eq!(o.report.compute_ns.max, 0);
+    assert!(s.slow_loop.step_ns.max > 0);
+}
+
+#[test]
+fn bench_refuses_bad_input_with_a_clear_error() {
+    let cases: [(&[&str], i32, &str); 4] = [
+        (&["bench", "four-bar", "--ticks", "0"], 2, "--ticks"),
+        (&["bench", "four-bar", "--rate", "5"], 2, "--rate"),
+        (&["bench", "no-such-scene"], 1, "not a built-in scene"),
+        (
+            &["bench", "four-bar", "--json", "/no/such/dir/x.json"],
+            1,
+            "cannot write",
+        ),
+    ];
+    for (args, code, says) in cases {
+        let out = haptloop().args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
