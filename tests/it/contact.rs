@@ -321,3 +321,26 @@ fn the_dragged_box_pushes_the_clutter_aside() {
     let c = s.contact.unwrap();
     assert!(c.max_tracked_pairs >= 100, "{}", c.max_tracked_pairs);
 }
+
+/// The gradient update (Eq. 3) does not cover contact rows: asking for it
+/// on a contact scene is a clear error naming the fix, never a panic in
+/// the loop.
+#[test]
+fn the_gradient_update_on_a_contact_scene_is_a_clear_error() {
+    let scene = resolve("box-slide").unwrap();
+    let options = SessionOptions {
+        seconds: 0.1,
+        deterministic: true,
+        update: Some(haptloop_solver::UpdateRule::Gradient),
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options).unwrap();
+    let e = session::run(&scene, plan, &StopFlag::new(), &mut |_| {})
+        .err()
+        .expect("refused");
+    let msg = format!("{e:#}");
+    assert!(msg.contains("does not cover contact rows"), "{msg}");
+    assert!(msg.contains("update = \"projected\""), "{msg}");
+    // Said once, not once per layer of the error chain.
+    assert_eq!(msg.matches("does not cover").count(), 1, "{msg}");
+}

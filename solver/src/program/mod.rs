@@ -147,6 +147,14 @@ impl Program {
     /// Allocates; call it off the real-time thread.
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
         settings.validate()?;
+        // The fused gradient pass holds at most six rows per constraint; a
+        // contact pair's witness rows are one constraint of many rows.
+        if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
+            return Err(ProgramError::Unsupported(
+                "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
+                 `update = \"projected\"`",
+            ));
+        }
         // The scene's `finger` and `least_astonishment` weights.
         let mut settings = settings;
         let weights = model.objectives();
