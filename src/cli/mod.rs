@@ -53,8 +53,11 @@ enum Command {
     /// Measure the speed/accuracy trade of a scene over a grid of settings.
     ///
     /// Runs one deterministic session per point of the grid (iterations ×
-    /// update rule × gain × rate × velocity filter; in parallel), then times
-    /// each point's ticks alone on one thread. Per point: violation, force
+    /// update rule × gain × rate × velocity filter; in parallel across the
+    /// cores), then, to keep timing honest, reruns each point alone on one
+    /// thread with nothing else of the sweep running and times its ticks
+    /// per stage as `haptloop bench` does (the tick without the simulated
+    /// devices' stages). Per point: violation, force
     /// error against the converged reference, tracking error, µs per tick,
     /// ticks over the period, failed ticks. Prints a table with the Pareto
     /// front (CPU load against force error) and the cheapest point within

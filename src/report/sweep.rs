@@ -300,12 +300,28 @@ pub fn table(s: &Sweep) -> String {
             );
         }
     }
+    // Only the criteria a figure was measured for are named.
+    let measured = |f: fn(&crate::sweep::Accuracy) -> f64| {
+        s.points
+            .iter()
+            .any(|p| p.accuracy.as_ref().is_ok_and(|a| f(a).is_finite()))
+    };
+    let violation = match s.tolerance_m {
+        Some(t) if measured(|a| a.violation_m.max) => format!("violation within {t:e} m, "),
+        Some(_) => "violation (not measured: no joint rows), ".to_string(),
+        None => "violation (no scene tolerance), ".to_string(),
+    };
+    let force = if measured(|a| a.force_error_n.max) {
+        format!(
+            "force error within {:.0} % of the largest force, ",
+            s.criteria.force_tolerance * 100.0
+        )
+    } else {
+        "force error (not measured), ".to_string()
+    };
     let crit = format!(
-        "no failed tick, violation within {}, force error within {:.0} % of the largest force, \
-         p99 tick within half the period, coupling passive at the rate for a relaxed grip",
-        s.tolerance_m
-            .map_or("(no scene tolerance)".to_string(), |t| format!("{t:e} m")),
-        s.criteria.force_tolerance * 100.0
+        "no failed tick, {violation}{force}p99 tick within half the period, coupling passive \
+         at the rate for a relaxed grip"
     );
     match s.recommended {
         Some(i) => {

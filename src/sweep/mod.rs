@@ -6,8 +6,9 @@
 //!     reference sampled every `reference_every`): violation, force error
 //!     against the converged reference, tracking, failed ticks
 //!  2. timing, afterwards, one point at a time on the calling thread
-//!     (session::timing: the same deterministic session, each tick timed
-//!     with the monotonic clock): p50, p99, ticks over the period
+//!     (session::timing::time_ticks: the same deterministic session with
+//!     `haptloop bench`'s per-stage timing on the monotonic clock; the tick
+//!     without the simulated devices' stages): p50, p99, ticks over the period
 //!  3. pareto.rs: the front of CPU load against force error, and the
 //!     cheapest point that meets every criterion
 //! ```
