@@ -68,6 +68,9 @@ struct JsonPoint {
     failure_kinds: std::collections::BTreeMap<String, u64>,
     reference_samples: u64,
     reference_missing: Option<String>,
+    /// Largest penetration, m (`"NaN"`: no contact machinery).
+    #[serde(with = "super::figure")]
+    penetration_m: f64,
     passive: bool,
     pareto: bool,
     verdict: &'static str,
@@ -121,6 +124,7 @@ fn json_point(p: &Point) -> JsonPoint {
         failure_kinds: a.map(|a| a.failure_kinds.clone()).unwrap_or_default(),
         reference_samples: a.map_or(0, |a| a.reference_samples),
         reference_missing: a.and_then(|a| a.reference_missing.clone()),
+        penetration_m: a.map_or(f64::NAN, |a| a.penetration_m),
         passive: p.passive,
         pareto: p.pareto,
         verdict: p.verdict.as_str(),
@@ -149,13 +153,13 @@ pub fn csv(s: &Sweep) -> String {
     let mut out = String::from(
         "index,iterations,update,gain,rate_hz,velocity_filter_ms,tick_p50_ns,tick_p99_ns,tick_max_ns,\
          overruns,load,violation_max_m,violation_rms_m,force_error_max_n,force_error_rms_n,force_max_n,\
-         tracking_max_m,tracking_rms_m,failed_ticks,reference_samples,passive,pareto,recommended,verdict\n",
+         tracking_max_m,tracking_rms_m,failed_ticks,reference_samples,penetration_m,passive,pareto,recommended,verdict\n",
     );
     for (i, p) in s.points.iter().enumerate() {
         let j = json_point(p);
         let _ = writeln!(
             out,
-            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             j.iterations,
             j.update,
             j.gain,
@@ -175,6 +179,7 @@ pub fn csv(s: &Sweep) -> String {
             j.tracking_m.rms,
             j.failed_ticks.map_or("NaN".into(), |v| v.to_string()),
             j.reference_samples,
+            j.penetration_m,
             j.passive,
             j.pareto,
             s.recommended == Some(i),
@@ -279,7 +284,7 @@ pub fn table(s: &Sweep) -> String {
         Axis::None => {
             let _ = writeln!(
                 out,
-                "no Pareto front: neither the force error nor a violation is measured in this scene"
+                "no Pareto front: neither the force error, a violation nor a penetration is measured in this scene"
             );
         }
         a => {
@@ -287,7 +292,7 @@ pub fn table(s: &Sweep) -> String {
                 out,
                 "front (*): CPU load (tick p50 × rate) against {}{}",
                 a.as_str(),
-                if a == Axis::Violation {
+                if matches!(a, Axis::Violation | Axis::Penetration) {
                     let why = s
                         .points
                         .iter()
@@ -319,8 +324,16 @@ pub fn table(s: &Sweep) -> String {
     } else {
         "force error (not measured), ".to_string()
     };
+    let penetration = if measured(|a| a.penetration_m) {
+        format!(
+            "penetration within {:e} m, ",
+            s.criteria.penetration_tolerance_m
+        )
+    } else {
+        String::new()
+    };
     let crit = format!(
-        "no failed tick, {violation}{force}p99 tick within half the period, coupling passive \
+        "no failed tick, {violation}{force}{penetration}p99 tick within half the period, coupling passive \
          at the rate for a relaxed grip"
     );
     match s.recommended {

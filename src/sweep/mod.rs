@@ -127,6 +127,8 @@ pub struct Accuracy {
     pub reference_samples: u64,
     /// Why the force error is not measured, if it is not.
     pub reference_missing: Option<String>,
+    /// Largest penetration of a shaped body, m (NaN: no contact machinery).
+    pub penetration_m: f64,
 }
 
 impl Accuracy {
@@ -185,6 +187,9 @@ impl Accuracy {
                 .collect(),
             reference_samples: r.compared,
             reference_missing,
+            penetration_m: o.slow.contact.map_or(f64::NAN, |c| {
+                c.max_penetration_m.max(s.contact.max_penetration_m)
+            }),
         }
     }
 }
@@ -373,6 +378,9 @@ pub fn run(
     let criteria = Criteria {
         tolerance_m: scene.compiled.settings.violation_tolerance,
         force_tolerance: options.force_tolerance,
+        penetration_tolerance_m: Plan::new(scene, &session_options(&knobs[0], options))?
+            .contact
+            .penetration_tolerance_m,
     };
     let axis = pareto::axis(&points);
     let recommended = pareto::mark(&mut points, axis, &criteria);

@@ -34,6 +34,9 @@ pub enum Axis {
     ForceError,
     /// Largest violation, m (the force error is not measured).
     Violation,
+    /// Largest penetration, m (contact scenes without joint rows: neither
+    /// the force error nor a violation is measured).
+    Penetration,
     /// Neither is measured: no front.
     None,
 }
@@ -44,6 +47,7 @@ impl Axis {
         match self {
             Axis::ForceError => "force error max (N)",
             Axis::Violation => "violation max (m)",
+            Axis::Penetration => "penetration max (m)",
             Axis::None => "none",
         }
     }
@@ -53,6 +57,7 @@ impl Axis {
         match (&p.accuracy, self) {
             (Ok(a), Axis::ForceError) => a.force_error_n.max,
             (Ok(a), Axis::Violation) => a.violation_m.max,
+            (Ok(a), Axis::Penetration) => a.penetration_m,
             _ => f64::NAN,
         }
     }
@@ -65,6 +70,8 @@ pub struct Criteria {
     pub tolerance_m: Option<f64>,
     /// Largest force error as a fraction of the largest reference force.
     pub force_tolerance: f64,
+    /// The scene's penetration tolerance, m (scenes with contact).
+    pub penetration_tolerance_m: f64,
 }
 
 /// Why a point is (not) recommendable: the first criterion it misses.
@@ -80,6 +87,8 @@ pub enum Verdict {
     Violation,
     /// Force error above the force tolerance.
     ForceError,
+    /// Penetration above the scene's penetration tolerance.
+    Penetration,
     /// p99 tick above half the period.
     TooSlow,
     /// The coupling is not passive at this rate.
@@ -95,6 +104,7 @@ impl Verdict {
             Verdict::FailedTicks => "failed ticks",
             Verdict::Violation => "violation > tolerance",
             Verdict::ForceError => "force error > tolerance",
+            Verdict::Penetration => "penetration > tolerance",
             Verdict::TooSlow => "p99 > period/2",
             Verdict::NotPassive => "coupling not passive",
         }
@@ -108,6 +118,8 @@ pub fn axis(points: &[Point]) -> Axis {
         Axis::ForceError
     } else if any(Axis::Violation) {
         Axis::Violation
+    } else if any(Axis::Penetration) {
+        Axis::Penetration
     } else {
         Axis::None
     }
@@ -128,6 +140,9 @@ fn verdict(p: &Point, c: &Criteria) -> Verdict {
     }
     if a.force_error_n.max.is_finite() && a.force_error_n.max > c.force_tolerance * a.force_max_n {
         return Verdict::ForceError;
+    }
+    if a.penetration_m.is_finite() && a.penetration_m > c.penetration_tolerance_m {
+        return Verdict::Penetration;
     }
     let period_ns = 1e9 / f64::from(p.knobs.rate_hz);
     if t.p99_ns as f64 > 0.5 * period_ns {
@@ -202,6 +217,7 @@ mod tests {
                 failure_kinds: Default::default(),
                 reference_samples: 10,
                 reference_missing: None,
+                penetration_m: f64::NAN,
             }),
             timing: Some(TickTiming {
                 ticks: 100,
@@ -221,6 +237,7 @@ mod tests {
         let c = Criteria {
             tolerance_m: Some(1e-6),
             force_tolerance: 0.01,
+            penetration_tolerance_m: 1e-4,
         };
         let mut p = vec![
             point(1000, 10_000, 1e-3, 0),  // load 1 %, on the front
@@ -254,9 +271,40 @@ mod tests {
         let c = Criteria {
             tolerance_m: None,
             force_tolerance: 0.01,
+            penetration_tolerance_m: 1e-4,
         };
         assert_eq!(mark(&mut p, Axis::ForceError, &c), Some(1));
         assert!((p[0].load() - 0.1).abs() < 1e-12 && (p[1].load() - 0.05).abs() < 1e-12);
         assert_eq!((p[0].pareto, p[1].pareto), (false, true));
+    }
+
+    /// A contact scene without joint rows measures neither force error nor
+    /// violation: the front is cost against penetration, and a point over
+    /// the penetration tolerance is never recommended.
+    #[test]
+    fn contact_scenes_trade_cost_against_penetration() {
+        let mut p = vec![
+            point(1000, 5_000, f64::NAN, 0),
+            point(1000, 8_000, f64::NAN, 0),
+            point(1000, 9_000, f64::NAN, 0),
+        ];
+        for (q, pen) in p.iter_mut().zip([3e-4, 5e-5, 6e-5]) {
+            let a = q.accuracy.as_mut().unwrap();
+            a.violation_m = MaxRms {
+                max: f64::NAN,
+                rms: f64::NAN,
+            };
+            a.penetration_m = pen;
+        }
+        assert_eq!(axis(&p), Axis::Penetration);
+        let c = Criteria {
+            tolerance_m: None,
+            force_tolerance: 0.01,
+            penetration_tolerance_m: 1e-4,
+        };
+        assert_eq!(mark(&mut p, Axis::Penetration, &c), Some(1));
+        assert_eq!(p[0].verdict, Verdict::Penetration);
+        let front: Vec<bool> = p.iter().map(|q| q.pareto).collect();
+        assert_eq!(front, [true, true, false]);
     }
 }

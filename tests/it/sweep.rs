@@ -71,8 +71,47 @@ fn the_cli_sweep_writes_its_files() {
     let r = json["recommended"].as_u64().unwrap() as usize;
     assert_eq!(points[r]["update"], "projected");
     assert_eq!(points[r]["pareto"], true);
+    // The figures mean what they say: grid order is iterations, then rule;
+    // one gradient iteration misses the converged force by far more than
+    // four projected steps, percentiles are ordered, and the front is
+    // exactly the clean points no other clean point dominates in (load,
+    // force error).
+    let f = |p: &serde_json::Value, k: &str, s: &str| p[k][s].as_f64().unwrap();
+    let (g1, p4) = (&points[0], &points[3]);
+    assert_eq!((g1["update"].as_str(), g1["iterations"].as_u64()), (Some("gradient"), Some(1)));
+    assert_eq!((p4["update"].as_str(), p4["iterations"].as_u64()), (Some("projected"), Some(4)));
+    assert!(
+        f(g1, "force_error_n", "max") >= 10.0 * f(p4, "force_error_n", "max"),
+        "{g1} {p4}"
+    );
+    assert!(f(p4, "violation_m", "max") < 1e-6, "{p4}");
+    let cost_acc: Vec<(f64, f64, bool)> = points
+        .iter()
+        .map(|p| {
+            assert!(f(p, "tick_ns", "p50") <= f(p, "tick_ns", "p99"), "{p}");
+            assert!(f(p, "force_error_n", "rms") <= f(p, "force_error_n", "max"), "{p}");
+            let clean = p["failed_ticks"].as_u64() == Some(0);
+            (p["load"].as_f64().unwrap(), f(p, "force_error_n", "max"), clean)
+        })
+        .collect();
+    for (i, p) in points.iter().enumerate() {
+        let (c, a, clean) = cost_acc[i];
+        let dominated = cost_acc
+            .iter()
+            .any(|&(oc, oa, ok)| ok && oc <= c && oa <= a && (oc < c || oa < a));
+        assert_eq!(p["pareto"].as_bool(), Some(clean && !dominated), "{p}");
+    }
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     assert_eq!(csv.lines().count(), 5);
+    // The CSV holds the JSON's figures.
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for (line, p) in csv.lines().skip(1).zip(points) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let v: f64 = cells[col("force_error_max_n")].parse().unwrap();
+        assert_eq!(v, f(p, "force_error_n", "max"));
+        assert_eq!(cells[col("pareto")], p["pareto"].to_string());
+    }
     let svg = std::fs::read_to_string(out.join("front.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("Pareto front"));
 }
@@ -132,7 +171,8 @@ fn sweep_results_do_not_depend_on_the_thread_count() {
     assert_eq!(a.points.len(), 8);
     for (p, q) in a.points.iter().zip(&b.points) {
         assert_eq!(p.knobs, q.knobs);
-        assert_eq!(p.accuracy, q.accuracy);
+        // Bit for bit (NaN figures included, which `==` never equates).
+        assert_eq!(format!("{:?}", p.accuracy), format!("{:?}", q.accuracy));
     }
     // K = 1 with the default multiplier gain k₂ = 1000 fails the stability
     // check: not run, said why.
