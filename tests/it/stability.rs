@@ -181,6 +181,10 @@ struct Case {
     /// reported, force cut, the slow loop recovering the configuration);
     /// none may fail once it is over and the settle window has passed.
     expect_failures: bool,
+    /// Where the extreme makes the scene's own tolerance unreachable: the
+    /// bound the case holds instead, m. The run's report must then say
+    /// `EXCEEDED`, never `kept`.
+    holds_instead_m: Option<f64>,
 }
 
 /// What a case's run showed.
@@ -315,9 +319,10 @@ fn drive_with(case: &Case, on_tick: &mut dyn FnMut(u64, &haptloop_solver::Progra
         .filter(|(_, n)| **n > 0)
         .map(|(k, n)| (k.as_str(), *n))
         .collect();
-    // Where ticks failed, the report of the same run must say so and
-    // never "kept".
-    if o.failed > 0 {
+    // Where ticks failed or the tolerance was exceeded, the report of the
+    // same run must say so and never "kept".
+    let exceeded = o.tolerance_m.is_some_and(|t| o.violation_max_m > t);
+    if o.failed > 0 || exceeded {
         let run = session::run(scene, plan, &StopFlag::new(), &mut |_| {}).unwrap();
         let summary = Summary::of(&run);
         o.verdict = summary.violation.verdict.clone();
@@ -350,7 +355,15 @@ fn check_recovered(case: &Case, o: Outcome) -> Outcome {
         "{n}: quaternion norms drift {o:?}"
     );
     assert_eq!(o.failed_after, 0, "{n}: {o:?}");
-    if let Some(tol) = o.tolerance_m {
+    if let Some(bound) = case.holds_instead_m {
+        let tol = o.tolerance_m.expect("a scene with joints");
+        assert!(
+            o.violation_after_m <= bound && o.violation_after_m > tol,
+            "{n}: violation {:e} against the bound {bound:e} it states: {o:?}",
+            o.violation_after_m
+        );
+        assert!(o.verdict.contains("EXCEEDED") && !o.verdict.contains("kept"), "{n}: {}", o.verdict);
+    } else if let Some(tol) = o.tolerance_m {
         assert!(
             o.violation_after_m <= tol,
             "{n}: violation {:e} > {tol:e} {} s after the disturbance: {o:?}",
@@ -395,6 +408,7 @@ fn case(name: String, scene: Scene, options: SessionOptions) -> Case {
         disturbance_end_s: 0.0,
         settle_s: 0.0,
         expect_failures: false,
+        holds_instead_m: None,
     }
 }
 
@@ -441,7 +455,14 @@ fn rates_from_100_hz_to_20_khz() {
                 rate_hz: Some(hz),
                 ..options(s)
             };
-            assert_recovers(&case(format!("{m} at {hz} Hz"), builtin(m), o));
+            let mut c = case(format!("{m} at {hz} Hz"), builtin(m), o);
+            // The sphere toy promises 1 µm at its own 1 kHz; at a tenth of
+            // that its hanging sphere lags 1.44 µm behind the rows, and the
+            // report says the tolerance was exceeded.
+            if m == "sphere-toy" && hz == 100 {
+                c.holds_instead_m = Some(2e-6);
+            }
+            assert_recovers(&c);
         }
     }
 }
@@ -500,10 +521,172 @@ fn two_fingers_pulling_a_body_apart() {
     assert_eq!(o.failed, 0);
 }
 
+/// The smallest over the largest singular value of C_q at `q` over the
+/// joint rows that hold there: every equality (quaternion norms included)
+/// and every limit at its bound (within 1 µm): 0 at a singular pose of
+/// the mechanism as it is held.
+fn joint_conditioning(scene: &Scene, q: &[f64]) -> f64 {
+    use haptloop_solver::Sense;
+    let model = &scene.compiled.joints_only;
+    let mut ev = haptloop_solver::Evaluation::new(model);
+    ev.evaluate(model, q, &[]).unwrap();
+    let j = ev.jacobian().to_dense();
+    let held: Vec<usize> = model
+        .rows()
+        .iter()
+        .enumerate()
+        .filter(|(i, r)| match r.sense {
+            Sense::Equality => true,
+            Sense::Inequality => ev.values()[*i] <= 1e-6,
+            Sense::Friction => false,
+        })
+        .map(|(i, _)| i)
+        .collect();
+    let sv = j.select_rows(held.iter()).singular_values();
+    sv.min() / sv.max()
+}
+
+/// Runs `c`, following the joint rows' conditioning every 10 ticks: the
+/// outcome, the conditioning at the start and its smallest.
+fn drive_conditioning(c: &Case) -> (Outcome, f64, f64) {
+    let (mut first, mut least) = (f64::NAN, f64::INFINITY);
+    let o = drive_with(c, &mut |k, p| {
+        let r = p.last_report();
+        if k % 10 == 0 && r.status == TickOutcome::Ok && r.max_violation_m <= 1e-4 {
+            let r = joint_conditioning(&c.scene, p.q());
+            if k == 0 {
+                first = r;
+            }
+            least = least.min(r);
+        }
+    });
+    (check_recovered(c, o), first, least)
+}
+
+/// The four-bar's transmission at `q`: how fast the crank and the rocker
+/// move (their centres) against the coupler's centre along the linkage's
+/// one freedom (the null vector of the joint rows' C_q). At a toggle one of
+/// the two stands still while the coupler moves: this goes to 0.
+fn four_bar_transmission(scene: &Scene, q: &[f64]) -> f64 {
+    let model = &scene.compiled.joints_only;
+    let mut ev = haptloop_solver::Evaluation::new(model);
+    ev.evaluate(model, q, &[]).unwrap();
+    let j = ev.jacobian().to_dense();
+    let e = (j.transpose() * &j).symmetric_eigen();
+    let k = e.eigenvalues.imin();
+    let n = e.eigenvectors.column(k);
+    let speed = |name: &str| {
+        let (_, off) = model
+            .layout()
+            .moving_bodies()
+            .find(|(id, _)| model.bodies()[id.index()].name == name)
+            .unwrap();
+        (n[off].powi(2) + n[off + 1].powi(2) + n[off + 2].powi(2)).sqrt()
+    };
+    speed("crank").min(speed("rocker")) / speed("coupler")
+}
+
+/// The four-bar driven into its toggle: the hand pulls the coupler 0.2 m
+/// out along each direction of its circle's plane in turn (far beyond the
+/// linkage's reach), so the linkage runs to the ends of its range, where it
+/// locks (this spatial linkage is not Grashof: its range ends at toggle
+/// poses, where the joint rows lose rank). The conditioning of the joint
+/// rows' C_q falls by the factor asserted below, and the loop is back
+/// within 1 µm 0.5 s after the hand returns.
+#[test]
+fn the_four_bar_toggle() {
+    let u = [0.045194, -0.997943, -0.045474];
+    let v = [0.556809, 0.062958, -0.828251];
+    let at = |d: [f64; 3], s: f64| [d[0] * s, d[1] * s, d[2] * s];
+    let mut path = vec![[0.0, 0.0, 0.0, 0.0]];
+    let mut t = 0.2;
+    for d in [at(u, 0.2), at(u, -0.2), at(v, 0.2), at(v, -0.2)] {
+        path.push([t, 0.0, 0.0, 0.0]);
+        path.push([t + 0.3, d[0], d[1], d[2]]);
+        path.push([t + 0.6, d[0], d[1], d[2]]);
+        path.push([t + 0.9, 0.0, 0.0, 0.0]);
+        t += 1.0;
+    }
+    let end = t - 0.1;
+    let scene = edited("four-bar", |s| set_waypoints(s, 0, &path));
+    let mut c = case("four-bar toggle".into(), scene, options(end + 1.0));
+    c.disturbance_end_s = end;
+    c.settle_s = 0.5;
+    c.expect_failures = true;
+    let (mut first, mut least) = (f64::NAN, f64::INFINITY);
+    let o = drive_with(&c, &mut |k, p| {
+        // Only configurations a tick held (a failed tick's q is not one).
+        let r = p.last_report();
+        if k % 10 == 0 && r.status == TickOutcome::Ok && r.max_violation_m <= 1e-4 {
+            let r = four_bar_transmission(&c.scene, p.q());
+            if k == 0 {
+                first = r;
+            }
+            least = least.min(r);
+        }
+    });
+    let o = check_recovered(&c, o);
+    eprintln!("four-bar toggle: transmission {least:e} (start {first:e}); {o:?}");
+    assert!(
+        least < 0.05 * first,
+        "the toggle was not reached: transmission {least:e} against {first:e} at the start"
+    );
+    // The fast loop cannot hold the linkage while the hand yanks it into
+    // the toggle: those ticks fail as counted, named failures (force cut,
+    // the slow loop re-places it), none after the settle window.
+    let kinds: Vec<&str> = o.failure_kinds.iter().map(|(k, _)| *k).collect();
+    assert!(
+        kinds
+            .iter()
+            .all(|k| ["diverged_violation", "violation_beyond_broken"].contains(k)),
+        "{o:?}"
+    );
+    assert_eq!(
+        o.failure_kinds.iter().map(|(_, n)| n).sum::<u64>(),
+        o.failed
+    );
+}
+
+/// The Stewart platform pulled toward a singular pose: lifted 0.1 m into
+/// its legs' stroke limits (the legs then act as locked struts), then
+/// 0.2 m sideways while there, so the locked legs lean over together;
+/// held, then back. The conditioning of the rows that hold (equalities and
+/// the limits at their bounds) falls about fourfold, the closest to a
+/// singular pose we found this scene's stroke limits let a hand pull it
+/// (a Gough singularity proper, where it reaches 0, was not reached); back
+/// within the 0.1 mm tolerance 0.5 s after the hand returns, with no
+/// failed tick.
+#[test]
+fn the_stewart_singular_pose() {
+    let path = [
+        [0.0, 0.0, 0.0, 0.0],
+        [0.2, 0.0, 0.0, 0.0],
+        [0.6, 0.0, 0.0, 0.1],
+        [1.0, 0.2, 0.0, 0.1],
+        [1.5, 0.2, 0.0, 0.1],
+        [2.0, 0.0, 0.0, 0.0],
+    ];
+    let end = 2.0;
+    let scene = edited("stewart", |s| set_waypoints(s, 0, &path));
+    let mut c = case("stewart singular pose".into(), scene, options(end + 1.0));
+    c.disturbance_end_s = end;
+    c.settle_s = 0.5;
+    let (o, first, least) = drive_conditioning(&c);
+    eprintln!("stewart singular: conditioning {least:e} (start {first:e}); {o:?}");
+    assert!(
+        least < 0.3 * first,
+        "no near-singular pose: conditioning {least:e} against {first:e} at the start"
+    );
+    assert_eq!(o.failed, 0, "{o:?}");
+}
+
 /// The Peaucellier linkage's dead point (P = Q, the rhombus flat) at about
-/// 2.58 s of its own hand path: the linkage folds into its other branch,
-/// within the scene's tolerance throughout (its quaternions jump by up to
-/// 1e-3 in |e|² at the snap, and are back within 1e-4 0.1 s later).
+/// 2.58 s of its own hand path: the linkage snaps into its other branch.
+/// For a tick or two the violation reaches 0.14–0.83 mm whatever the
+/// iterations (`haptloop sweep peaucellier`, BENCHMARKS.md), within the 1 mm
+/// the scene states; 0.1 s later it is back under 1 µm for good, and the
+/// quaternions' |e|² jump at the snap by about 1.5e-2 and are back within
+/// 1e-4.
 #[test]
 fn the_peaucellier_dead_point() {
     let mut c = case(
@@ -514,7 +697,8 @@ fn the_peaucellier_dead_point() {
     c.disturbance_end_s = 2.6;
     c.settle_s = 0.1;
     let o = assert_recovers(&c);
-    assert!(o.violation_max_m <= 5e-5, "{o:?}");
+    assert!(o.violation_max_m <= 1e-3, "{o:?}");
+    assert!(o.violation_after_m <= 1e-6, "{o:?}");
     assert!(o.norm_max > 1e-5, "the run went through the snap: {o:?}");
 }
 
