@@ -24,8 +24,8 @@ use super::{Plan, run};
 use crate::scenes::Scene;
 use anyhow::Result;
 use haptloop_rt::clock::{Clock, MonotonicClock, Nanos};
-use haptloop_rt::schedule::StopFlag;
 use haptloop_rt::hist::LatencyHistogram;
+use haptloop_rt::schedule::StopFlag;
 use haptloop_solver::program::{SolverStage, StageMarks};
 
 /// The stages of a fast-loop tick, in order.
@@ -227,7 +227,8 @@ impl TickTiming {
             over_period: if ticks == 0 {
                 0
             } else {
-                h.inner().count_between(period_ns.saturating_add(1), u64::MAX)
+                h.inner()
+                    .count_between(period_ns.saturating_add(1), u64::MAX)
             },
         }
     }

@@ -362,7 +362,11 @@ fn check_recovered(case: &Case, o: Outcome) -> Outcome {
             "{n}: violation {:e} against the bound {bound:e} it states: {o:?}",
             o.violation_after_m
         );
-        assert!(o.verdict.contains("EXCEEDED") && !o.verdict.contains("kept"), "{n}: {}", o.verdict);
+        assert!(
+            o.verdict.contains("EXCEEDED") && !o.verdict.contains("kept"),
+            "{n}: {}",
+            o.verdict
+        );
     } else if let Some(tol) = o.tolerance_m {
         assert!(
             o.violation_after_m <= tol,
@@ -427,7 +431,11 @@ fn geometry_scaled_from_1e_3_to_10() {
     for (m, seconds) in MECHANISMS {
         for s in [1e-3, 10.0] {
             let scene = edited(m, |t| scale_geometry(t, s));
-            assert_recovers(&case(format!("{m}, geometry × {s}"), scene, options(seconds)));
+            assert_recovers(&case(
+                format!("{m}, geometry × {s}"),
+                scene,
+                options(seconds),
+            ));
         }
     }
 }
@@ -479,7 +487,11 @@ fn a_hand_at_5_m_per_s() {
         let scene = edited(m, |t| set_waypoints(t, 0, &path));
         let toy = m == "sphere-toy";
         let settle = if toy { 1.0 } else { 0.1 };
-        let mut c = case(format!("{m}, hand at 5 m/s"), scene, options(end + settle + 0.3));
+        let mut c = case(
+            format!("{m}, hand at 5 m/s"),
+            scene,
+            options(end + settle + 0.3),
+        );
         c.disturbance_end_s = end;
         c.settle_s = settle;
         c.expect_failures = toy;
@@ -709,7 +721,11 @@ fn the_peaucellier_dead_point() {
 /// the scene's tolerance, and the quaternion norms with them.
 #[test]
 fn a_million_ticks_of_the_default_scene() {
-    let c = case("four-bar, 1e6 ticks".into(), builtin("four-bar"), options(1000.0));
+    let c = case(
+        "four-bar, 1e6 ticks".into(),
+        builtin("four-bar"),
+        options(1000.0),
+    );
     let (mut early, mut late) = (Vec::new(), Vec::new());
     let o = drive_with(&c, &mut |k, p| {
         if k == 9_999 {
@@ -734,5 +750,9 @@ fn a_million_ticks_of_the_default_scene() {
 /// its own path): more active rows than the platform has freedoms.
 #[test]
 fn the_stewart_platform_at_its_stroke_limits() {
-    assert_recovers(&case("stewart limits".into(), builtin("stewart"), options(6.0)));
+    assert_recovers(&case(
+        "stewart limits".into(),
+        builtin("stewart"),
+        options(6.0),
+    ));
 }

@@ -78,8 +78,14 @@ fn the_cli_sweep_writes_its_files() {
     // force error).
     let f = |p: &serde_json::Value, k: &str, s: &str| p[k][s].as_f64().unwrap();
     let (g1, p4) = (&points[0], &points[3]);
-    assert_eq!((g1["update"].as_str(), g1["iterations"].as_u64()), (Some("gradient"), Some(1)));
-    assert_eq!((p4["update"].as_str(), p4["iterations"].as_u64()), (Some("projected"), Some(4)));
+    assert_eq!(
+        (g1["update"].as_str(), g1["iterations"].as_u64()),
+        (Some("gradient"), Some(1))
+    );
+    assert_eq!(
+        (p4["update"].as_str(), p4["iterations"].as_u64()),
+        (Some("projected"), Some(4))
+    );
     assert!(
         f(g1, "force_error_n", "max") >= 10.0 * f(p4, "force_error_n", "max"),
         "{g1} {p4}"
@@ -89,9 +95,16 @@ fn the_cli_sweep_writes_its_files() {
         .iter()
         .map(|p| {
             assert!(f(p, "tick_ns", "p50") <= f(p, "tick_ns", "p99"), "{p}");
-            assert!(f(p, "force_error_n", "rms") <= f(p, "force_error_n", "max"), "{p}");
+            assert!(
+                f(p, "force_error_n", "rms") <= f(p, "force_error_n", "max"),
+                "{p}"
+            );
             let clean = p["failed_ticks"].as_u64() == Some(0);
-            (p["load"].as_f64().unwrap(), f(p, "force_error_n", "max"), clean)
+            (
+                p["load"].as_f64().unwrap(),
+                f(p, "force_error_n", "max"),
+                clean,
+            )
         })
         .collect();
     for (i, p) in points.iter().enumerate() {
