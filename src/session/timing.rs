@@ -208,7 +208,8 @@ pub struct TickTiming {
     pub p99_ns: u64,
     /// Largest.
     pub max_ns: u64,
-    /// Ticks that took longer than the period: overruns the loop would have
+    /// Ticks that took longer than the period (to the histogram's 3
+    /// significant digits): overruns the loop would have
     /// at this rate from its own compute alone (device I/O, the host's
     /// wake-up lateness and stalls come on top; `haptloop probe` measures
     /// those).
@@ -227,8 +228,11 @@ impl TickTiming {
             over_period: if ticks == 0 {
                 0
             } else {
-                h.inner()
-                    .count_between(period_ns.saturating_add(1), u64::MAX)
+                // Values in buckets above the period's: the histogram's 3
+                // significant digits (a tick within 0.1 % over the period
+                // shares its bucket and is not counted).
+                let above = h.inner().highest_equivalent(period_ns).saturating_add(1);
+                h.inner().count_between(above, u64::MAX)
             },
         }
     }
