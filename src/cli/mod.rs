@@ -57,12 +57,14 @@ enum Command {
     /// cores), then, to keep timing honest, reruns each point alone on one
     /// thread with nothing else of the sweep running and times its ticks
     /// per stage as `haptloop bench` does (the tick without the simulated
-    /// devices' stages). Per point: violation, force
-    /// error against the converged reference, tracking error, µs per tick,
-    /// ticks over the period, failed ticks. Prints a table with the Pareto
-    /// front (CPU load against force error) and the cheapest point within
-    /// the scene's tolerance; writes sweep.csv, sweep.json and front.svg to
-    /// --out DIR (default runs/sweep-<scene>-<time>/).
+    /// devices' stages; other processes on the machine still count). Per
+    /// point: violation, force error against the converged reference,
+    /// penetration (contact scenes), tracking error, µs per tick, ticks over
+    /// the period, failed ticks. Prints a table with the Pareto front (CPU
+    /// load against force error, else violation, else penetration) and the
+    /// cheapest point within the scene's tolerances; writes sweep.csv,
+    /// sweep.json and front.svg to --out DIR (default
+    /// runs/sweep-<scene>-<time>/).
     Sweep(sweep::SweepArgs),
     /// Measure this machine's timer and the scheduler's added jitter.
     ///
