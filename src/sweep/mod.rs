@@ -4,13 +4,14 @@
 //!  Grid (iterations × update × gain × rate × velocity filter) ──► Knobs per point
 //!  1. accuracy, in parallel (one deterministic session per point, mock clock,
 //!     reference sampled every `reference_every`): violation, force error
-//!     against the converged reference, tracking, failed ticks
+//!     against the converged reference, penetration, tracking, failed ticks
 //!  2. timing, afterwards, one point at a time on the calling thread
 //!     (session::timing::time_ticks: the same deterministic session with
 //!     `haptloop bench`'s per-stage timing on the monotonic clock; the tick
 //!     without the simulated devices' stages): p50, p99, ticks over the period
-//!  3. pareto.rs: the front of CPU load against force error, and the
-//!     cheapest point that meets every criterion
+//!  3. pareto.rs: the front of CPU load against force error (else
+//!     violation, else penetration), and the cheapest point that meets
+//!     every criterion
 //! ```
 //!
 //! Timing is kept honest by running it alone: no accuracy run shares the
