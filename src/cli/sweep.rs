@@ -68,6 +68,18 @@ pub struct SweepArgs {
     pub quiet: bool,
 }
 
+/// The first of each repeated item, in order (a repeat, anywhere in a
+/// list, would repeat grid points).
+fn first_of_each<T: PartialEq + Clone>(v: &[T]) -> Vec<T> {
+    let mut out: Vec<T> = Vec::with_capacity(v.len());
+    for x in v {
+        if !out.contains(x) {
+            out.push(x.clone());
+        }
+    }
+    out
+}
+
 /// Runs the sweep, prints its table and writes its files.
 pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
     let scene = match resolve(&args.scene) {
@@ -86,32 +98,19 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
             ..SessionOptions::default()
         },
     )?;
-    let dedup = |v: &mut Vec<f64>| {
-        let mut seen = Vec::new();
-        v.retain(|x| {
-            let new = !seen.contains(x);
-            seen.push(*x);
-            new
-        });
-    };
-    let mut gain = if args.gain.is_empty() {
+    let gain = if args.gain.is_empty() {
         vec![base.solver.gain]
     } else {
-        args.gain.clone()
+        first_of_each(&args.gain)
     };
-    let mut velocity_filter_ms = if args.velocity_filter_ms.is_empty() {
+    let velocity_filter_ms = if args.velocity_filter_ms.is_empty() {
         vec![base.solver.velocity_filter.as_secs_f64() * 1e3]
     } else {
-        args.velocity_filter_ms.clone()
+        first_of_each(&args.velocity_filter_ms)
     };
-    dedup(&mut gain);
-    dedup(&mut velocity_filter_ms);
-    let mut iterations = args.iterations.clone();
-    iterations.dedup();
-    let mut rate_hz = args.rate.clone();
-    rate_hz.dedup();
-    let mut update = args.update.clone();
-    update.dedup();
+    let iterations = first_of_each(&args.iterations);
+    let rate_hz = first_of_each(&args.rate);
+    let update = first_of_each(&args.update);
     let grid = Grid {
         iterations,
         update,
@@ -119,6 +118,17 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
         rate_hz,
         velocity_filter_ms,
     };
+    // Every session must have a tick to measure.
+    if let Some(&slowest) = grid.rate_hz.iter().min()
+        && (args.seconds * f64::from(slowest)).round() < 1.0
+    {
+        eprintln!(
+            "haptloop: error: --seconds {} gives no tick at {slowest} Hz; at least {} s",
+            args.seconds,
+            1.0 / f64::from(slowest)
+        );
+        return Ok(ExitCode::from(2));
+    }
     let n = grid.points().len();
     if n > MAX_POINTS {
         eprintln!(
@@ -146,7 +156,7 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
         force_tolerance: args.force_tolerance,
     };
     eprintln!(
-        "haptloop: sweeping `{}` over {n} points ({:.1} s each, {threads} thread{} for accuracy, then timing alone); Ctrl-C stops",
+        "haptloop: sweeping `{}` over {n} points ({} s each, {threads} thread{} for accuracy, then timing alone); Ctrl-C stops",
         scene.compiled.name,
         args.seconds,
         if threads == 1 { "" } else { "s" }

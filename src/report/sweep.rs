@@ -202,7 +202,7 @@ pub fn table(s: &Sweep) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "haptloop sweep {}: {} points, {:.1} s each (deterministic); reference every {}",
+        "haptloop sweep {}: {} points, {} s each (deterministic); reference every {}",
         s.scene,
         s.points.len(),
         s.seconds,
@@ -313,7 +313,7 @@ pub fn table(s: &Sweep) -> String {
     };
     let violation = match s.tolerance_m {
         Some(t) if measured(|a| a.violation_m.max) => format!("violation within {t:e} m, "),
-        Some(_) => "violation (not measured: no joint rows), ".to_string(),
+        Some(_) => "violation (not measured), ".to_string(),
         None => "violation (no scene tolerance), ".to_string(),
     };
     let force = if measured(|a| a.force_error_n.max) {

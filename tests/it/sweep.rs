@@ -142,6 +142,8 @@ fn bad_sweep_flags_are_usage_errors_naming_the_flag() {
         ("--gain", "0"),
         ("--velocity-filter-ms", "1001"),
         ("--seconds", "inf"),
+        // Less than one tick at the slowest rate.
+        ("--seconds", "0.001"),
     ] {
         let o = haptloop()
             .args(["sweep", "four-bar", flag, value, "--no-files"])
