@@ -1,5 +1,5 @@
-//! Reports: the probe's and the session's text reports, `summary.json`, and
-//! the SVG plots.
+//! Reports: the probe's and the session's text reports, `summary.json`, the
+//! SVG plots, and the sweep's table and files.
 
 pub mod figure;
 pub mod plots;
@@ -7,3 +7,4 @@ pub mod probe;
 pub mod scene_plot;
 pub mod session;
 pub mod summary;
+pub mod sweep;
