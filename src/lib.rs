@@ -5,7 +5,7 @@
 //!
 //! ```text
 //!  scenes::resolve(SCENE|FILE) ─► Scene { CompiledScene (haptloop_solver), hand traces }
-//!  cli ─► probe (haptloop_rt::probe) │ scenes │ check │ run (session)
+//!  cli ─► probe (haptloop_rt::probe) │ scenes │ check │ run (session) │ sweep (sweep → session)
 //!  report ─► text reports, summary.json, percentile distributions, SVG plots
 //! ```
 //!
@@ -16,3 +16,4 @@ pub mod cli;
 pub mod report;
 pub mod scenes;
 pub mod session;
+pub mod sweep;

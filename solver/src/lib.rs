@@ -45,7 +45,10 @@
 //!   loads of Eq. 7–8 plus a virtual coupling ([`FingerOutput`], force on the
 //!   finger, world frame), with zero allocation, and refuses a finite but
 //!   absurd result ([`TickOutcome::Diverged`]); [`reference_finger_wrenches`]
-//!   is the dense reference.
+//!   is the dense reference. [`Program::converged_tick`] replays a tick
+//!   saved as [`TickState`]s to convergence: the force a converged update
+//!   would have rendered, against which the fast loop's force error is
+//!   measured.
 //! - [`semantic`]: Gösele & Stuerzlinger's semantic constraints on the slow
 //!   loop (labels, snapping, checkMove, the grouping graph, consistency);
 //!   a satisfied constraint reaches the fast loop as rows
@@ -121,6 +124,6 @@ pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };
 pub use program::{
-    AssemblyReport, Divergence, DivergenceLimits, FingerOutput, Program, ProgramError, TickOutcome,
-    TickReport,
+    AssemblyReport, ConvergedTick, Divergence, DivergenceLimits, FingerOutput, Program,
+    ProgramError, TickOutcome, TickReport, TickState,
 };

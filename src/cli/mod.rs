@@ -8,6 +8,7 @@ mod probe;
 mod rt_args;
 mod run;
 mod scenes;
+mod sweep;
 mod values;
 
 use anyhow::Result;
@@ -49,6 +50,22 @@ enum Command {
     /// constraint violation, tracking error, force per finger, safety events.
     /// Files go to --out DIR (default runs/<scene>-<time>/).
     Run(run::RunArgs),
+    /// Measure the speed/accuracy trade of a scene over a grid of settings.
+    ///
+    /// Runs one deterministic session per point of the grid (iterations ×
+    /// update rule × gain × rate × velocity filter; in parallel across the
+    /// cores), then, to keep timing honest, reruns each point alone on one
+    /// thread with nothing else of the sweep running and times its ticks
+    /// per stage as `haptloop bench` does (the tick without the simulated
+    /// devices' stages; other processes on the machine still count). Per
+    /// point: violation, force error against the converged reference,
+    /// penetration (contact scenes), tracking error, µs per tick, ticks over
+    /// the period, failed ticks. Prints a table with the Pareto front (CPU
+    /// load against force error, else violation, else penetration) and the
+    /// cheapest point within the scene's tolerances; writes sweep.csv,
+    /// sweep.json and front.svg to --out DIR (default
+    /// runs/sweep-<scene>-<time>/).
+    Sweep(sweep::SweepArgs),
     /// Measure this machine's timer and the scheduler's added jitter.
     ///
     /// Runs the hard-rate scheduler with a synthetic tick load, alternating in
@@ -96,6 +113,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Check { scene }) => check::run(&scene),
         Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Run(args)) => run::run(&args, &stop),
+        Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),
     }

@@ -32,6 +32,11 @@ pub struct RunArgs {
     /// solver's.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub iterations: Option<u32>,
+    /// Update rule of the fast loop: `projected` (Gauss–Newton with the
+    /// force solve's factor; the default) or `gradient` (Nelson & Cohen
+    /// Eq. 1–3).
+    #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
+    pub update: Option<haptloop_solver::UpdateRule>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the
     /// scene's, else the solver's.
     #[arg(long, value_parser = values::positive)]
@@ -87,6 +92,7 @@ impl Default for RunArgs {
             seconds: 10.0,
             rate: None,
             iterations: None,
+            update: None,
             gain: None,
             velocity_filter_ms: None,
             deterministic: false,
@@ -104,7 +110,7 @@ impl Default for RunArgs {
 }
 
 /// `YYYYMMDD-HHMMSS` in UTC, for default run directories.
-fn utc_stamp() -> String {
+pub(super) fn utc_stamp() -> String {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs()) as i64;
@@ -159,6 +165,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         seconds: args.seconds,
         rate_hz: args.rate,
         iterations: args.iterations,
+        update: args.update,
         gain: args.gain,
         velocity_filter: args
             .velocity_filter_ms
@@ -170,6 +177,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         replay: args.replay.clone(),
         spin: args.rt.spin(),
         thread: args.rt.thread(),
+        reference_every: None,
     };
     let plan = Plan::new(&scene, &options)?;
     eprintln!(

@@ -32,6 +32,59 @@ pub fn filter_ms(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Update iterations per tick: an integer 1–10000.
+pub fn iterations(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (1..=10_000).contains(&v) => Ok(v),
+        Ok(v) => Err(format!("must be 1–10000, got {v}")),
+        Err(_) => Err(format!("`{s}` is not a whole number 1–10000")),
+    }
+}
+
+/// A loop rate, Hz: an integer in the scheduler's range.
+pub fn rate(s: &str) -> Result<u32, String> {
+    use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ};
+    match s.trim().parse::<u32>() {
+        Ok(v) if (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&v) => Ok(v),
+        Ok(v) => Err(format!("must be {MIN_RATE_HZ}–{MAX_RATE_HZ} Hz, got {v}")),
+        Err(_) => Err(format!(
+            "`{s}` is not a whole number of Hz ({MIN_RATE_HZ}–{MAX_RATE_HZ})"
+        )),
+    }
+}
+
+/// Milliseconds between reference samples: 0 (every tick) to 10000.
+pub fn reference_ms(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if (0.0..=10_000.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("must be 0–10000 ms, got {v}"))
+    }
+}
+
+/// A fraction in (0, 1].
+pub fn fraction(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, 1], got {v}"))
+    }
+}
+
+/// An update rule: `projected` (the default) or `gradient` (Nelson & Cohen
+/// Eq. 1–3).
+pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
+    match s.trim() {
+        "projected" => Ok(haptloop_solver::UpdateRule::Projected),
+        "gradient" => Ok(haptloop_solver::UpdateRule::Gradient),
+        other => Err(format!(
+            "unknown update rule `{other}` (expected `projected` or `gradient`)"
+        )),
+    }
+}
+
 fn number(s: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
@@ -57,5 +110,12 @@ mod tests {
         assert_eq!(positive("1e20"), Ok(1e20));
         assert_eq!(filter_ms("0"), Ok(0.0));
         assert!(filter_ms("1000.1").is_err() && filter_ms("x").is_err());
+        assert!(update_rule("gradient").is_ok() && update_rule("newton").is_err());
+        assert_eq!((iterations("1"), iterations("10000")), (Ok(1), Ok(10_000)));
+        assert!(iterations("0").is_err() && iterations("").is_err() && iterations("2.5").is_err());
+        assert_eq!((rate("100"), rate("20000")), (Ok(100), Ok(20_000)));
+        assert!(rate("99").is_err() && rate("20001").is_err() && rate("").is_err());
+        assert!(reference_ms("0").is_ok() && reference_ms("-1").is_err());
+        assert!(fraction("1").is_ok() && fraction("0").is_err() && fraction("1.5").is_err());
     }
 }

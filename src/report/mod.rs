@@ -1,5 +1,5 @@
-//! Reports: the probe's and the session's text reports, `summary.json`, and
-//! the SVG plots.
+//! Reports: the probe's and the session's text reports, `summary.json`, the
+//! SVG plots, and the sweep's table and files.
 
 pub mod figure;
 pub mod plots;
@@ -8,3 +8,4 @@ pub mod scene_plot;
 pub mod semantic;
 pub mod session;
 pub mod summary;
+pub mod sweep;

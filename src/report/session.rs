@@ -200,21 +200,7 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     if let Some(sem) = &s.semantic {
         super::semantic::lines(&mut out, sem);
     }
-    match &s.slow_loop.reference_missing {
-        None => {
-            let _ = writeln!(
-                out,
-                "against the Newton-converged reference ({} samples): configuration within {:.2e} m, \
-                 static finger force within {:.2e} N",
-                s.slow_loop.reference_samples,
-                s.slow_loop.reference_q_error_m,
-                s.slow_loop.reference_force_error_n
-            );
-        }
-        Some(why) => {
-            let _ = writeln!(out, "no reference samples: {why}");
-        }
-    }
+    reference_line(&mut out, s);
     let _ = write!(
         out,
         "slow loop: {} re-projections ({} recoveries, {} not converged); programs swapped in: {}; \
@@ -227,6 +213,38 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.wall_clock_s
     );
     out
+}
+
+/// The fast loop's force against the converged reference.
+fn reference_line(out: &mut String, s: &Summary) {
+    let r = &s.reference;
+    if let Some(why) = &r.missing {
+        let _ = writeln!(out, "force error against the converged reference: {why}");
+        return;
+    }
+    let skipped = if r.not_compared.is_empty() {
+        String::new()
+    } else {
+        let k: Vec<String> = r
+            .not_compared
+            .iter()
+            .map(|(k, n)| format!("{k} × {n}"))
+            .collect();
+        format!("; not compared: {}", k.join(", "))
+    };
+    let _ = writeln!(
+        out,
+        "force error against the converged reference ({} of {} sampled ticks, one in {}): \
+         max {:.2e} N, RMS {:.2e} N ({:.1e} and {:.1e} of the force); configuration within {:.2e} m{skipped}",
+        r.compared,
+        r.samples,
+        r.every_ticks,
+        r.force_error_n.max,
+        r.force_error_n.rms,
+        r.force_error_relative.max,
+        r.force_error_relative.rms,
+        r.configuration_error_m.max,
+    );
 }
 
 /// How the design variables and objectives moved, one line each.

@@ -46,8 +46,8 @@ pub struct Violation {
     /// Ticks whose solve failed (zero force written); not covered.
     pub ticks_failed: u64,
     /// What the figures show against the tolerance, in words: `kept`,
-    /// `EXCEEDED`, `kept over the N ticks that succeeded …`, or why nothing
-    /// was measured (the figures are then `"NaN"`).
+    /// `EXCEEDED`, `FAILED TICKS: …` (never `kept` when a tick failed), or
+    /// why nothing was measured (the figures are then `"NaN"`).
     pub verdict: String,
 }
 
@@ -69,17 +69,22 @@ impl Violation {
                 format!("not measured: all {failed} ticks failed")
             };
         }
-        let covered = if failed == 0 {
-            String::new()
-        } else {
-            format!(
-                " over the {measured} ticks that succeeded only ({failed} failed and are not covered)"
-            )
-        };
+        if failed > 0 {
+            // Never "kept" when ticks failed: those ticks wrote zero force
+            // and their violation is not a measurement.
+            let over = match tolerance {
+                Some(t) if max <= t => "within the tolerance",
+                Some(_) => "EXCEEDED",
+                None => "no tolerance stated",
+            };
+            return format!(
+                "FAILED TICKS: {failed} ticks failed and are not covered; over the {measured} that succeeded: {over}"
+            );
+        }
         match tolerance {
-            Some(t) if max <= t => format!("kept{covered}"),
-            Some(_) => format!("EXCEEDED{covered}"),
-            None => format!("no tolerance stated{covered}"),
+            Some(t) if max <= t => "kept".into(),
+            Some(_) => "EXCEEDED".into(),
+            None => "no tolerance stated".into(),
         }
     }
 }
@@ -151,20 +156,109 @@ pub struct SlowLoop {
     /// Largest violation the slow loop saw in a snapshot, m.
     #[serde(with = "super::figure")]
     pub max_seen_violation_m: f64,
-    /// Snapshots compared with a Newton-converged reference (none for models
-    /// over 300 coordinates, whose dense reference is too slow to sample).
-    pub reference_samples: u64,
-    /// Why there are no reference samples, when there are none.
-    pub reference_missing: Option<String>,
-    /// Largest body-position distance from the reference configuration, m.
-    #[serde(with = "super::figure")]
-    pub reference_q_error_m: f64,
-    /// Largest difference of a finger's static Eq. 7 force from the
-    /// reference's, N.
-    #[serde(with = "super::figure")]
-    pub reference_force_error_n: f64,
     /// Wall time of one slow-loop step (about every 5 ms), monotonic clock.
     pub step_ns: Percentiles,
+}
+
+/// The fast loop's force against the converged reference: the same tick,
+/// from the same state, replayed to convergence (`session::reference`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// One tick in this many was sampled.
+    pub every_ticks: u64,
+    /// Ticks sampled.
+    pub samples: u64,
+    /// Samples compared (the figures cover these only).
+    pub compared: u64,
+    /// Why nothing was compared, when nothing was (the figures are then
+    /// `"NaN"`).
+    pub missing: Option<String>,
+    /// |F − F*| per finger and sample, N: the force the solver asked for
+    /// (before the safety layer) against the reference's.
+    pub force_error_n: MaxRms,
+    /// The same over the reference force: max error / max |F*|, RMS error /
+    /// RMS |F*|.
+    pub force_error_relative: MaxRms,
+    /// Largest and RMS |F*|, N.
+    pub force_n: MaxRms,
+    /// Largest distance of a body origin from the reference configuration
+    /// per sample, m: max and RMS over samples.
+    pub configuration_error_m: MaxRms,
+    /// Samples not compared, by why: the fast tick failed, the reference's
+    /// solve failed, it did not converge, a newer sample replaced it.
+    pub not_compared: BTreeMap<String, u64>,
+    /// Compared samples whose reference stopped at round-off above the
+    /// 1e-12 m tolerance (included; `last_step_max_m` says how far).
+    pub round_off: u64,
+    /// Most iterations a reference took.
+    pub iterations_max: u32,
+    /// Largest last step of a compared reference, m.
+    #[serde(with = "super::figure")]
+    pub last_step_max_m: f64,
+}
+
+impl Reference {
+    fn of(o: &SessionOutcome) -> Reference {
+        let r = &o.slow.reference;
+        let nan = MaxRms {
+            max: f64::NAN,
+            rms: f64::NAN,
+        };
+        let missing = if let Some(why) = o.slow.reference_unsupported {
+            Some(format!("not measured: {why}"))
+        } else if r.compared > 0 {
+            None
+        } else if r.captured == 0 {
+            Some("not measured: no tick was sampled".to_string())
+        } else {
+            Some(format!(
+                "not measured: none of the {} sampled ticks could be compared",
+                r.captured
+            ))
+        };
+        let measured = missing.is_none();
+        let pick = |m: MaxRms| if measured { m } else { nan };
+        let not_compared = [
+            ("fast_tick_failed", r.fast_failed),
+            ("reference_failed", r.reference_failed),
+            ("not_converged", r.not_converged),
+            ("overwritten", r.overwritten),
+        ]
+        .into_iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(k, n)| (k.to_string(), n))
+        .collect();
+        Reference {
+            every_ticks: o.plan.reference_every_ticks,
+            samples: r.captured,
+            compared: r.compared,
+            missing,
+            force_error_n: pick(MaxRms {
+                max: r.force_error_max_n,
+                rms: r.force_error_rms_n(),
+            }),
+            force_error_relative: pick(MaxRms {
+                max: r.force_error_max_n / r.force_max_n,
+                rms: r.force_error_rms_n() / r.force_rms_n(),
+            }),
+            force_n: pick(MaxRms {
+                max: r.force_max_n,
+                rms: r.force_rms_n(),
+            }),
+            configuration_error_m: pick(MaxRms {
+                max: r.q_error_max_m,
+                rms: r.q_error_rms_m(),
+            }),
+            not_compared,
+            round_off: r.round_off,
+            iterations_max: r.iterations_max,
+            last_step_max_m: if measured {
+                r.last_step_max_m
+            } else {
+                f64::NAN
+            },
+        }
+    }
 }
 
 /// The tick's time per stage (`session::timing`), monotonic clock, ns.
@@ -366,6 +460,8 @@ pub struct Summary {
     pub assembly: Option<Assembly>,
     /// The slow loop's re-projections.
     pub slow_loop: SlowLoop,
+    /// The fast loop's force error against the converged reference.
+    pub reference: Reference,
     /// Programs the slow loop handed over.
     pub programs_swapped: u64,
     /// Contact figures (absent for scenes without contact).
@@ -500,27 +596,9 @@ impl Summary {
                 recoveries: o.slow.recoveries,
                 placements_not_converged: o.slow.placements_not_converged,
                 max_seen_violation_m: o.slow.max_seen_violation_m,
-                reference_samples: o.slow.reference_samples,
-                reference_missing: (o.slow.reference_samples == 0).then(|| {
-                    if o.slow.reference_skipped_large > 0 {
-                        format!(
-                            "the dense reference is skipped above {} coordinates",
-                            crate::session::REFERENCE_MAX_COORDS
-                        )
-                    } else if o.slow.reference_skipped_no_joints > 0 {
-                        "the scene has no joint rows: a joints-only reference would be the \
-                         configuration itself"
-                            .into()
-                    } else if measured == 0 {
-                        "no tick succeeded".into()
-                    } else {
-                        "no healthy snapshot fell on a sampling step (every 100 ms)".into()
-                    }
-                }),
-                reference_q_error_m: o.slow.reference_q_error_m,
-                reference_force_error_n: o.slow.reference_force_error_n,
                 step_ns: o.slow.step_ns.into(),
             },
+            reference: Reference::of(o),
             programs_swapped: s.programs_swapped,
             contact: o.slow.contact.map(|c| {
                 let f = &s.contact;
@@ -533,23 +611,19 @@ impl Summary {
                 };
                 let max_pen = c.max_penetration_m.max(f.max_penetration_m);
                 let tol = o.plan.contact.penetration_tolerance_m;
-                let covered = if s.solver_failures == 0 {
-                    String::new()
-                } else {
-                    format!(
-                        " over the {measured} ticks that succeeded only ({} failed and are not covered)",
-                        s.solver_failures
-                    )
-                };
+                let failed = s.solver_failures;
+                let within = max_pen <= tol;
                 Contact {
                     max_penetration_m: max_pen,
                     tolerance_m: tol,
-                    verdict: if measured == 0 {
-                        "not measured: no tick succeeded".into()
-                    } else if max_pen <= tol {
-                        format!("kept{covered}")
-                    } else {
-                        format!("EXCEEDED{covered}")
+                    verdict: match (measured, failed, within) {
+                        (0, _, _) => "not measured: no tick succeeded".into(),
+                        (_, 0, true) => "kept".into(),
+                        (_, 0, false) => "EXCEEDED".into(),
+                        (_, f, w) => format!(
+                            "FAILED TICKS: {f} ticks failed and are not covered; over the {measured} that succeeded: {}",
+                            if w { "within the tolerance" } else { "EXCEEDED" }
+                        ),
                     },
                     max_penetration_exact_m: c.max_penetration_m,
                     max_penetration_rows_m: f.max_penetration_m,

@@ -117,6 +117,10 @@ pub struct FastLoop<C: Clock> {
     pub(super) inbox: Option<super::contact::WitnessInbox>,
     /// Design variables' and objectives' figures and trace (scenes with any).
     pub(super) design: Option<super::design::DesignTracker>,
+    /// Samples ticks for the converged reference (scenes it supports).
+    pub(super) reference: Option<super::reference::ReferenceCapture>,
+    /// The last tick was sampled for the reference.
+    pub(super) sampled: bool,
     /// Times the stages of the tick (monotonic clock, whatever `clock` is).
     pub(super) timer: StageClock,
     /// Per finger: the force its device's motors produced this tick, scene frame.
@@ -153,6 +157,11 @@ impl<C: Clock> FastLoop<C> {
     /// The running program.
     pub fn program(&self) -> &Program {
         &self.program.program
+    }
+
+    /// True if the last tick was sampled for the converged reference.
+    pub fn sampled(&self) -> bool {
+        self.sampled
     }
 
     /// The devices.
@@ -212,6 +221,11 @@ impl<C: Clock> TickBody for FastLoop<C> {
             .map_or(1, |last| tick.index.saturating_sub(last).max(1));
         self.last_index = Some(tick.index);
         let dt = self.periods(steps);
+        if let Some(r) = &mut self.reference {
+            r.before(tick.index, &self.program.program);
+            // Saving the state is bookkeeping, not the update's time.
+            self.timer.lap(Stage::Bookkeeping);
+        }
         let report = self
             .program
             .program
@@ -285,6 +299,10 @@ impl<C: Clock> TickBody for FastLoop<C> {
             });
         }
         self.stats.record_tick(&report, solved);
+        if let Some(r) = &mut self.reference {
+            let p = &self.program.program;
+            self.sampled = r.after(tick.index, p, &self.targets, dt.as_secs_f64(), solved);
+        }
 
         let program = &self.program.program;
         self.snapshot.publish_with(|s| {

@@ -16,21 +16,26 @@ mod design;
 mod fast;
 mod plan;
 mod recorder;
+mod reference;
 mod rig;
 mod semantic;
 mod slow;
 mod stats;
-mod timing;
+pub mod timing;
 mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
-pub use plan::{Plan, SessionOptions};
+pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
+pub use reference::{
+    REFERENCE_GAIN, REFERENCE_MAX_ITERATIONS, REFERENCE_TOLERANCE_M, ReferenceCapture,
+    ReferenceCheck, ReferenceSample, ReferenceStats,
+};
 pub use rig::{Rig, SessionDevice};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
-pub use slow::{Correction, Handover, REFERENCE_MAX_COORDS, SlowLoop, SlowStats};
+pub use slow::{Correction, Handover, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
 pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, TrackSample};
@@ -196,6 +201,17 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
             .context("starting from the assembled configuration")?;
     }
     let inbox = contact.as_ref().map(|_| WitnessInbox::new(frames_rx));
+    // The converged reference of sampled ticks, where it applies.
+    let reference_unsupported = reference::unsupported(contact.is_some());
+    let (capture, check) = match reference_unsupported {
+        Some(_) => (None, None),
+        None if plan.reference_every_ticks == 0 => (None, None),
+        None => {
+            let (c, k) = reference::pair(&program, plan.reference_every_ticks)
+                .context("building the converged reference")?;
+            (Some(c), Some(k))
+        }
+    };
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
     let n = model.n_coords();
@@ -281,6 +297,8 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         recorders,
         inbox,
         design,
+        reference: capture,
+        sampled: false,
         timer: StageClock::default(),
         rendered: vec![Vector3::zeros(); fingers],
         commanded: vec![Vector3::zeros(); fingers],
@@ -296,9 +314,11 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         threshold_m,
         broken_m,
         last_good: q.clone(),
-        stats: SlowStats::default(),
-        // Every 100 ms of slow-loop steps (each about 5 ms).
-        reference_every: 20,
+        stats: SlowStats {
+            reference_unsupported,
+            ..SlowStats::default()
+        },
+        reference: check,
         contact,
         semantic,
         step_times: haptloop_rt::hist::LatencyHistogram::new(),
@@ -476,6 +496,10 @@ impl TickBody for Lockstep<'_> {
     type Fault = SessionFault;
     fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
         let status = self.fast.tick(tick);
+        // Every sampled tick is compared, in order: nothing is overwritten.
+        if self.fast.sampled() {
+            self.slow.check_reference();
+        }
         if tick.index % self.every == self.every - 1 {
             self.slow.step();
             if let Err(e) = self.recorder.drain(self.trace, self.names) {

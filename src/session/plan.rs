@@ -5,8 +5,8 @@ use crate::scenes::Scene;
 use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
 use haptloop_rt::thread::ThreadConfig;
-use haptloop_solver::SolverSettings;
 use haptloop_solver::geometry::ContactSettings;
+use haptloop_solver::{SolverSettings, UpdateRule};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -31,6 +31,8 @@ pub struct SessionOptions {
     pub rate_hz: Option<u32>,
     /// AL iterations per tick override.
     pub iterations: Option<u32>,
+    /// Update rule override (projected or Nelson & Cohen's gradient step).
+    pub update: Option<UpdateRule>,
     /// Constraint gain K override.
     pub gain: Option<f64>,
     /// Velocity low-pass time constant override (zero: off).
@@ -50,7 +52,15 @@ pub struct SessionOptions {
     pub spin: Duration,
     /// The fast thread's core, priority and memory-locking requests.
     pub thread: ThreadConfig,
+    /// Compare one tick in this many with the converged reference (`None`:
+    /// [`DEFAULT_REFERENCE_EVERY`]; zero: every tick).
+    pub reference_every: Option<Duration>,
 }
+
+/// How often a session compares the fast loop's force with the converged
+/// reference: every 100 ms (a replay costs a few factorisations of the
+/// force matrix on the slow thread: 2–5 ms on the sphere toy).
+pub const DEFAULT_REFERENCE_EVERY: Duration = Duration::from_millis(100);
 
 impl Default for SessionOptions {
     fn default() -> Self {
@@ -58,6 +68,7 @@ impl Default for SessionOptions {
             seconds: 10.0,
             rate_hz: None,
             iterations: None,
+            update: None,
             gain: None,
             velocity_filter: None,
             deterministic: false,
@@ -67,6 +78,7 @@ impl Default for SessionOptions {
             replay: None,
             spin: Duration::ZERO,
             thread: ThreadConfig::default(),
+            reference_every: None,
         }
     }
 }
@@ -102,6 +114,9 @@ pub struct Plan {
     pub thread: ThreadConfig,
     /// The contact active set's knobs (scenes with shapes).
     pub contact: ContactSettings,
+    /// Ticks between comparisons with the converged reference (1: every
+    /// tick; 0: none).
+    pub reference_every_ticks: u64,
     /// Translational joint rows (violation is measured on these; 0: the
     /// status line and report say there is nothing to violate).
     pub joint_rows: usize,
@@ -124,6 +139,9 @@ impl Plan {
                 bail!("--iterations must be 1–10000, got {n}");
             }
             solver.iterations = n;
+        }
+        if let Some(u) = options.update {
+            solver.update = u;
         }
         if let Some(k) = options.gain.or(s.gain) {
             if !(k.is_finite() && k > 0.0) {
@@ -192,6 +210,13 @@ impl Plan {
             spin: options.spin,
             thread: options.thread.clone(),
             contact,
+            reference_every_ticks: (options
+                .reference_every
+                .unwrap_or(DEFAULT_REFERENCE_EVERY)
+                .as_secs_f64()
+                * f64::from(rate_hz))
+            .round()
+            .max(1.0) as u64,
             joint_rows: super::joint_length_rows(&scene.compiled.model),
         })
     }

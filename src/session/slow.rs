@@ -9,9 +9,7 @@ use super::fast::Snapshot;
 use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
 use haptloop_rt::hist::{LatencyHistogram, Summary};
-use haptloop_solver::{
-    Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings, reference_finger_wrenches,
-};
+use haptloop_solver::{Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings};
 use std::sync::Arc;
 
 /// How a handed-over program corrects the configuration it adopts.
@@ -88,22 +86,10 @@ pub struct SlowStats {
     pub programs_dropped: u64,
     /// The last placement's outcome.
     pub last_placement: Option<SolveInfo>,
-    /// Snapshots compared with a Newton-converged reference.
-    pub reference_samples: u64,
-    /// Reference samples skipped because the model has more than
-    /// [`REFERENCE_MAX_COORDS`] coordinates.
-    pub reference_skipped_large: u64,
-    /// Reference samples skipped because the model has no joint rows: the
-    /// joints-only reference would be the configuration itself and every
-    /// figure a trivial 0.
-    pub reference_skipped_no_joints: u64,
-    /// Largest distance of a fast-loop body position from the reference
-    /// configuration, m.
-    pub reference_q_error_m: f64,
-    /// Largest difference of a finger's static Eq. 7 force (gravity and joint
-    /// loads at rest, dense reference solve) between the fast loop's
-    /// configuration and the reference, N.
-    pub reference_force_error_n: f64,
+    /// The fast loop's force error against the converged reference.
+    pub reference: super::reference::ReferenceStats,
+    /// Why the force error is not measured in this scene, if it is not.
+    pub reference_unsupported: Option<&'static str>,
     /// The contact active set's figures (`None`: no contact machinery).
     pub contact: Option<super::contact::ContactSlowStats>,
     /// Wall time of one step, ns (monotonic clock).
@@ -129,8 +115,8 @@ pub struct SlowLoop {
     pub(super) broken_m: f64,
     pub(super) last_good: Vec<f64>,
     pub(super) stats: SlowStats,
-    /// Steps between reference measurements (0: never).
-    pub(super) reference_every: u64,
+    /// The converged reference of sampled ticks (scenes it supports).
+    pub(super) reference: Option<super::reference::ReferenceCheck>,
     /// The contact active set, for scenes with shapes that can touch.
     pub(super) contact: Option<super::contact::ContactLoop>,
     /// Semantic constraints and the hand's holds (scenes with areas or
@@ -139,20 +125,6 @@ pub struct SlowLoop {
     /// Wall time of each step, ns.
     pub(super) step_times: LatencyHistogram,
 }
-
-/// Whether `model` holds a joint (anything but quaternion norms and design
-/// bounds, which a configuration satisfies by itself).
-fn has_joints(model: &Model) -> bool {
-    use haptloop_solver::ConstraintKind::{DesignBound, DesignPin, QuaternionNorm};
-    model
-        .constraints()
-        .iter()
-        .any(|c| !matches!(c.kind, QuaternionNorm | DesignBound | DesignPin))
-}
-
-/// Largest model (coordinates) whose snapshots are compared with the dense
-/// reference: its SVD costs O(n³) on the slow thread.
-pub const REFERENCE_MAX_COORDS: usize = 300;
 
 impl SlowLoop {
     /// One pass: collect returned programs, read the newest snapshot, and
@@ -167,6 +139,7 @@ impl SlowLoop {
 
     fn step_untimed(&mut self) {
         self.stats.steps += 1;
+        self.check_reference();
         while let Some(spent) = self.programs.collect() {
             self.stats.programs_dropped += 1;
             if let Some(c) = &mut self.contact {
@@ -195,10 +168,6 @@ impl SlowLoop {
         if snap.solved && finite && v <= self.threshold_m {
             self.last_good.clear();
             self.last_good.extend_from_slice(&snap.q);
-            if self.reference_every > 0 && self.stats.steps.is_multiple_of(self.reference_every) {
-                let q = snap.q.clone();
-                self.measure_against_reference(&q);
-            }
             return;
         }
         // One re-projection in flight at a time: wait until the fast loop has
@@ -212,45 +181,11 @@ impl SlowLoop {
         self.reproject(&snapshot_q, recover);
     }
 
-    /// Compares the fast loop's configuration `q` with the Newton-converged
-    /// assembled configuration nearest to it, and the static finger forces of
-    /// the two (dense reference solve).
-    fn measure_against_reference(&mut self, q: &[f64]) {
-        if self.model.n_coords() > REFERENCE_MAX_COORDS {
-            self.stats.reference_skipped_large += 1;
-            return;
-        }
-        if !has_joints(&self.joints_only) {
-            self.stats.reference_skipped_no_joints += 1;
-            return;
-        }
-        let mut q_star = q.to_vec();
-        let Ok(info) = self.placement.solve(&self.joints_only, &mut q_star, q, &[]) else {
-            return;
-        };
-        if info.status != SolveStatus::Converged {
-            return;
-        }
-        let rest = vec![0.0; q.len()];
-        let (Ok(fast), Ok(reference)) = (
-            reference_finger_wrenches(&self.model, q, &rest, &rest),
-            reference_finger_wrenches(&self.model, &q_star, &rest, &rest),
-        ) else {
-            return;
-        };
-        let s = &mut self.stats;
-        s.reference_samples += 1;
-        for (_, off) in self.model.layout().moving_bodies() {
-            let d = (0..3)
-                .map(|k| (q[off + k] - q_star[off + k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            s.reference_q_error_m = s.reference_q_error_m.max(d);
-        }
-        for (a, b) in fast.iter().zip(&reference) {
-            s.reference_force_error_n = s
-                .reference_force_error_n
-                .max((a.force_n - b.force_n).norm());
+    /// Compares the newest sampled tick with its converged reference
+    /// (`session::reference`), if there is a new one.
+    pub fn check_reference(&mut self) {
+        if let Some(r) = &mut self.reference {
+            r.check();
         }
     }
 
@@ -362,6 +297,9 @@ impl SlowLoop {
     pub fn stats(&self) -> SlowStats {
         let mut s = self.stats;
         s.contact = self.contact.as_ref().map(|c| c.stats());
+        if let Some(r) = &self.reference {
+            s.reference = r.stats();
+        }
         s.step_ns = self.step_times.summary();
         s
     }

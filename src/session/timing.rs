@@ -15,9 +15,17 @@
 //! [`StageClock::lap`] is a clock read and a subtraction; [`StageTimes::record`]
 //! records nine histogram values: no allocation, no lock, no syscall (the
 //! clock reads go through the vDSO).
+//!
+//! [`time_ticks`] is what `haptloop sweep` times each grid point with: the
+//! same deterministic session `haptloop bench` runs, its stage histograms
+//! read back, so the two commands' figures are one measurement.
 
+use super::{Plan, run};
+use crate::scenes::Scene;
+use anyhow::Result;
 use haptloop_rt::clock::{Clock, MonotonicClock, Nanos};
 use haptloop_rt::hist::LatencyHistogram;
+use haptloop_rt::schedule::StopFlag;
 use haptloop_solver::program::{SolverStage, StageMarks};
 
 /// The stages of a fast-loop tick, in order.
@@ -187,6 +195,66 @@ impl Default for StageTimes {
     }
 }
 
+/// The measured cost of the ticks of one session, ns: the tick without the
+/// simulated devices' stages (a real device's read and write are I/O, not
+/// this simulation's physics sub-steps), from [`StageTimes`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TickTiming {
+    /// Ticks timed.
+    pub ticks: u64,
+    /// Median.
+    pub p50_ns: u64,
+    /// 99th percentile.
+    pub p99_ns: u64,
+    /// Largest.
+    pub max_ns: u64,
+    /// Ticks that took longer than the period (to the histogram's 3
+    /// significant digits): overruns the loop would have
+    /// at this rate from its own compute alone (device I/O, the host's
+    /// wake-up lateness and stalls come on top; `haptloop probe` measures
+    /// those).
+    pub over_period: u64,
+}
+
+impl TickTiming {
+    /// The figures of `h`, with the ticks over `period_ns` counted.
+    pub fn of(h: &LatencyHistogram, period_ns: u64) -> Self {
+        let ticks = h.count();
+        TickTiming {
+            ticks,
+            p50_ns: h.quantile(0.50),
+            p99_ns: h.quantile(0.99),
+            max_ns: h.max(),
+            over_period: if ticks == 0 {
+                0
+            } else {
+                // Values in buckets above the period's: the histogram's 3
+                // significant digits (a tick within 0.1 % over the period
+                // shares its bucket and is not counted).
+                let above = h.inner().highest_equivalent(period_ns).saturating_add(1);
+                h.inner().count_between(above, u64::MAX)
+            },
+        }
+    }
+}
+
+/// Runs `plan` as `haptloop bench` does (deterministic, on this thread,
+/// without reference sampling or output files) and returns the stage
+/// timing of its ticks.
+pub fn time_ticks(scene: &Scene, plan: &Plan) -> Result<TickTiming> {
+    let mut plan = plan.clone();
+    plan.deterministic = true;
+    plan.out_dir = None;
+    plan.record = None;
+    plan.reference_every_ticks = 0;
+    let period = plan.period().as_nanos() as u64;
+    let outcome = run(scene, plan, &StopFlag::new(), &mut |_| {})?;
+    Ok(TickTiming::of(
+        &outcome.stats.stages.tick_without_device,
+        period,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,5 +278,20 @@ mod tests {
         assert_eq!(t.tick.max(), c.total_ns());
         assert_eq!(t.tick_without_device.max(), c.total_ns() - device);
         assert_eq!(t.stage(Stage::Force).count(), 1);
+    }
+
+    #[test]
+    fn tick_timing_counts_ticks_over_the_period() {
+        let mut h = LatencyHistogram::new();
+        for ns in 1..=100u64 {
+            h.record(ns * 1000);
+        }
+        let t = TickTiming::of(&h, 97_000);
+        assert_eq!(t.ticks, 100);
+        assert_eq!(t.over_period, 3);
+        assert!((49_000..=51_000).contains(&t.p50_ns), "{t:?}");
+        assert!((98_000..=100_000).contains(&t.p99_ns), "{t:?}");
+        let empty = TickTiming::of(&LatencyHistogram::new(), 1);
+        assert_eq!((empty.ticks, empty.over_period), (0, 0));
     }
 }

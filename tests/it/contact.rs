@@ -231,11 +231,12 @@ fn the_pinch_lifts_only_with_friction() {
         "not back on the table"
     );
     assert!(s.contact.as_ref().unwrap().max_sticking >= 2);
-    // No joint rows: no joints-only reference to compare with (it would be
-    // the configuration itself, every figure a trivial 0).
-    assert_eq!(s.slow_loop.reference_samples, 0);
-    let why = s.slow_loop.reference_missing.as_deref().unwrap_or("");
-    assert!(why.contains("no joint rows"), "{why}");
+    // Contact rows: the converged replay does not cover them, so the force
+    // error is not measured, and says why (never a trivial 0).
+    assert_eq!(s.reference.compared, 0);
+    assert!(s.reference.force_error_n.max.is_nan());
+    let why = s.reference.missing.as_deref().unwrap_or("");
+    assert!(why.contains("contact rows"), "{why}");
     // Frictionless fingertips: the same file with `friction = 0.0`.
     let text =
         include_str!("../../scenes/pinch-lift.toml").replace("friction = 0.8", "friction = 0.0");
@@ -319,4 +320,27 @@ fn the_dragged_box_pushes_the_clutter_aside() {
     assert!(pushed >= 5, "only {pushed} objects were pushed aside");
     let c = s.contact.unwrap();
     assert!(c.max_tracked_pairs >= 100, "{}", c.max_tracked_pairs);
+}
+
+/// The gradient update (Eq. 3) does not cover contact rows: asking for it
+/// on a contact scene is a clear error naming the fix, never a panic in
+/// the loop.
+#[test]
+fn the_gradient_update_on_a_contact_scene_is_a_clear_error() {
+    let scene = resolve("box-slide").unwrap();
+    let options = SessionOptions {
+        seconds: 0.1,
+        deterministic: true,
+        update: Some(haptloop_solver::UpdateRule::Gradient),
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options).unwrap();
+    let e = session::run(&scene, plan, &StopFlag::new(), &mut |_| {})
+        .err()
+        .expect("refused");
+    let msg = format!("{e:#}");
+    assert!(msg.contains("does not cover contact rows"), "{msg}");
+    assert!(msg.contains("update = \"projected\""), "{msg}");
+    // Said once, not once per layer of the error chain.
+    assert_eq!(msg.matches("does not cover").count(), 1, "{msg}");
 }

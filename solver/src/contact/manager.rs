@@ -42,8 +42,9 @@ pub enum ContactError {
     /// The model with the contact rows could not be built.
     #[error("contact rows: {0}")]
     Build(#[from] BuildError),
-    /// Its program could not be built.
-    #[error("contact program: {0}")]
+    /// Its program could not be built (its message is the program's: a
+    /// prefix here would print twice in an error chain).
+    #[error(transparent)]
     Program(#[from] ProgramError),
 }
 

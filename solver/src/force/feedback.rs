@@ -222,6 +222,12 @@ impl Feedback {
         &self.prev_error
     }
 
+    /// Replaces every finger's coupling history (a replayed tick, see
+    /// `program::converged`).
+    pub fn set_prev_errors(&mut self, e: &[Vector3<f64>]) {
+        self.prev_error.copy_from_slice(e);
+    }
+
     /// Carries finger `from` of `old`'s coupling history into finger `to`.
     pub fn copy_finger(&mut self, to: usize, old: &Feedback, from: usize) {
         self.prev_error[to] = old.prev_error[from];

@@ -56,6 +56,7 @@
 //! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
 mod contact;
+mod converged;
 mod objective;
 mod report;
 mod semantic;
@@ -64,6 +65,7 @@ mod state;
 mod tick;
 
 pub use contact::DYNAMIC_DAMPING_PER_S;
+pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use semantic::SNAP_RISE_S;
 pub use stages::{SolverStage, StageMarks};
@@ -149,6 +151,14 @@ impl Program {
     /// Allocates; call it off the real-time thread.
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
         settings.validate()?;
+        // The fused gradient pass holds at most six rows per constraint; a
+        // contact pair's witness rows are one constraint of many rows.
+        if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
+            return Err(ProgramError::Unsupported(
+                "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
+                 `update = \"projected\"`",
+            ));
+        }
         // The scene's `finger` and `least_astonishment` weights.
         let mut settings = settings;
         let weights = model.objectives();

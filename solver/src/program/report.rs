@@ -164,6 +164,9 @@ pub enum ProgramError {
         /// Its index.
         index: usize,
     },
+    /// The settings do not cover a part of this model.
+    #[error("{0}")]
+    Unsupported(&'static str),
 }
 
 /// Largest |v| of the given outputs' tracking errors.

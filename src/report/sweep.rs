@@ -1,0 +1,465 @@
+//! What `haptloop sweep` prints and writes: a table, `sweep.csv`,
+//! `sweep.json` and `front.svg` (CPU load against accuracy, the front joined,
+//! the recommendation circled).
+
+use crate::sweep::{Axis, MaxRms, Point, Sweep, Verdict};
+use anyhow::{Result, anyhow};
+use haptloop_solver::UpdateRule;
+use plotters::prelude::*;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn rule(u: UpdateRule) -> &'static str {
+    match u {
+        UpdateRule::Projected => "projected",
+        UpdateRule::Gradient => "gradient",
+    }
+}
+
+/// A max/RMS pair as `sweep.json` writes it (non-finite by name).
+#[derive(Debug, Clone, Copy, Serialize)]
+struct Fig {
+    #[serde(with = "super::figure")]
+    max: f64,
+    #[serde(with = "super::figure")]
+    rms: f64,
+}
+
+impl From<MaxRms> for Fig {
+    fn from(m: MaxRms) -> Self {
+        Fig {
+            max: m.max,
+            rms: m.rms,
+        }
+    }
+}
+
+/// Tick time, ns (`"NaN"` for a point that did not run).
+#[derive(Debug, Clone, Copy, Serialize)]
+struct TickNs {
+    #[serde(with = "super::figure")]
+    p50: f64,
+    #[serde(with = "super::figure")]
+    p99: f64,
+    #[serde(with = "super::figure")]
+    max: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+struct JsonPoint {
+    iterations: u32,
+    update: &'static str,
+    gain: f64,
+    rate_hz: u32,
+    velocity_filter_ms: f64,
+    tick_ns: TickNs,
+    /// Ticks over the period (compute alone).
+    overruns: Option<u64>,
+    /// Fraction of a core: tick p50 × rate.
+    #[serde(with = "super::figure")]
+    load: f64,
+    violation_m: Fig,
+    force_error_n: Fig,
+    #[serde(with = "super::figure")]
+    force_max_n: f64,
+    tracking_m: Fig,
+    failed_ticks: Option<u64>,
+    failure_kinds: std::collections::BTreeMap<String, u64>,
+    reference_samples: u64,
+    reference_missing: Option<String>,
+    /// Largest penetration, m (`"NaN"`: no contact machinery).
+    #[serde(with = "super::figure")]
+    penetration_m: f64,
+    passive: bool,
+    pareto: bool,
+    verdict: &'static str,
+    /// Why the point did not run, if it did not.
+    error: Option<String>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+struct JsonSweep<'a> {
+    scene: &'a str,
+    seconds: f64,
+    reference_every_ms: f64,
+    tolerance_m: Option<f64>,
+    force_tolerance: f64,
+    axis: &'static str,
+    points: Vec<JsonPoint>,
+    recommended: Option<usize>,
+}
+
+fn json_point(p: &Point) -> JsonPoint {
+    let nan = MaxRms {
+        max: f64::NAN,
+        rms: f64::NAN,
+    };
+    let (a, error) = match &p.accuracy {
+        Ok(a) => (Some(a), None),
+        Err(e) => (None, Some(e.clone())),
+    };
+    let t = p.timing;
+    let ns = |f: fn(&crate::session::timing::TickTiming) -> u64| {
+        t.as_ref().map_or(f64::NAN, |t| f(t) as f64)
+    };
+    JsonPoint {
+        iterations: p.knobs.iterations,
+        update: rule(p.knobs.update),
+        gain: p.knobs.gain,
+        rate_hz: p.knobs.rate_hz,
+        velocity_filter_ms: p.knobs.velocity_filter_ms,
+        tick_ns: TickNs {
+            p50: ns(|t| t.p50_ns),
+            p99: ns(|t| t.p99_ns),
+            max: ns(|t| t.max_ns),
+        },
+        overruns: t.map(|t| t.over_period),
+        load: p.load(),
+        violation_m: a.map_or(nan, |a| a.violation_m).into(),
+        force_error_n: a.map_or(nan, |a| a.force_error_n).into(),
+        force_max_n: a.map_or(f64::NAN, |a| a.force_max_n),
+        tracking_m: a.map_or(nan, |a| a.tracking_m).into(),
+        failed_ticks: a.map(|a| a.failed_ticks),
+        failure_kinds: a.map(|a| a.failure_kinds.clone()).unwrap_or_default(),
+        reference_samples: a.map_or(0, |a| a.reference_samples),
+        reference_missing: a.and_then(|a| a.reference_missing.clone()),
+        penetration_m: a.map_or(f64::NAN, |a| a.penetration_m),
+        passive: p.passive,
+        pareto: p.pareto,
+        verdict: p.verdict.as_str(),
+        error,
+    }
+}
+
+/// `sweep.json`.
+pub fn json(s: &Sweep) -> Result<String> {
+    let j = JsonSweep {
+        scene: &s.scene,
+        seconds: s.seconds,
+        reference_every_ms: s.reference_every.as_secs_f64() * 1e3,
+        tolerance_m: s.tolerance_m,
+        force_tolerance: s.criteria.force_tolerance,
+        axis: s.axis.as_str(),
+        points: s.points.iter().map(json_point).collect(),
+        recommended: s.recommended,
+    };
+    Ok(serde_json::to_string_pretty(&j)? + "\n")
+}
+
+/// `sweep.csv`: one row per point, the same fields as `sweep.json` (figures
+/// that were not measured are `NaN`).
+pub fn csv(s: &Sweep) -> String {
+    let mut out = String::from(
+        "index,iterations,update,gain,rate_hz,velocity_filter_ms,tick_p50_ns,tick_p99_ns,tick_max_ns,\
+         overruns,load,violation_max_m,violation_rms_m,force_error_max_n,force_error_rms_n,force_max_n,\
+         tracking_max_m,tracking_rms_m,failed_ticks,reference_samples,penetration_m,passive,pareto,recommended,verdict\n",
+    );
+    for (i, p) in s.points.iter().enumerate() {
+        let j = json_point(p);
+        let _ = writeln!(
+            out,
+            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            j.iterations,
+            j.update,
+            j.gain,
+            j.rate_hz,
+            j.velocity_filter_ms,
+            j.tick_ns.p50,
+            j.tick_ns.p99,
+            j.tick_ns.max,
+            j.overruns.map_or("NaN".into(), |v| v.to_string()),
+            j.load,
+            j.violation_m.max,
+            j.violation_m.rms,
+            j.force_error_n.max,
+            j.force_error_n.rms,
+            j.force_max_n,
+            j.tracking_m.max,
+            j.tracking_m.rms,
+            j.failed_ticks.map_or("NaN".into(), |v| v.to_string()),
+            j.reference_samples,
+            j.penetration_m,
+            j.passive,
+            j.pareto,
+            s.recommended == Some(i),
+            j.verdict,
+        );
+    }
+    out
+}
+
+fn sci(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2e}")
+    } else {
+        "–".into()
+    }
+}
+
+/// The table printed at the end of a sweep.
+pub fn table(s: &Sweep) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "haptloop sweep {}: {} points, {} s each (deterministic); reference every {}",
+        s.scene,
+        s.points.len(),
+        s.seconds,
+        if s.reference_every.is_zero() {
+            "tick".to_string()
+        } else {
+            format!("{:.0} ms", s.reference_every.as_secs_f64() * 1e3)
+        }
+    );
+    let _ = writeln!(
+        out,
+        "\n  {:>3} {:<9} {:>3} {:>7} {:>6} {:>5} {:>8} {:>8} {:>6} {:>5} {:>9} {:>9} {:>9} {:>8} {:>6}  front · verdict",
+        "#",
+        "rule",
+        "it",
+        "K",
+        "Hz",
+        "τ ms",
+        "p50 µs",
+        "p99 µs",
+        "load",
+        "over",
+        "viol max",
+        "F err max",
+        "F err RMS",
+        "track mm",
+        "failed",
+    );
+    for (i, p) in s.points.iter().enumerate() {
+        let k = &p.knobs;
+        let (tp50, tp99, over) = p.timing.map_or(("–".into(), "–".into(), "–".into()), |t| {
+            (
+                format!("{:.1}", t.p50_ns as f64 / 1e3),
+                format!("{:.1}", t.p99_ns as f64 / 1e3),
+                t.over_period.to_string(),
+            )
+        });
+        let load = if p.load().is_finite() {
+            format!("{:.1}%", 100.0 * p.load())
+        } else {
+            "–".into()
+        };
+        let (viol, fmax, frms, track, failed) = match &p.accuracy {
+            Ok(a) => (
+                sci(a.violation_m.max),
+                sci(a.force_error_n.max),
+                sci(a.force_error_n.rms),
+                if a.tracking_m.rms.is_finite() {
+                    format!("{:.2}", a.tracking_m.rms * 1e3)
+                } else {
+                    "–".into()
+                },
+                a.failed_ticks.to_string(),
+            ),
+            Err(_) => ("–".into(), "–".into(), "–".into(), "–".into(), "–".into()),
+        };
+        let mark = match (p.pareto, s.recommended == Some(i)) {
+            (_, true) => "* ◀ recommended",
+            (true, false) => "*",
+            (false, false) => " ",
+        };
+        let verdict = match (&p.accuracy, p.verdict) {
+            (Err(e), _) => format!("not run: {e}"),
+            (_, Verdict::Recommendable) => String::new(),
+            (_, v) => v.as_str().to_string(),
+        };
+        let _ = writeln!(
+            out,
+            "  {i:>3} {:<9} {:>3} {:>7} {:>6} {:>5} {tp50:>8} {tp99:>8} {load:>6} {over:>5} {viol:>9} {fmax:>9} {frms:>9} {track:>8} {failed:>6}  {mark} {verdict}",
+            rule(k.update),
+            k.iterations,
+            format!("{}", k.gain),
+            k.rate_hz,
+            format!("{}", k.velocity_filter_ms),
+        );
+    }
+    let _ = writeln!(out);
+    match s.axis {
+        Axis::None => {
+            let _ = writeln!(
+                out,
+                "no Pareto front: neither the force error, a violation nor a penetration is measured in this scene"
+            );
+        }
+        a => {
+            let _ = writeln!(
+                out,
+                "front (*): CPU load (tick p50 × rate) against {}{}",
+                a.as_str(),
+                if matches!(a, Axis::Violation | Axis::Penetration) {
+                    let why = s
+                        .points
+                        .iter()
+                        .find_map(|p| p.accuracy.as_ref().ok()?.reference_missing.clone())
+                        .unwrap_or_default();
+                    format!(" (force error not measured: {why})")
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
+    // Only the criteria a figure was measured for are named.
+    let measured = |f: fn(&crate::sweep::Accuracy) -> f64| {
+        s.points
+            .iter()
+            .any(|p| p.accuracy.as_ref().is_ok_and(|a| f(a).is_finite()))
+    };
+    let violation = match s.tolerance_m {
+        Some(t) if measured(|a| a.violation_m.max) => format!("violation within {t:e} m, "),
+        Some(_) => "violation (not measured), ".to_string(),
+        None => "violation (no scene tolerance), ".to_string(),
+    };
+    let force = if measured(|a| a.force_error_n.max) {
+        format!(
+            "force error within {:.0} % of the largest force, ",
+            s.criteria.force_tolerance * 100.0
+        )
+    } else {
+        "force error (not measured), ".to_string()
+    };
+    let penetration = if measured(|a| a.penetration_m) {
+        format!(
+            "penetration within {:e} m, ",
+            s.criteria.penetration_tolerance_m
+        )
+    } else {
+        String::new()
+    };
+    let crit = format!(
+        "no failed tick, {violation}{force}{penetration}p99 tick within half the period, coupling passive \
+         at the rate for a relaxed grip"
+    );
+    match s.recommended {
+        Some(i) => {
+            let p = &s.points[i];
+            let k = &p.knobs;
+            let _ = writeln!(
+                out,
+                "recommended: #{i}: {} update, {} iteration{}, gain {}, {} Hz, velocity filter {} ms \
+                 ({:.1} % of a core) — the cheapest point with {crit}",
+                rule(k.update),
+                k.iterations,
+                if k.iterations == 1 { "" } else { "s" },
+                k.gain,
+                k.rate_hz,
+                k.velocity_filter_ms,
+                100.0 * p.load(),
+            );
+        }
+        None => {
+            let _ = writeln!(out, "recommended: none: no point has {crit}");
+        }
+    }
+    out
+}
+
+fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("plotting: {e}")
+}
+
+/// `front.svg`: every point that ran cleanly (CPU load against the
+/// accuracy axis, log-log), the front joined, the recommendation ringed.
+pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
+    let pts: Vec<(f64, f64, bool, bool)> = s
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| {
+            let (x, y) = (p.load(), s.axis.value(p));
+            let clean = matches!(&p.accuracy, Ok(a) if a.failed_ticks == 0);
+            (clean && x > 0.0 && y.is_finite()).then_some((
+                100.0 * x,
+                y.max(1e-15),
+                p.pareto,
+                s.recommended == Some(i),
+            ))
+        })
+        .collect();
+    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
+    let (y0, y1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.1), b.max(p.1))
+    });
+    let (x0, x1) = if pts.is_empty() {
+        (0.01, 100.0)
+    } else {
+        (x0 / 2.0, x1 * 2.0)
+    };
+    let (y0, y1) = if pts.is_empty() {
+        (1e-9, 1.0)
+    } else {
+        (y0 / 3.0, y1 * 3.0)
+    };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!(
+                "{}: cost against accuracy ({} points)",
+                s.scene,
+                s.points.len()
+            ),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("CPU load, % of a core (tick p50 × rate)")
+        .y_desc(s.axis.as_str())
+        .x_label_formatter(&|v| format!("{v}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(err)?;
+    let grey = RGBColor(150, 150, 150);
+    let blue = RGBColor(31, 119, 180);
+    let red = RGBColor(214, 39, 40);
+    chart
+        .draw_series(
+            pts.iter()
+                .filter(|p| !p.2)
+                .map(|p| Circle::new((p.0, p.1), 3, grey.filled())),
+        )
+        .map_err(err)?
+        .label("measured")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 3, grey.filled()));
+    let mut front: Vec<(f64, f64)> = pts.iter().filter(|p| p.2).map(|p| (p.0, p.1)).collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front.clone(), blue.stroke_width(2)))
+        .map_err(err)?
+        .label("Pareto front")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(2)));
+    chart
+        .draw_series(front.iter().map(|&p| Circle::new(p, 4, blue.filled())))
+        .map_err(err)?;
+    if let Some(p) = pts.iter().find(|p| p.3) {
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (p.0, p.1),
+                9,
+                red.stroke_width(2),
+            )))
+            .map_err(err)?
+            .label("recommended")
+            .legend(move |(x, y)| Circle::new((x + 10, y), 6, red.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
