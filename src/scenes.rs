@@ -64,6 +64,10 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/pinch-lift.toml"),
     },
     Builtin {
+        name: "room",
+        text: include_str!("../scenes/room.toml"),
+    },
+    Builtin {
         name: "grasp-3-contact",
         text: include_str!("../scenes/grasp-3-contact.toml"),
     },

@@ -106,7 +106,13 @@ impl Evaluation {
             frames,
             values: vec![0.0; model.n_rows()],
             jacobian: Jacobian::new(model),
-            witnesses: vec![Witness::Off; model.contact.slots],
+            witnesses: {
+                // Contact slots at the head, semantic surface rows at the
+                // tail (`constraint/surface.rs`).
+                let mut w = vec![Witness::Off; model.contact.slots];
+                w.extend(model.semantic.slots.iter().map(|p| Witness::Plane(*p)));
+                w
+            },
         }
     }
 
@@ -122,7 +128,8 @@ impl Evaluation {
     }
 
     /// The witness table: the parameters of the model's contact rows, one
-    /// entry per slot ([`Model::contact`]). All `Off` until set.
+    /// entry per slot ([`Model::contact`]; all `Off` until set), followed by
+    /// the semantic surface rows' ([`Model::semantic`]).
     pub fn witnesses(&self) -> &[Witness] {
         &self.witnesses
     }

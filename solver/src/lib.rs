@@ -49,6 +49,10 @@
 //!   saved as [`TickState`]s to convergence: the force a converged update
 //!   would have rendered, against which the fast loop's force error is
 //!   measured.
+//! - [`semantic`]: Gösele & Stuerzlinger's semantic constraints on the slow
+//!   loop (labels, snapping, checkMove, the grouping graph, consistency);
+//!   a satisfied constraint reaches the fast loop as rows
+//!   ([`Model::with_semantic`]).
 //! - [`mechanisms`]: built-in models (spatial four-bar, Stewart platform, a
 //!   132-body sphere toy), each assembled at q0.
 //!
@@ -98,6 +102,7 @@ pub mod placement;
 pub mod program;
 pub mod rotation;
 pub mod scene;
+pub mod semantic;
 
 pub use al::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
@@ -111,6 +116,7 @@ pub use model::{
     FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model,
     ModelBuilder, Owner, PlaneOwner, PointPlaneSpec, Shape, UnknownName,
 };
+pub use model::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 pub use objective::{
     Objective, ObjectiveEval, ObjectiveKind, ObjectiveSpec, Objectives, ObstacleSpec,
 };

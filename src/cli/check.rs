@@ -155,15 +155,10 @@ pub fn summary(scene: &Scene) -> String {
     out += &match c.shaped_bodies {
         0 => "  contact      no shapes: no contact machinery compiled\n".to_string(),
         n => format!(
-            "  contact      {n} shaped bod{}: shapes parsed; contact witnesses are not yet simulated\n",
+            "  contact      {n} shaped bod{}: witnesses on the slow loop, their rows in the fast loop\n",
             if n == 1 { "y" } else { "ies" }
         ),
     };
-    out += &match c.semantic_areas {
-        0 => "  semantic     no areas\n".to_string(),
-        n => format!(
-            "  semantic     {n} areas parsed and checked; semantic snapping is not yet simulated\n"
-        ),
-    };
+    out += &crate::report::semantic::check_lines(c);
     out
 }

@@ -5,6 +5,7 @@ pub mod figure;
 pub mod plots;
 pub mod probe;
 pub mod scene_plot;
+pub mod semantic;
 pub mod session;
 pub mod summary;
 pub mod sweep;

@@ -197,6 +197,9 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             c.updates, c.latency_ticks_mean, c.latency_ticks_max, c.cycle_us_mean, c.cycle_us_max
         );
     }
+    if let Some(sem) = &s.semantic {
+        super::semantic::lines(&mut out, sem);
+    }
     reference_line(&mut out, s);
     let _ = write!(
         out,

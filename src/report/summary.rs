@@ -467,6 +467,10 @@ pub struct Summary {
     /// Contact figures (absent for scenes without contact).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<Contact>,
+    /// Semantic events and the grouping graph (absent for scenes without
+    /// semantic areas or holds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub semantic: Option<super::semantic::Semantic>,
     /// Trace samples dropped (queue full).
     pub trace_dropped: u64,
     /// What the OS granted the fast thread (real-time mode).
@@ -649,6 +653,7 @@ impl Summary {
                     },
                 }
             }),
+            semantic: o.semantic.as_ref().map(Into::into),
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,

@@ -139,6 +139,20 @@ impl ContactLoop {
         self.manager.recycle(program);
     }
 
+    /// Takes `base` as the mechanism from now on (a semantic change: new
+    /// surface rows or holds) and returns the program for it at `q`, its
+    /// build time counted with the structure changes.
+    pub fn rebase(&mut self, base: Arc<Model>, q: &[f64]) -> Option<Program> {
+        let clock = MonotonicClock::new();
+        let start = clock.now();
+        let program = self.manager.rebase(base, q).ok()?;
+        let ns = (clock.now() - start).0;
+        self.stats.structure_changes += 1;
+        self.stats.build_ns_max = self.stats.build_ns_max.max(ns);
+        self.stats.build_ns_sum += ns;
+        Some(program)
+    }
+
     /// A program for the model the fast loop runs, with its current witness
     /// table (a re-projection's hand-over).
     pub fn program_for_current(&self) -> Option<Program> {

@@ -46,6 +46,9 @@ pub struct Snapshot {
     pub max_violation_rad: f64,
     /// False if the tick's solve failed or the mechanism came apart.
     pub solved: bool,
+    /// Each finger's force as the solver computed it (on the finger, N,
+    /// scene frame; before the safety layer): what the hand pulls with.
+    pub finger_force_n: Vec<[f64; 3]>,
 }
 
 /// One finger at one tick, for `trace.csv` and the plots.
@@ -310,6 +313,13 @@ impl<C: Clock> TickBody for FastLoop<C> {
             s.max_violation_m = report.max_violation_m;
             s.max_violation_rad = report.max_violation_rad;
             s.solved = solved;
+            s.finger_force_n.clear();
+            s.finger_force_n.extend(
+                program
+                    .finger_outputs()
+                    .iter()
+                    .map(|o| <[f64; 3]>::from(o.force_n)),
+            );
         });
         self.timer.lap(Stage::Bookkeeping);
         self.stats.stages.record(&self.timer);

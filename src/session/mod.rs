@@ -18,6 +18,7 @@ mod plan;
 mod recorder;
 mod reference;
 mod rig;
+mod semantic;
 mod slow;
 mod stats;
 pub mod timing;
@@ -33,6 +34,7 @@ pub use reference::{
     ReferenceCheck, ReferenceSample, ReferenceStats,
 };
 pub use rig::{Rig, SessionDevice};
+pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
 pub use slow::{Correction, Handover, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
 pub use timing::{Stage, StageClock, StageTimes};
@@ -112,6 +114,8 @@ pub struct SessionOutcome {
     pub joint_rows: usize,
     /// How the design variables and objectives moved (empty without any).
     pub design: DesignStats,
+    /// Semantic events and the grouping graph (scenes with areas or holds).
+    pub semantic: Option<SemanticReport>,
 }
 
 /// Everything the loops need, built before the clock starts.
@@ -167,11 +171,29 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     } else {
         None
     };
+    // Semantic constraints: those aligned at the assembled configuration are
+    // satisfied, and their rows are part of the mechanism from the start.
+    let semantic = SemanticLoop::new(
+        model.clone(),
+        scene.compiled.semantic.as_ref(),
+        &scene.compiled.holds,
+        &q,
+    )?;
+    let mechanism = semantic
+        .as_ref()
+        .map_or(model.clone(), |s| s.current_model().clone());
+    if semantic.is_some() {
+        program = Program::new(mechanism.clone(), plan.solver)
+            .context("building the fast-loop program with the semantic rows")?;
+        program
+            .set_q(&q)
+            .context("starting from the assembled configuration")?;
+    }
     // Contact: the active set at the assembled configuration decides the
     // model (the mechanism plus the contact rows of the pairs in reach) the
     // fast loop starts with.
     let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
-    let mut contact = ContactLoop::new(model.clone(), plan.solver, plan.contact, frames_tx);
+    let mut contact = ContactLoop::new(mechanism.clone(), plan.solver, plan.contact, frames_tx);
     if let Some(c) = &mut contact {
         program = c.initial(&q).context("building the contact rows")?;
         program
@@ -193,9 +215,11 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
     let n = model.n_coords();
+    let n_fingers = model.fingers().len();
     let (snapshot, snapshots) = mailbox(|| Snapshot {
         q: Vec::with_capacity(n),
         solved: true,
+        finger_force_n: Vec::with_capacity(n_fingers),
         ..Snapshot::default()
     });
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
@@ -282,7 +306,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let slow = SlowLoop {
         snapshots,
         programs: programs_tx,
-        model: model.clone(),
+        model: mechanism.clone(),
         settings: plan.solver,
         placement: Placement::analyze(&scene.compiled.joints_only, &options)
             .context("analysing the scene's joints for re-projection")?,
@@ -296,6 +320,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         },
         reference: check,
         contact,
+        semantic,
         step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
     Ok(Built {
@@ -374,7 +399,7 @@ fn finish<C: Clock>(
     wall_start: Nanos,
 ) -> Result<SessionOutcome> {
     recorder.finish()?;
-    let (report, histograms, granted, fast, slow, assembly, trace, track) = finished;
+    let (report, histograms, granted, fast, slow, assembly, trace, track, semantic) = finished;
     let device_events = fast
         .rig()
         .devices
@@ -421,6 +446,7 @@ fn finish<C: Clock>(
         track,
         joint_rows: joint_length_rows(&scene.compiled.model),
         design: fast.design_stats(),
+        semantic,
     })
 }
 
@@ -452,6 +478,7 @@ type Finished<C> = (
     Option<SolveInfo>,
     u64,
     Option<BodyTrack>,
+    Option<SemanticReport>,
 );
 
 /// The fast loop and the slow loop on one thread, in lockstep: deterministic.
@@ -530,6 +557,7 @@ fn run_deterministic(
         built.assembly,
         dropped,
         body.slow.track(),
+        body.slow.semantic_report(),
     ))
 }
 
@@ -598,6 +626,7 @@ fn run_real_time(
         assembly,
         dropped,
         slow.track(),
+        slow.semantic_report(),
     ))
 }
 

@@ -119,6 +119,9 @@ pub struct SlowLoop {
     pub(super) reference: Option<super::reference::ReferenceCheck>,
     /// The contact active set, for scenes with shapes that can touch.
     pub(super) contact: Option<super::contact::ContactLoop>,
+    /// Semantic constraints and the hand's holds (scenes with areas or
+    /// holds).
+    pub(super) semantic: Option<super::semantic::SemanticLoop>,
     /// Wall time of each step, ns.
     pub(super) step_times: LatencyHistogram,
 }
@@ -147,6 +150,9 @@ impl SlowLoop {
             return;
         }
         self.stats.fresh_snapshots += 1;
+        if self.semantic.is_some() && self.semantic_step() {
+            return;
+        }
         let snap = self.snapshots.latest();
         if let Some(c) = &mut self.contact {
             let q = snap.q.clone();
@@ -226,6 +232,60 @@ impl SlowLoop {
         {
             self.stats.programs_sent += 1;
         }
+    }
+
+    /// The semantic cycle on the newest snapshot; when the satisfied
+    /// constraints or holds changed and no program is in flight, a program
+    /// with their rows is sent (returns true: the contact cycle and any
+    /// re-projection wait for the next step).
+    fn semantic_step(&mut self) -> bool {
+        let snap = self.snapshots.latest();
+        let (q, forces, t_s, solved) = (
+            snap.q.clone(),
+            snap.finger_force_n.clone(),
+            snap.time.as_secs_f64(),
+            snap.solved,
+        );
+        let Some(sem) = &mut self.semantic else {
+            return false;
+        };
+        if solved {
+            sem.step(&q, &forces, t_s);
+        } else {
+            sem.step_unsolved(t_s);
+        }
+        if !sem.dirty() || self.programs.in_flight() > 0 {
+            return false;
+        }
+        let clock = haptloop_rt::clock::MonotonicClock::new();
+        let start = haptloop_rt::clock::Clock::now(&clock);
+        let Some(model) = sem.take_model() else {
+            return false;
+        };
+        let program = match &mut self.contact {
+            Some(c) => c.rebase(model.clone(), &q),
+            None => {
+                // Re-projections hand over programs of this model from now on.
+                self.model = model.clone();
+                Program::new(model, self.settings).ok()
+            }
+        };
+        let ns = (haptloop_rt::clock::Clock::now(&clock) - start).0;
+        let sent = program.is_some_and(|program| {
+            self.programs
+                .try_send(Box::new(Handover::new(program)))
+                .is_ok()
+        });
+        sem.note_program(sent, ns);
+        self.stats.programs_sent += u64::from(sent);
+        sent
+    }
+
+    /// What the semantic loop saw and did (scenes with areas or holds).
+    pub fn semantic_report(&self) -> Option<super::semantic::SemanticReport> {
+        self.semantic
+            .as_ref()
+            .map(super::semantic::SemanticLoop::report)
     }
 
     /// The sampled poses of the shaped bodies (scenes with contact).

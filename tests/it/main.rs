@@ -12,6 +12,7 @@ mod docs;
 mod reference;
 mod scene_format;
 mod scenes;
+mod semantic;
 mod session;
 mod stability;
 mod sweep;

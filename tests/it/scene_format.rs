@@ -98,6 +98,14 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
             format!("{base}\n[[body.offer]]\nzz_unknown = 1\n"),
         ),
         ("top", format!("{base}\n[zz_unknown]\n")),
+        (
+            "[semantic]",
+            format!("{base}\n[semantic]\nzz_unknown = 1\n"),
+        ),
+        (
+            "holds",
+            after("[[finger]]\n", "holds = [{ zz_unknown = 1 }]\n"),
+        ),
         ("hand", replace(hand, "hand = { zz_unknown = 1, circle = {")),
         (
             "circle",

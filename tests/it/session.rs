@@ -661,3 +661,57 @@ fn the_fast_loop_tick_allocates_nothing_with_contacts_switching() {
     assert!(activations > 0, "no in-tick activation ran");
     assert!(sticking > 0, "no friction contact stuck");
 }
+
+/// The room's fast loop allocates nothing either while the slow loop beside
+/// it grabs, snaps, breaks and hands over programs with semantic rows: the
+/// ticks ramp snap offsets, carry bound bodies and run pinch (weld) rows.
+#[test]
+fn the_fast_loop_tick_allocates_nothing_with_semantic_rows() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let scene = resolve("room").unwrap();
+    let plan = Plan::new(&scene, &deterministic(10.0)).unwrap();
+    let clock = MockClock::new(Nanos(0));
+    let session::Built {
+        mut fast,
+        mut slow,
+        trace,
+        ..
+    } = session::build(&scene, &plan, clock.clone()).unwrap();
+    let done = Arc::new(AtomicBool::new(false));
+    let flag = done.clone();
+    let slow_thread = std::thread::spawn(move || {
+        while !flag.load(Ordering::Acquire) {
+            slow.step();
+            std::thread::yield_now();
+        }
+        slow
+    });
+    let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
+    let stop = StopFlag::new();
+    periodic.run(&mut fast, RunLimit::slots(50), &stop);
+    let chunks = (plan.ticks() - 50) / 50;
+    let (_, stats) = count(|| {
+        for _ in 0..chunks {
+            periodic.run(&mut fast, RunLimit::slots(50), &stop);
+            while trace.pop().is_some() {}
+            std::thread::yield_now();
+        }
+    });
+    done.store(true, Ordering::Release);
+    let slow = slow_thread.join().unwrap();
+    assert_eq!(stats.total(), 0, "the fast loop allocated: {stats:?}");
+    let report = slow.semantic_report().expect("the room has semantics");
+    let kinds: Vec<&str> = report.events.iter().map(|e| e.kind.as_str()).collect();
+    assert!(
+        kinds.contains(&"snap"),
+        "no snap during the counted ticks: {kinds:?}"
+    );
+    assert!(kinds.contains(&"hold"), "no hold: {kinds:?}");
+    assert!(
+        report.programs >= 4,
+        "{} semantic programs",
+        report.programs
+    );
+    assert!(fast.stats().programs_swapped >= report.programs);
+}

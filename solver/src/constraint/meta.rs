@@ -47,6 +47,18 @@ pub enum ConstraintKind {
     DesignBound,
     /// A design-variable component held at its bound (lo = hi): 1 row, m.
     DesignPin,
+    /// A satisfied semantic surface constraint's plane rows (Gösele &
+    /// Stuerzlinger §3.1.1): three points of the binding area on the offer
+    /// area's plane, so the areas are coplanar with anti-parallel orientation
+    /// vectors: 3 rows, m.
+    SurfacePlane,
+    /// The same constraint's polygon inclusion: each vertex of the binding
+    /// polygon on the inner side of each edge of the (convex) offer polygon
+    /// (≥ 0): one row per vertex and edge, m.
+    SurfaceInclusion,
+    /// A hand's hold on a body: the fingertip's centre fixed in the body
+    /// (a spherical joint the slow loop adds and removes): 3 rows, m.
+    Hold,
 }
 
 impl ConstraintKind {
@@ -55,7 +67,8 @@ impl ConstraintKind {
         use ConstraintKind::*;
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
-            | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin => {
+            | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin
+            | SurfacePlane | SurfaceInclusion | Hold => {
                 return RowUnit::Length;
             }
             Perpendicular | RevoluteLimit => return RowUnit::Angle,
@@ -75,7 +88,7 @@ impl ConstraintKind {
         use ConstraintKind::*;
         match self {
             RevoluteLimit | PrismaticLimit | DistanceLimit | PointPlaneInequality | Contact
-            | DesignBound => Sense::Inequality,
+            | DesignBound | SurfaceInclusion => Sense::Inequality,
             ContactFriction => Sense::Friction,
             _ => Sense::Equality,
         }
@@ -104,6 +117,9 @@ impl ConstraintKind {
             ContactFriction => "contact friction",
             DesignBound => "design bound",
             DesignPin => "design pin",
+            SurfacePlane => "surface plane",
+            SurfaceInclusion => "surface inclusion",
+            Hold => "hold",
         }
     }
 }

@@ -16,6 +16,7 @@
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
+//! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
 
@@ -32,6 +33,7 @@ pub(crate) mod prismatic;
 pub(crate) mod quat_norm;
 pub(crate) mod revolute;
 pub(crate) mod spherical;
+pub(crate) mod surface;
 pub(crate) mod universal;
 pub(crate) mod weld;
 pub mod witness;
@@ -56,6 +58,7 @@ pub(crate) enum Geometry {
     Limit(limit::Limit),
     Contact(witness::ContactRows),
     Bound(bound::DesignBound),
+    Surface(surface::SurfaceRows),
 }
 
 impl Geometry {
@@ -75,6 +78,7 @@ impl Geometry {
             Self::Limit(_) => limit::Limit::ROWS,
             Self::Contact(c) => c.rows as usize,
             Self::Bound(b) => b.rows(),
+            Self::Surface(s) => s.rows as usize,
         }
     }
 
@@ -107,6 +111,7 @@ impl Geometry {
             Self::Limit(j) => j.groups(),
             Self::Contact(c) => c.pair.groups(),
             Self::Bound(b) => b.groups(),
+            Self::Surface(s) => s.pair.groups(),
         }
     }
 
@@ -128,6 +133,7 @@ impl Geometry {
             Self::Contact(c) => c.pair.frame,
             // Raw values only, like the norm row.
             Self::Bound(_) => [0, 0],
+            Self::Surface(s) => s.pair.frame,
         }
     }
 
@@ -148,6 +154,7 @@ impl Geometry {
             Self::Limit(j) => j.eval(x, c, sink),
             Self::Contact(j) => j.eval(x, c, sink),
             Self::Bound(j) => j.eval(x, c, sink),
+            Self::Surface(j) => j.eval(x, c, sink),
         }
     }
 }

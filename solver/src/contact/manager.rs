@@ -120,8 +120,14 @@ impl ContactManager {
 
     /// Takes back a program the fast loop handed back (it is replaced): kept
     /// for reuse when its set of pairs comes back (the oldest is dropped past
-    /// [`PROGRAM_CACHE`]). Allocates (slow thread).
+    /// [`PROGRAM_CACHE`]; one of a mechanism replaced by
+    /// [`rebase`](Self::rebase) is dropped). Allocates (slow thread).
     pub fn recycle(&mut self, program: Program) {
+        if program.model().semantic() != self.base.semantic() {
+            // A program of the mechanism before a rebase (other semantic
+            // rows or holds): never to be handed out again.
+            return;
+        }
         if program.model().contact().specs.is_empty() && self.pairs.is_empty() {
             // The bare mechanism's program: Program::new is cheap for it.
             return;
@@ -132,6 +138,19 @@ impl ContactManager {
         if self.cache.len() > PROGRAM_CACHE {
             self.cache.remove(0);
         }
+    }
+
+    /// Takes `base` as the mechanism from now on (the same bodies and
+    /// layout with other joints: satisfied semantic constraints, a hand's
+    /// holds; its jointed pairs stop colliding), runs a cycle at `q` and
+    /// returns the program for it and the pairs in reach. Programs kept for
+    /// reuse belonged to the old mechanism and are dropped. Allocates.
+    pub fn rebase(&mut self, base: Arc<Model>, q: &[f64]) -> Result<Program, ContactError> {
+        self.active.set_excluded(jointed_pairs(&base));
+        self.base = base;
+        self.cache.clear();
+        let _ = self.cycle(q);
+        self.build_program()
     }
 
     /// How the contact programs so far were obtained.

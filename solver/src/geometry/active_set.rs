@@ -171,6 +171,24 @@ impl ActiveSet {
         }
     }
 
+    /// Replaces the pairs that never collide (a model derived with new
+    /// joints: semantic constraints, holds) and stops tracking any that are
+    /// now excluded.
+    pub fn set_excluded(&mut self, excluded: Vec<[u32; 2]>) {
+        let mut excluded: Vec<[u32; 2]> = excluded
+            .into_iter()
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        excluded.sort_unstable();
+        excluded.dedup();
+        self.tracked.retain(|k, _| {
+            excluded
+                .binary_search(&[k[0].min(k[1]), k[0].max(k[1])])
+                .is_err()
+        });
+        self.excluded = excluded;
+    }
+
     /// The settings.
     pub fn settings(&self) -> &ContactSettings {
         &self.settings

@@ -242,6 +242,7 @@ impl ModelBuilder {
             characteristic_length,
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
+            semantic: super::SemanticLayout::default(),
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;

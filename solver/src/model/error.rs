@@ -358,6 +358,13 @@ pub enum BuildError {
         /// The valid range.
         why: &'static str,
     },
+    /// Semantic rows asked of a model that already has derived (contact or
+    /// semantic) rows: they are derived from the mechanism alone.
+    #[error("{owner}: semantic rows are derived from a model without contact or semantic rows")]
+    AlreadyDerived {
+        /// The model's owner (the scene).
+        owner: Owner,
+    },
     /// A body's Coulomb μ is negative or not finite.
     #[error("{owner}: `friction` = {value} must be finite and ≥ 0")]
     BadFriction {
@@ -408,7 +415,8 @@ impl BuildError {
             | FingerOnFixedBody { owner, .. }
             | Shape { owner, .. }
             | BadFingertip { owner, .. }
-            | BadFriction { owner, .. } => owner,
+            | BadFriction { owner, .. }
+            | AlreadyDerived { owner } => owner,
         }
     }
 }

@@ -1,7 +1,8 @@
 //! The mechanism model: bodies, the coordinate [`Layout`], the compiled
 //! constraints with per-row metadata, fingers and gravity. Built once by
 //! [`ModelBuilder`], immutable afterwards; [`Model::with_inequalities`] derives a
-//! model with extra point–plane inequalities for a new active set.
+//! model with extra point–plane inequalities for a new active set,
+//! [`Model::with_semantic`] one with satisfied surface constraints and holds.
 
 mod build;
 mod compiler;
@@ -11,6 +12,7 @@ mod inequality;
 mod joints;
 mod layout;
 mod spec;
+mod surface;
 
 pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
@@ -22,6 +24,7 @@ pub use spec::{
     DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape,
     UnknownName,
 };
+pub use surface::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -89,6 +92,7 @@ pub struct Model {
     pub(crate) characteristic_length: f64,
     pub(crate) contact: ContactLayout,
     pub(crate) objectives: crate::objective::Objectives,
+    pub(crate) semantic: SemanticLayout,
 }
 
 fn next_model_id() -> u64 {

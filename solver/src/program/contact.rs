@@ -38,7 +38,9 @@ impl Program {
     /// No allocation; O(slots) copies, one evaluation and one force solve.
     pub fn apply_witnesses(&mut self, table: &[Witness]) -> bool {
         let keep = &self.friction_slot;
-        let own = self.ev.witnesses_mut();
+        // The contact slots: the table's head (semantic rows follow them).
+        let n = self.model.contact().slots;
+        let own = &mut self.ev.witnesses_mut()[..n];
         if table.len() != own.len() {
             return false;
         }
@@ -62,7 +64,8 @@ impl Program {
     /// # Real-time
     /// No allocation; as [`apply_witnesses`](Self::apply_witnesses).
     pub fn reset_witnesses(&mut self, table: &[Witness]) -> bool {
-        let own = self.ev.witnesses_mut();
+        let n = self.model.contact().slots;
+        let own = &mut self.ev.witnesses_mut()[..n];
         if table.len() != own.len() {
             return false;
         }
@@ -72,9 +75,9 @@ impl Program {
         true
     }
 
-    /// The witness table in use.
+    /// The witness table in use (the contact slots).
     pub fn witnesses(&self) -> &[Witness] {
-        self.ev.witnesses()
+        &self.ev.witnesses()[..self.model.contact().slots]
     }
 
     /// The largest pulling force of an active contact row in the last

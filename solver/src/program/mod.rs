@@ -59,6 +59,7 @@ mod contact;
 mod converged;
 mod objective;
 mod report;
+mod semantic;
 mod stages;
 mod state;
 mod tick;
@@ -66,6 +67,7 @@ mod tick;
 pub use contact::DYNAMIC_DAMPING_PER_S;
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
+pub use semantic::SNAP_RISE_S;
 pub use stages::{SolverStage, StageMarks};
 pub use tick::MAX_ACTIVATIONS;
 
@@ -125,6 +127,8 @@ pub struct Program {
     friction_bodies: Vec<[Option<usize>; 2]>,
     /// The objectives' pull on q₀ (models with design objectives).
     objective: Option<objective::ObjectivePull>,
+    /// Snap ramps and grouped carrying (models with semantic rows).
+    semantic: Option<semantic::SemanticState>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -234,6 +238,7 @@ impl Program {
             contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
             objective,
+            semantic: semantic::SemanticState::new(&model),
             friction_slot,
             friction_pair,
             lambda: vec![0.0; m],

@@ -146,6 +146,7 @@ impl Program {
             }
         }
         self.adopt_friction(old);
+        self.adopt_semantic(old);
         let _ = self.refresh();
         self.measure_objectives();
         self.report = old.report;

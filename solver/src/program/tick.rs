@@ -267,6 +267,8 @@ impl Program {
         self.q_ref.copy_from_slice(&self.q);
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
+        self.carry_groups();
+        self.ramp_snaps(dt_s);
         self.pull_objectives();
         let n = match self.iterations(targets, n) {
             Ok(applied) => applied,

@@ -1,12 +1,14 @@
 //! Compiling a validated scene into what a session needs — and only that: a
 //! [`Model`] (no coordinates for fixed bodies, design variables only where
 //! marked free), one [`DeviceDecl`] per `[[device]]`, the finger wiring, the
-//! solver settings the file set, and a count of the semantic areas.
+//! solver settings the file set, and the semantic layer (areas, label
+//! order, `[semantic]`, checked consistent; `compile_semantic.rs`).
 //!
 //! Builder errors come back as [`SceneError`]s pointing at the offending field.
 
 use super::LoadedScene;
 use super::SceneError;
+use super::compile_semantic::HoldDecl;
 use super::spec::{
     Arr, BodySection, BoundsSpec, FreeSpec, GraspSpec, JointKindSpec, JointSection,
     ObjectiveKindSpec, ObjectiveSection, Quat, ShapeSpec, SolverSection,
@@ -157,6 +159,11 @@ pub struct CompiledScene {
     pub shaped_bodies: usize,
     /// Semantic offer + binding areas declared.
     pub semantic_areas: usize,
+    /// The semantic layer: areas, label order, `[semantic]` settings
+    /// (`None` without areas; checked consistent at q0).
+    pub semantic: Option<crate::semantic::SemanticSpec>,
+    /// The contact fingers' scheduled holds.
+    pub holds: Vec<HoldDecl>,
 }
 
 fn settings(s: &SolverSection) -> SceneSettings {
@@ -392,6 +399,12 @@ impl LoadedScene {
             .map_err(|e| self.build_error(&e))?;
         let model = builder.build().map_err(|e| self.build_error(&e))?;
         self.check_limits_at_q0(&model)?;
+        let penetration = s.solver.penetration_tolerance.as_ref().map_or(
+            crate::geometry::ContactSettings::default().penetration_tolerance_m,
+            |x| *x.get_ref(),
+        );
+        let semantic = self.compile_semantic(&model, penetration)?;
+        let holds = self.compile_holds(&model);
 
         let devices = s
             .devices
@@ -437,6 +450,8 @@ impl LoadedScene {
                 .iter()
                 .map(|b| b.offer.len() + b.binding.len())
                 .sum(),
+            semantic,
+            holds,
         })
     }
 

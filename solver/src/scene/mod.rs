@@ -2,7 +2,7 @@
 //!
 //! ```text
 //!  text ──toml+serde──► spec::SceneFile (typed, every value Spanned)
-//!       ──validate────► LoadedScene      (devices, hands, wiring, areas, labels checked)
+//!       ──validate────► LoadedScene      (devices, hands, wiring, areas, labels, holds checked)
 //!       ──compile─────► CompiledScene    (Model via ModelBuilder; builder errors mapped to spans)
 //! ```
 //!
@@ -13,14 +13,17 @@
 //! the rest from the checks here and in the model builder.
 
 mod compile;
+mod compile_semantic;
 mod error;
 mod flags;
 mod polygon;
+mod semantic;
 pub mod spec;
 mod validate;
 mod write;
 
 pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
+pub use compile_semantic::HoldDecl;
 pub use error::SceneError;
 pub use flags::Flagged;
 pub use write::mechanism_tables;

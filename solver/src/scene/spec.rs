@@ -89,6 +89,27 @@ pub struct SceneFile {
     /// `[labels]`: each key is ≤ every label in its list (a partial order).
     #[serde(default)]
     pub labels: BTreeMap<Spanned<String>, Spanned<Vec<Spanned<String>>>>,
+    /// `[semantic]`: snapping and breaking of semantic constraints.
+    #[serde(default)]
+    pub semantic: Option<SemanticSection>,
+}
+
+/// `[semantic]`: every key optional (defaults in
+/// [`SemanticSettings`](crate::semantic::SemanticSettings)).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SemanticSection {
+    /// A binding this close to a fitting offer's plane snaps, m.
+    pub snap_distance: Option<Spanned<f64>>,
+    /// … if its orientation is this close to the offer's, rad.
+    pub snap_angle: Option<Spanned<f64>>,
+    /// Speed at which a snap pulls the binding onto the offer, m/s.
+    pub snap_speed: Option<Spanned<f64>>,
+    /// The largest change of a finger's force a snap's pull may cause, N.
+    pub snap_force: Option<Spanned<f64>>,
+    /// Pulling a held object off its offer harder than this breaks the
+    /// constraint, N.
+    pub break_force: Option<Spanned<f64>>,
 }
 
 /// `[scene]`.
@@ -434,6 +455,22 @@ pub struct FingerSection {
     /// Contact fingers: Coulomb friction coefficient (default 0).
     #[serde(default)]
     pub friction: Option<Spanned<f64>>,
+    /// Contact fingers: when the fingertip holds which body.
+    #[serde(default)]
+    pub holds: Vec<Spanned<HoldSection>>,
+}
+
+/// One `holds = [{ body, from, until }]` entry of a contact finger: from
+/// `from` to `until` (s) the fingertip holds `body` where it touches it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldSection {
+    /// The body held (a moving one).
+    pub body: Spanned<String>,
+    /// When the hold starts, s.
+    pub from: Spanned<f64>,
+    /// When it ends, s.
+    pub until: Spanned<f64>,
 }
 
 /// `kind = "…"` of an objective.

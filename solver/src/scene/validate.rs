@@ -97,7 +97,8 @@ impl Checker<'_> {
         for o in &s.objectives {
             self.objective(o)?;
         }
-        self.labels(s)
+        self.labels(s)?;
+        self.semantic(s)
     }
 
     /// The keys an objective's kind takes (the rest are errors at their

@@ -61,6 +61,8 @@ pub enum WitnessType {
     FaceFace,
     /// A friction stick row (not a witness type of the paper).
     Friction,
+    /// A semantic surface row (`constraint/surface.rs`; not a contact).
+    Surface,
 }
 
 impl WitnessType {
@@ -74,6 +76,7 @@ impl WitnessType {
             Self::EdgeFace => "edge-face",
             Self::FaceFace => "face-face",
             Self::Friction => "friction",
+            Self::Surface => "surface",
         }
     }
 }
