@@ -15,7 +15,10 @@
 //!   recover must fail as counted, named failures (`failure_kinds`), and
 //!   its report must not say "kept".
 //!
-//! No timing: every figure is deterministic.
+//! No timing: every figure is deterministic. The matrix's sweeps (masses,
+//! geometry, gains, rates, the fast hand and the 1 m step) and the million
+//! ticks take minutes each unoptimised (the whole file about 14 minutes), so
+//! a debug build skips them: `cargo test --release` runs them all.
 
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{BUILTIN, Scene, check_loaded};
@@ -429,6 +432,7 @@ fn case(name: String, scene: Scene, options: SessionOptions) -> Case {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn masses_from_1e_4_to_1e3_kg() {
     for (m, seconds) in MECHANISMS {
         for kg in [1e-4, 1e3] {
@@ -439,6 +443,7 @@ fn masses_from_1e_4_to_1e3_kg() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn geometry_scaled_from_1e_3_to_10() {
     for (m, seconds) in MECHANISMS {
         for s in [1e-3, 10.0] {
@@ -453,6 +458,7 @@ fn geometry_scaled_from_1e_3_to_10() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn gains_from_1e_3_to_1e3_times_the_default() {
     for (m, seconds) in MECHANISMS {
         for f in [1e-3, 1e3] {
@@ -468,6 +474,7 @@ fn gains_from_1e_3_to_1e3_times_the_default() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn rates_from_100_hz_to_20_khz() {
     for (m, seconds) in MECHANISMS {
         for (hz, s) in [(100, seconds), (20_000, seconds / 8.0)] {
@@ -493,6 +500,7 @@ fn rates_from_100_hz_to_20_khz() {
 /// apart while it is jerked: ticks fail (counted by kind, force cut, the
 /// slow loop re-places it) and it is back within 1 µm 1 s after.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn a_hand_at_5_m_per_s() {
     for (m, _) in MECHANISMS {
         let (path, end) = out_and_back(0.2, [0.05, 0.0, 0.0], 0.01, 0.3);
@@ -516,6 +524,7 @@ fn a_hand_at_5_m_per_s() {
 /// tolerance 0.5 s after the jump back (the sphere toy: 1 s, with failed
 /// ticks while it is yanked, as above).
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn a_1_m_step_of_the_hand_target() {
     for (m, _) in MECHANISMS {
         let (path, end) = out_and_back(0.2, [1.0, 0.0, 0.0], 0.001, 0.3);
