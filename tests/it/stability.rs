@@ -15,7 +15,10 @@
 //!   recover must fail as counted, named failures (`failure_kinds`), and
 //!   its report must not say "kept".
 //!
-//! No timing: every figure is deterministic.
+//! No timing: every figure is deterministic. The matrix's sweeps (masses,
+//! geometry, gains, rates, the fast hand and the 1 m step) and the million
+//! ticks take minutes each unoptimised (the whole file about 14 minutes), so
+//! a debug build skips them: `cargo test --release` runs them all.
 
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{BUILTIN, Scene, check_loaded};
@@ -24,6 +27,7 @@ use haptloop_devices::PhantomModel;
 use haptloop_rt::clock::{MockClock, Nanos};
 use haptloop_rt::schedule::{SafetyEvent, StopFlag, Tick, TickBody, TickStatus};
 use haptloop_solver::TickOutcome;
+use nalgebra::{Matrix6, Vector3};
 use std::path::Path;
 use toml::{Table, Value};
 
@@ -181,6 +185,10 @@ struct Case {
     /// reported, force cut, the slow loop recovering the configuration);
     /// none may fail once it is over and the settle window has passed.
     expect_failures: bool,
+    /// The disturbance may make ticks fail, or may not (a chaotic passage
+    /// through a singular pose, where the last bits decide it). Any that
+    /// fail are held to what `expect_failures` asks of them.
+    may_fail: bool,
     /// Where the extreme makes the scene's own tolerance unreachable: the
     /// bound the case holds instead, m. The run's report must then say
     /// `EXCEEDED`, never `kept`.
@@ -192,8 +200,12 @@ struct Case {
 struct Outcome {
     /// The first non-finite output, if any.
     non_finite: Option<String>,
-    /// Largest rendered force over the device's peak.
+    /// Largest force the motors rendered over the device's peak (both in
+    /// the device's frame and units).
     force_over_peak: f64,
+    /// Largest force the solver asked for (before the safety layer) over
+    /// the device's peak, in the same units.
+    commanded_over_peak: f64,
     /// Largest | |e|² − 1 | of any body at any tick (a transient: the
     /// rational rotation R(e) = A_h/|e|² is exact for any e).
     norm_max: f64,
@@ -234,6 +246,7 @@ fn drive_with(case: &Case, on_tick: &mut dyn FnMut(u64, &haptloop_solver::Progra
     let mut o = Outcome {
         non_finite: None,
         force_over_peak: 0.0,
+        commanded_over_peak: 0.0,
         norm_max: 0.0,
         norm_drift: 0.0,
         norm_end: 0.0,
@@ -305,11 +318,12 @@ fn drive_with(case: &Case, on_tick: &mut dyn FnMut(u64, &haptloop_solver::Progra
     b.fast.on_stop();
     let stats = b.fast.stats();
     for (i, f) in stats.fingers.iter().enumerate() {
-        let d = scene.compiled.fingers[i].device;
-        let peak = PhantomModel::by_name(&scene.compiled.devices[d].model)
-            .unwrap()
-            .peak_force_n;
-        o.force_over_peak = o.force_over_peak.max(f.force_max / peak);
+        let d = &scene.compiled.devices[scene.compiled.fingers[i].device];
+        let peak = PhantomModel::by_name(&d.model).unwrap().peak_force_n;
+        // The session's figures are scene forces, F/s for a workspace
+        // scale s: the motors produced s times them.
+        o.force_over_peak = o.force_over_peak.max(f.force_max * d.scale / peak);
+        o.commanded_over_peak = o.commanded_over_peak.max(f.commanded_max * d.scale / peak);
         assert!(f.force_max.is_finite(), "{}: rendered force", case.name);
     }
     o.failed = stats.solver_failures;
@@ -375,14 +389,14 @@ fn check_recovered(case: &Case, o: Outcome) -> Outcome {
             case.settle_s
         );
     }
-    if case.expect_failures {
+    if case.expect_failures || (case.may_fail && o.failed > 0) {
         assert!(o.failed > 0 && !o.failure_kinds.is_empty(), "{n}: {o:?}");
         assert!(
             o.verdict.starts_with("FAILED TICKS") && !o.verdict.contains("kept"),
             "{n}: {}",
             o.verdict
         );
-    } else {
+    } else if !case.may_fail {
         assert_eq!(o.failed, 0, "{n}: {o:?}");
     }
     o
@@ -412,11 +426,13 @@ fn case(name: String, scene: Scene, options: SessionOptions) -> Case {
         disturbance_end_s: 0.0,
         settle_s: 0.0,
         expect_failures: false,
+        may_fail: false,
         holds_instead_m: None,
     }
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn masses_from_1e_4_to_1e3_kg() {
     for (m, seconds) in MECHANISMS {
         for kg in [1e-4, 1e3] {
@@ -427,6 +443,7 @@ fn masses_from_1e_4_to_1e3_kg() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn geometry_scaled_from_1e_3_to_10() {
     for (m, seconds) in MECHANISMS {
         for s in [1e-3, 10.0] {
@@ -441,6 +458,7 @@ fn geometry_scaled_from_1e_3_to_10() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn gains_from_1e_3_to_1e3_times_the_default() {
     for (m, seconds) in MECHANISMS {
         for f in [1e-3, 1e3] {
@@ -456,6 +474,7 @@ fn gains_from_1e_3_to_1e3_times_the_default() {
 }
 
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn rates_from_100_hz_to_20_khz() {
     for (m, seconds) in MECHANISMS {
         for (hz, s) in [(100, seconds), (20_000, seconds / 8.0)] {
@@ -481,6 +500,7 @@ fn rates_from_100_hz_to_20_khz() {
 /// apart while it is jerked: ticks fail (counted by kind, force cut, the
 /// slow loop re-places it) and it is back within 1 µm 1 s after.
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn a_hand_at_5_m_per_s() {
     for (m, _) in MECHANISMS {
         let (path, end) = out_and_back(0.2, [0.05, 0.0, 0.0], 0.01, 0.3);
@@ -504,6 +524,7 @@ fn a_hand_at_5_m_per_s() {
 /// tolerance 0.5 s after the jump back (the sphere toy: 1 s, with failed
 /// ticks while it is yanked, as above).
 #[test]
+#[cfg_attr(debug_assertions, ignore = "minutes unoptimised: run with --release")]
 fn a_1_m_step_of_the_hand_target() {
     for (m, _) in MECHANISMS {
         let (path, end) = out_and_back(0.2, [1.0, 0.0, 0.0], 0.001, 0.3);
@@ -556,23 +577,6 @@ fn joint_conditioning(scene: &Scene, q: &[f64]) -> f64 {
         .collect();
     let sv = j.select_rows(held.iter()).singular_values();
     sv.min() / sv.max()
-}
-
-/// Runs `c`, following the joint rows' conditioning every 10 ticks: the
-/// outcome, the conditioning at the start and its smallest.
-fn drive_conditioning(c: &Case) -> (Outcome, f64, f64) {
-    let (mut first, mut least) = (f64::NAN, f64::INFINITY);
-    let o = drive_with(c, &mut |k, p| {
-        let r = p.last_report();
-        if k % 10 == 0 && r.status == TickOutcome::Ok && r.max_violation_m <= 1e-4 {
-            let r = joint_conditioning(&c.scene, p.q());
-            if k == 0 {
-                first = r;
-            }
-            least = least.min(r);
-        }
-    });
-    (check_recovered(c, o), first, least)
 }
 
 /// The four-bar's transmission at `q`: how fast the crank and the rocker
@@ -659,37 +663,327 @@ fn the_four_bar_toggle() {
     );
 }
 
-/// The Stewart platform pulled toward a singular pose: lifted 0.1 m into
-/// its legs' stroke limits (the legs then act as locked struts), then
-/// 0.2 m sideways while there, so the locked legs lean over together;
-/// held, then back. The conditioning of the rows that hold (equalities and
-/// the limits at their bounds) falls about fourfold, the closest to a
-/// singular pose we found this scene's stroke limits let a hand pull it
-/// (a Gough singularity proper, where it reaches 0, was not reached); back
-/// within the 0.1 mm tolerance 0.5 s after the hand returns, with no
-/// failed tick.
+/// The Stewart platform's legs as lines, from the scene file's own numbers
+/// (not the solver's): the base attachment points (joints `base{i}`, on
+/// the fixed base at the origin) and the platform's (joints `top{i}`, in
+/// the platform's frame), placed by the platform's pose in q.
+struct StewartLegs {
+    base: [Vector3<f64>; 6],
+    top: [Vector3<f64>; 6],
+    /// The platform's offset in q.
+    platform: usize,
+    /// Moments are divided by this (the platform's radius), m, so that the
+    /// wrench matrix holds numbers of one kind.
+    radius_m: f64,
+}
+
+impl StewartLegs {
+    fn of(scene: &Scene) -> Self {
+        let text = BUILTIN.iter().find(|b| b.name == "stewart").unwrap().text;
+        let mut t: Table = text.parse().unwrap();
+        let base = tables(&mut t, "body").next().unwrap();
+        // The base is fixed at the origin, unrotated: its anchors are
+        // scene coordinates.
+        assert_eq!(base.get("fixed").and_then(Value::as_bool), Some(true));
+        let numbers = |k: &str| -> Vec<f64> {
+            base[k]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_float().unwrap())
+                .collect()
+        };
+        assert_eq!(numbers("position"), [0.0; 3]);
+        assert_eq!(numbers("orientation"), [1.0, 0.0, 0.0, 0.0]);
+        let mut anchor = |joint: String, k: usize| {
+            let j = tables(&mut t, "joint")
+                .find(|j| j.get("name").and_then(Value::as_str) == Some(&joint))
+                .unwrap();
+            let a = j["anchors"].as_array().unwrap()[k].as_array().unwrap();
+            Vector3::from_iterator(a.iter().map(|x| x.as_float().unwrap()))
+        };
+        let base = std::array::from_fn(|i| anchor(format!("base{i}"), 0));
+        let top: [Vector3<f64>; 6] = std::array::from_fn(|i| anchor(format!("top{i}"), 1));
+        let model = &scene.compiled.model;
+        let (_, platform) = model
+            .layout()
+            .moving_bodies()
+            .find(|(id, _)| model.bodies()[id.index()].name == "platform")
+            .unwrap();
+        let radius_m = top.iter().map(|a| a.norm()).sum::<f64>() / 6.0;
+        StewartLegs {
+            base,
+            top,
+            platform,
+            radius_m,
+        }
+    }
+
+    /// Leg i at `q`: (base point, platform point relative to the
+    /// platform's centre, platform point), m.
+    fn leg(&self, q: &[f64], i: usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        let o = self.platform;
+        let x = Vector3::new(q[o], q[o + 1], q[o + 2]);
+        let r = haptloop_solver::rotation::rotation_wxyz([q[o + 3], q[o + 4], q[o + 5], q[o + 6]])
+            .unwrap();
+        let arm = r * self.top[i];
+        (self.base[i], arm, x + arm)
+    }
+
+    /// Leg i's length (base attachment to platform attachment) at `q`, m.
+    fn length(&self, q: &[f64], i: usize) -> f64 {
+        let (b, _, p) = self.leg(q, i);
+        (p - b).norm()
+    }
+
+    /// σ_min/σ_max of the platform's wrench Jacobian at `q`: row i the
+    /// Plücker coordinates of leg i's line, its unit direction u_i and its
+    /// moment about the platform's centre (r_i × u_i)/radius. A leg,
+    /// spherical at the platform, can only push or pull along its line, so
+    /// this is 0 exactly where some wrench on the platform is one no leg
+    /// force can balance: a Gough–Stewart singular pose.
+    fn conditioning(&self, q: &[f64]) -> f64 {
+        let mut w = Matrix6::zeros();
+        for i in 0..6 {
+            let (b, arm, p) = self.leg(q, i);
+            let u = (p - b).normalize();
+            let m = arm.cross(&u) / self.radius_m;
+            w.fixed_view_mut::<1, 3>(i, 0).copy_from(&u.transpose());
+            w.fixed_view_mut::<1, 3>(i, 3).copy_from(&m.transpose());
+        }
+        let sv = w.singular_values();
+        sv.min() / sv.max()
+    }
+}
+
+/// What a run through the Stewart platform's singular pose showed.
+#[derive(Debug)]
+struct SingularRun {
+    /// σ_min/σ_max of the legs' wrench matrix at the first tick, at the
+    /// tick closest to singular, and that tick and the platform's height
+    /// there (m; the base attachment points are at 0).
+    wrench_first: f64,
+    wrench_least: f64,
+    least_tick: u64,
+    least_z_m: f64,
+    /// σ_min/σ_max of the rows the solver held (equalities, limits at their
+    /// bounds): at the first tick and the least over the run.
+    rows_first: f64,
+    rows_least: f64,
+    /// The last tick whose violation exceeded the scene's tolerance or
+    /// that failed (None: none did).
+    last_bad_tick: Option<u64>,
+}
+
+/// The hand's path through the Stewart platform's singular pose: the
+/// platform down 12 cm into the plane of the base attachment points over
+/// 1 s, held there 0.3 s, 1 cm further (below it) and back, held 0.3 s, and
+/// up again over 1 s; the hand leaves the singular pose at 2 s. The arm's
+/// workspace box reaches 9.55 cm below its home pose, so every device
+/// metre is two scene metres (the hand moves 6.5 cm). Each slider's stroke
+/// limits become `[lower[i], 0.04]`.
+fn stewart_through_its_base_plane(t: &mut Table, lower: [f64; 6]) {
+    for j in tables(t, "joint") {
+        let Some(i) = j
+            .get("name")
+            .and_then(Value::as_str)
+            .and_then(|n| n.strip_prefix("slider"))
+        else {
+            continue;
+        };
+        let i: usize = i.parse().unwrap();
+        j.insert(
+            "limits".into(),
+            Value::Array(vec![Value::Float(lower[i]), Value::Float(0.04)]),
+        );
+    }
+    tables(t, "device")
+        .next()
+        .unwrap()
+        .insert("scale".into(), Value::Float(2.0));
+    set_waypoints(
+        t,
+        0,
+        &[
+            [0.0, 0.0, 0.0, 0.0],
+            [0.2, 0.0, 0.0, 0.0],
+            [1.2, 0.0, 0.0, -0.12],
+            [1.5, 0.0, 0.0, -0.12],
+            [1.6, 0.0, 0.0, -0.13],
+            [1.7, 0.0, 0.0, -0.12],
+            [2.0, 0.0, 0.0, -0.12],
+            [3.0, 0.0, 0.0, 0.0],
+        ],
+    );
+}
+
+/// Runs the Stewart platform through its base plane with the sliders'
+/// lower stroke limits at `lower`, measuring the singularity as it goes,
+/// and asserts what every case of the matrix asserts (`check_recovered`),
+/// back within tolerance `settle_s` after the hand leaves the singular
+/// pose (at 2 s, tick 2000), and that it went through a singular pose.
+fn drive_stewart_singular(
+    name: &str,
+    lower: [f64; 6],
+    settle_s: f64,
+    may_fail: bool,
+) -> (Outcome, SingularRun) {
+    let scene = edited("stewart", |t| stewart_through_its_base_plane(t, lower));
+    let legs = StewartLegs::of(&scene);
+    let mut c = case(name.into(), scene, options(4.0));
+    c.disturbance_end_s = 2.0;
+    c.settle_s = settle_s;
+    c.may_fail = may_fail;
+    let tol = c.scene.compiled.settings.violation_tolerance.unwrap();
+    let mut s = SingularRun {
+        wrench_first: f64::NAN,
+        wrench_least: f64::INFINITY,
+        least_tick: 0,
+        least_z_m: f64::NAN,
+        rows_first: f64::NAN,
+        rows_least: f64::INFINITY,
+        last_bad_tick: None,
+    };
+    let o = drive_with(&c, &mut |k, p| {
+        let w = legs.conditioning(p.q());
+        if k == 0 {
+            s.wrench_first = w;
+        }
+        if w < s.wrench_least {
+            (s.wrench_least, s.least_tick) = (w, k);
+            s.least_z_m = p.q()[legs.platform + 2];
+        }
+        // (A failed tick is one of these too; `check_recovered` counts
+        // them after the settle window.)
+        let r = p.last_report();
+        if r.status != TickOutcome::Ok || r.max_violation_m > tol {
+            s.last_bad_tick = Some(k);
+        }
+        // Only configurations a tick held; every tick near the pose.
+        if (k % 10 == 0 || w < 1e-2) && r.status == TickOutcome::Ok && r.max_violation_m <= 1e-4 {
+            let j = joint_conditioning(&c.scene, p.q());
+            if k == 0 {
+                s.rows_first = j;
+            }
+            s.rows_least = s.rows_least.min(j);
+        }
+    });
+    eprintln!("{name}: {s:?}; {o:?}");
+    let o = check_recovered(&c, o);
+    assert_eq!(
+        o.failure_kinds.iter().map(|(_, n)| n).sum::<u64>(),
+        o.failed,
+        "{name}: {o:?}"
+    );
+    // Over the tolerance at any tick: the report says so, never "kept".
+    if o.violation_max_m > tol {
+        assert!(
+            o.verdict.contains("EXCEEDED") && !o.verdict.contains("kept"),
+            "{name}: {}",
+            o.verdict
+        );
+    }
+    // Measured independently of the solver: the run went through a
+    // singular pose, from a well-conditioned start.
+    assert!(s.wrench_first > 0.1, "{name}: {s:?}");
+    assert!(
+        s.wrench_least < 1e-3 && s.least_z_m.abs() < 1e-4,
+        "{name}: the singular pose was not reached: {s:?}"
+    );
+    (o, s)
+}
+
+/// The Stewart platform lowered into the plane of its base attachment
+/// points, through it and back (`stewart_through_its_base_plane`). There
+/// all six leg lines lie in one plane, so their Plücker coordinates span
+/// rank 3 and no leg force can hold a vertical force or a tilt: the classic
+/// Gough–Stewart singularity. The legs must shorten from 13.3 cm to 5.7 cm
+/// for it, beyond the scene's −4 cm stroke, so the lower stroke limits are
+/// widened to −10 cm. The legs are unactuated: the rows the solver holds
+/// (each leg a U-P-S chain with six freedoms of its own) keep their rank,
+/// conditioning 3.3e-2 at the start and 1.4e-2 at the least, and the
+/// singularity is the one the legs have as struts: measured from q and the
+/// scene file's anchors (`StewartLegs`), independently of the solver, the
+/// legs' wrench matrix falls from σ_min/σ_max 0.286 at the start to 1.8e-4
+/// at the closest tick (tick 1197, the platform 14 µm below the plane).
+/// The loop holds the mechanism within its 0.1 mm tolerance at every tick
+/// (6.9e-7 m at most), no tick fails, the motors' force reaches 0.513 of
+/// the arm's peak, and |e|² stays within 9e-6 of 1.
 #[test]
 fn the_stewart_singular_pose() {
-    let path = [
-        [0.0, 0.0, 0.0, 0.0],
-        [0.2, 0.0, 0.0, 0.0],
-        [0.6, 0.0, 0.0, 0.1],
-        [1.0, 0.2, 0.0, 0.1],
-        [1.5, 0.2, 0.0, 0.1],
-        [2.0, 0.0, 0.0, 0.0],
-    ];
-    let end = 2.0;
-    let scene = edited("stewart", |s| set_waypoints(s, 0, &path));
-    let mut c = case("stewart singular pose".into(), scene, options(end + 1.0));
-    c.disturbance_end_s = end;
-    c.settle_s = 0.5;
-    let (o, first, least) = drive_conditioning(&c);
-    eprintln!("stewart singular: conditioning {least:e} (start {first:e}); {o:?}");
-    assert!(
-        least < 0.3 * first,
-        "no near-singular pose: conditioning {least:e} against {first:e} at the start"
-    );
+    let (o, s) = drive_stewart_singular("stewart singular pose", [-0.10; 6], 0.5, false);
     assert_eq!(o.failed, 0, "{o:?}");
+    assert!(o.violation_max_m <= 1e-4, "{o:?}");
+    assert_eq!(s.last_bad_tick, None, "{s:?}");
+}
+
+/// The stroke limits of `the_stewart_singular_pose` with each leg's lower
+/// limit `by` off its length in the base plane: `by` = 0, the six legs
+/// reach their stops together at the singular pose and act there as
+/// locked struts, so the rows the solver holds lose rank as well.
+fn stewart_legs_bottoming_out(by: f64) -> [f64; 6] {
+    let stewart = builtin("stewart");
+    let legs = StewartLegs::of(&stewart);
+    let q0 = stewart.compiled.model.q0();
+    let mut flat = q0.to_vec();
+    flat[legs.platform + 2] = 0.0;
+    std::array::from_fn(|i| legs.length(&flat, i) - legs.length(q0, i) + by)
+}
+
+/// The same, with the legs bottoming out in the base plane: there the six
+/// limits become active together at a pose where the legs' lines are
+/// coplanar, and the held rows lose rank (conditioning 3.3e-2 → 2.6e-9).
+/// The passage is chaotic: the solver asks for up to 17× the arm's peak
+/// force (the safety layer clamps it), and whether ticks fail or the
+/// violation merely exceeds the tolerance depends on the limits' last bits.
+/// With the limits exactly at the in-plane lengths two ticks fail
+/// (`force_solve`, counted, the report says FAILED TICKS, not "kept"), the
+/// violation reaches 0.107 mm, and the last tick over the tolerance is
+/// tick 1759, before the hand leaves the pose at 2 s.
+#[test]
+fn the_stewart_legs_bottoming_out_in_the_singular_pose() {
+    let (o, s) = drive_stewart_singular(
+        "stewart legs bottoming out",
+        stewart_legs_bottoming_out(0.0),
+        1.0,
+        true,
+    );
+    assert!(
+        s.rows_least < 1e-6,
+        "the held rows did not lose rank: {s:?}"
+    );
+    assert!(o.violation_max_m <= 5e-3, "{o:?}");
+    assert!(s.last_bad_tick.is_none_or(|k| k < 3000), "{s:?}");
+}
+
+/// KNOWN BUG (issue 11), reproduced: with each lower limit 1 nm below the
+/// in-plane length the fast loop falls into a period-5 limit cycle beside
+/// the singular pose at 1.8 s and never leaves it. Each cycle the
+/// Gauss–Newton step halves the platform's height (4.8 → 2.4 → 1.2 →
+/// 0.6 mm, the signature of Newton at a singular root) and then the
+/// active limits throw it back to 4.8 mm; the violation runs 3.6e-4,
+/// 7.6e-5, 1.9e-5, 4.7e-6, 6.6e-5 m, no tick counts as failed, and the
+/// platform stays jammed in the base plane while the hand rises to 12 cm
+/// pulling with the arm's peak force, to the end of the run (|e|² drifts
+/// 3e-3 from 1). The slow loop, which would re-project it (it does, and
+/// the loop recovers, when made to look at every tick from 1.95 s), looks
+/// at the newest snapshot every 5 ticks, the cycle's own period, and
+/// always lands on the 6.6e-5 m tick, under its 1e-4 m threshold: the
+/// re-projection trigger aliases. Triggering it on the largest violation
+/// since it last looked (the fast loop can tell from the mailbox's fresh
+/// bit) recovers this case by tick 2121 but is not the cure: with the
+/// limits 10 nm short the jam stays (0.65 mm to the end), and 1 pm short
+/// every tick fails (`force_solve`) from 2.2 s to the end. The fast loop's
+/// step at a rank-deficient set of active limits is what needs fixing.
+#[test]
+#[ignore = "known bug: a period-5 jam at the Stewart singular pose the slow loop aliases past"]
+fn the_stewart_legs_bottoming_out_1_nm_short() {
+    drive_stewart_singular(
+        "stewart legs bottoming out, 1 nm short",
+        stewart_legs_bottoming_out(-1e-9),
+        1.0,
+        true,
+    );
 }
 
 /// The Peaucellier linkage's dead point (P = Q, the rhombus flat) at about
