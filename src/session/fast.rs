@@ -49,6 +49,11 @@ pub struct Snapshot {
     /// Each finger's force as the solver computed it (on the finger, N,
     /// scene frame; before the safety layer): what the hand pulls with.
     pub finger_force_n: Vec<[f64; 3]>,
+    /// Largest length-row violation of every tick since the snapshot the
+    /// slow loop last took, this one's included, m: the slow loop looks
+    /// every few ticks, and a violation that comes and goes with its period
+    /// must not slip between its looks.
+    pub peak_violation_m: f64,
 }
 
 /// One finger at one tick, for `trace.csv` and the plots.
@@ -105,6 +110,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) stats: RunStats,
     pub(super) last_index: Option<u64>,
     pub(super) cut_until: u64,
+    /// [`Snapshot::peak_violation_m`] so far, m.
+    pub(super) violation_peak_m: f64,
     pub(super) health: Vec<Health>,
     /// Encoder counts read this tick, per device.
     pub(super) counts: Vec<[i32; 3]>,
@@ -305,6 +312,13 @@ impl<C: Clock> TickBody for FastLoop<C> {
         }
 
         let program = &self.program.program;
+        let v = report.max_violation_m;
+        self.violation_peak_m = if self.snapshot.reader_is_current() || v.is_nan() {
+            v
+        } else {
+            self.violation_peak_m.max(v)
+        };
+        let peak = self.violation_peak_m;
         self.snapshot.publish_with(|s| {
             s.tick = tick.index;
             s.time = now;
@@ -320,6 +334,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                     .iter()
                     .map(|o| <[f64; 3]>::from(o.force_n)),
             );
+            s.peak_violation_m = peak;
         });
         self.timer.lap(Stage::Bookkeeping);
         self.stats.stages.record(&self.timer);

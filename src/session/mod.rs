@@ -291,6 +291,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         stats: RunStats::new(fingers),
         last_index: None,
         cut_until: 0,
+        violation_peak_m: 0.0,
         health,
         counts,
         orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],

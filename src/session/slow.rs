@@ -163,9 +163,12 @@ impl SlowLoop {
         }
         let snap = self.snapshots.latest();
         let v = snap.max_violation_m;
-        self.stats.max_seen_violation_m = self.stats.max_seen_violation_m.max(v);
+        // Over every tick since the last look, not just the newest: a
+        // violation cycling with the look's own period would alias away.
+        let peak = snap.peak_violation_m;
+        self.stats.max_seen_violation_m = self.stats.max_seen_violation_m.max(v.max(peak));
         let finite = v.is_finite() && snap.q.iter().all(|x| x.is_finite());
-        if snap.solved && finite && v <= self.threshold_m {
+        if snap.solved && finite && v <= self.threshold_m && peak <= self.threshold_m {
             self.last_good.clear();
             self.last_good.extend_from_slice(&snap.q);
             return;

@@ -97,6 +97,19 @@ impl<T: Send> MailboxWriter<T> {
         self.index = previous & INDEX_MASK;
     }
 
+    /// True if the reader has taken the last value published (or nothing
+    /// was published yet): the next value is the first it has not seen.
+    /// The reader may take a value just after this says false; a writer
+    /// that accumulates over the values the reader missed then reports a
+    /// little more than it needs to, never less.
+    ///
+    /// # Real-time
+    /// One relaxed atomic load.
+    #[inline]
+    pub fn reader_is_current(&self) -> bool {
+        self.shared.back.load(Ordering::Relaxed) & FRESH == 0
+    }
+
     /// Publishes `value`, dropping the slot's old value on this thread: use
     /// [`Self::publish_with`] for types that own heap memory.
     #[inline]
@@ -154,6 +167,25 @@ mod tests {
         assert!(!r.refresh(), "no newer value than 3");
         w.publish(4);
         assert_eq!(r.read(|v| *v), 4);
+    }
+
+    #[test]
+    fn the_writer_knows_whether_the_reader_took_its_last_value() {
+        let (mut w, mut r) = mailbox(|| 0u64);
+        assert!(w.reader_is_current(), "nothing published yet");
+        w.publish(1);
+        assert!(!w.reader_is_current());
+        w.publish(2);
+        assert!(!w.reader_is_current(), "1 was overwritten unseen, 2 unseen");
+        assert_eq!(*r.latest(), 2);
+        assert!(w.reader_is_current());
+        assert!(!r.refresh());
+        assert!(
+            w.reader_is_current(),
+            "a refresh with nothing new changes nothing"
+        );
+        w.publish(3);
+        assert!(!w.reader_is_current());
     }
 
     #[test]
