@@ -17,7 +17,9 @@ use std::time::Duration;
 /// finite-difference acceleration, so the Eq. 7 inertial force of a 0.08 kg
 /// coupler buzzes by about 2.4 N per count. Measured on the default scene
 /// (BENCHMARKS.md, sessions): tick-to-tick force change p99 7.0 N unfiltered,
-/// 1.4 N at 2 ms, 0.66 N at 5 ms, 0.33 N at 10 ms. 10 ms delays only the
+/// 1.4 N at 2 ms, 0.66 N at 5 ms, 0.33 N at 10 ms; the accelerations' own
+/// τ/4 stage (`ACCELERATION_FILTER_FRACTION` in the solver) then cut the
+/// remaining buzz about 5× (BENCHMARKS.md, issue 11). 10 ms delays only the
 /// inertial part of the force (gravity and coupling are undelayed), and is in
 /// line with the 15–20 ms velocity windows CHAI3D and Force Dimension use.
 pub const DEFAULT_VELOCITY_FILTER: Duration = Duration::from_millis(10);

@@ -101,8 +101,14 @@ fn every_builtin_scene_runs_within_its_stated_tolerance() {
                 "{}: {finger} force not finite",
                 b.name
             );
+            // The safety layer clamps the command to the peak; the motors'
+            // force is their torque (mapped with the encoder-sensed
+            // Jacobian) at the arm's true pose, so a clamped command may
+            // come out above the peak by that Jacobian's error (counts of
+            // 0.03 mm on ~0.2 m links: ~1e-4 relative; the stability matrix
+            // bounds it the same way).
             assert!(
-                f.max <= peak + 1e-9,
+                f.max <= peak * (1.0 + 1e-3),
                 "{}: {finger} rendered {} N > peak {peak} N",
                 b.name,
                 f.max

@@ -13,7 +13,13 @@
 //! instant one tick back, so they lag by one tick. With
 //! [`SolverSettings::velocity_filter`](crate::SolverSettings::velocity_filter)
 //! τ > 0, v and ω pass a first-order low-pass y ← y + dt/(τ + dt) (x − y)
-//! before differencing, adding a delay of about τ.
+//! before differencing, adding a delay of about τ, and a and α pass a second
+//! one of time constant τ_a = [`ACCELERATION_FILTER_FRACTION`] · τ after it:
+//! an encoder count arriving is a step Δv in the raw velocity, which the
+//! first stage alone turns into a doublet +Δv/τ, −Δv/τ·(1 − dt/τ) of
+//! acceleration on two consecutive ticks (a buzz at half the tick rate);
+//! the second stage spreads it over τ_a. Accelerations lag by about
+//! τ + τ_a + dt.
 //!
 //! History after a reset ([`Program::new`](crate::Program::new), `assemble`,
 //! `set_q`): the program is taken to be at rest. The first tick's velocity is
@@ -24,6 +30,16 @@
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::inertia::BodyMass;
+
+/// τ_a / τ: the time constant of the acceleration's own low-pass stage as
+/// a fraction of the velocity filter's. Measured on the built-in scenes
+/// (`haptloop run SCENE --deterministic`, RMS tick-to-tick change of the
+/// rendered force; BENCHMARKS.md, issue 11): 1 (τ_a = τ) cuts the
+/// encoder-count buzz 15–30× but delays the inertial force by 2τ, and a
+/// 1000 kg four-bar (the stability matrix) then no longer settles within
+/// its tolerance; 0.5 fails the same case; 0.25 passes it and cuts the buzz
+/// 5–6× (default scene 0.226 → 0.043 N, Stewart 0.653 → 0.110 N).
+pub(crate) const ACCELERATION_FILTER_FRACTION: f64 = 0.25;
 
 /// Velocity and acceleration history of every moving body.
 #[derive(Debug, Clone)]
@@ -76,6 +92,11 @@ impl Motion {
         } else {
             1.0
         };
+        let alpha_a = if self.tau_s > 0.0 {
+            dt_s / (ACCELERATION_FILTER_FRACTION * self.tau_s + dt_s)
+        } else {
+            1.0
+        };
         let first = self.ticks == 0;
         for (k, m) in masses.iter().enumerate() {
             let o = m.offset;
@@ -96,8 +117,15 @@ impl Motion {
                 self.a[k] = Vector3::zeros();
                 self.alpha[k] = Vector3::zeros();
             } else {
-                self.a[k] = (v - self.v[k]) / dt_s;
-                self.alpha[k] = (w - self.w[k]) / dt_s;
+                // The difference of a filtered velocity still steps by
+                // Δv/τ when an encoder count arrives, and back the next
+                // tick: a period-2 buzz. A second low-pass stage on the
+                // acceleration (time constant τ_a, module docs) damps it.
+                let a_raw = (v - self.v[k]) / dt_s;
+                let alpha_raw = (w - self.w[k]) / dt_s;
+                let (a, al) = (self.a[k], self.alpha[k]);
+                self.a[k] = a + (a_raw - a) * alpha_a;
+                self.alpha[k] = al + (alpha_raw - al) * alpha_a;
             }
             self.v[k] = v;
             self.w[k] = w;

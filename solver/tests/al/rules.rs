@@ -78,7 +78,10 @@ fn conjugate_gradients_agree_with_the_cholesky() {
 
 /// A body accelerated from rest at a constant a: unfiltered, the finger feels
 /// m (g − a) from the second tick; with a velocity filter of time constant τ
-/// the response is first order, 1 − e^(−t/τ), and `motion_delay` says τ.
+/// the inertial part responds through two first-order stages, τ on the
+/// velocity and τ_a = τ/4 on the acceleration (`force/motion.rs`):
+/// 1 − (τ e^(−t/τ) − τ_a e^(−t/τ_a)) / (τ − τ_a), 0.516 at t = τ; and
+/// `motion_delay` (the velocities' delay) says τ.
 #[test]
 fn velocity_filter_delays_the_inertial_force_by_its_time_constant() {
     let tau = Duration::from_millis(10);
@@ -107,6 +110,13 @@ fn velocity_filter_delays_the_inertial_force_by_its_time_constant() {
     };
     assert!((run(Duration::ZERO, 10) - 1.0).abs() < 0.02);
     let at_tau = run(tau, 10);
-    assert!((at_tau - (1.0 - (-1.0f64).exp())).abs() < 0.06, "{at_tau}");
+    let (t1, t2) = (1.0f64, 0.25f64); // τ and τ_a in units of τ, at t = τ
+    let expected = 1.0 - (t1 * (-1.0 / t1).exp() - t2 * (-1.0 / t2).exp()) / (t1 - t2);
+    assert!(
+        (at_tau - expected).abs() < 0.06,
+        "{at_tau} against {expected}"
+    );
+    // A single first-order stage would be 1 − e⁻¹ = 0.632 here.
+    assert!(at_tau < 1.0 - (-1.0f64).exp() - 0.06, "{at_tau}");
     assert!((run(tau, 50) - 1.0).abs() < 0.02);
 }
