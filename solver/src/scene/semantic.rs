@@ -8,7 +8,6 @@
 use std::collections::BTreeSet;
 
 use nalgebra::Vector3;
-use toml::Spanned;
 
 use super::SceneError;
 use super::spec::{AreaSection, FingerSection, GraspSpec, SceneFile};
@@ -31,7 +30,7 @@ impl Checker<'_> {
                 (&sec.break_force, "break_force"),
             ] {
                 if let Some(v) = v {
-                    self.positive_value(v, what)?;
+                    self.positive(v, what)?;
                 }
             }
             if let Some(a) = &sec.snap_angle {
@@ -75,18 +74,6 @@ impl Checker<'_> {
             self.holds(s, f)?;
         }
         Ok(())
-    }
-
-    fn positive_value(&self, v: &Spanned<f64>, what: &str) -> Check {
-        let x = *v.get_ref();
-        if x.is_finite() && x > 0.0 {
-            Ok(())
-        } else {
-            Err(self.err(
-                v.span(),
-                format!("{what} is {x}; expected a finite number > 0"),
-            ))
-        }
     }
 
     /// Orientation vector ⊥ polygon; offers convex.

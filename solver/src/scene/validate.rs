@@ -35,7 +35,7 @@ impl Checker<'_> {
         }
     }
 
-    fn positive(&self, v: &Spanned<f64>, what: &str) -> Check {
+    pub(super) fn positive(&self, v: &Spanned<f64>, what: &str) -> Check {
         let x = *v.get_ref();
         if x.is_finite() && x > 0.0 {
             Ok(())

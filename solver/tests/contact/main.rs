@@ -6,7 +6,11 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod common;
+// The solver tests' finite differences, shared.
 mod drags;
+#[allow(dead_code)]
+#[path = "../solver/fd.rs"]
+mod fd;
 mod friction;
 mod pinch;
 mod recycle;

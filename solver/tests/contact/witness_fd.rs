@@ -12,28 +12,11 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestRunner};
 
 use crate::common::{cuboid, three_bodies};
+use crate::fd;
 
-fn values(model: &Model, q: &[f64], w: &[Witness]) -> Vec<f64> {
-    let mut ev = model.evaluation();
-    ev.witnesses_mut().copy_from_slice(w);
-    ev.evaluate_values(model, q, &[]).expect("evaluate");
-    ev.values().to_vec()
-}
-
+/// Central-difference C_q with the witness table `w`.
 fn fd(model: &Model, q: &[f64], w: &[Witness], h: f64) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(model.n_rows(), model.n_coords());
-    let mut x = q.to_vec();
-    for col in 0..q.len() {
-        x[col] = q[col] + h;
-        let plus = values(model, &x, w);
-        x[col] = q[col] - h;
-        let minus = values(model, &x, w);
-        for r in 0..plus.len() {
-            j[(r, col)] = (plus[r] - minus[r]) / (2.0 * h);
-        }
-        x[col] = q[col];
-    }
-    j
+    fd::fd_jacobian_with(model, q, &[], w, h)
 }
 
 fn v3(u: &mut impl Iterator<Item = f64>, s: f64) -> Vector3<f64> {

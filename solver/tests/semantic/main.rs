@@ -9,7 +9,11 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 
 mod algorithms;
 mod common;
+// The solver tests' finite differences, shared.
 mod fast;
+#[allow(dead_code)]
+#[path = "../solver/fd.rs"]
+mod fd;
 mod random_ops;
 mod rows_fd;
 mod special;

@@ -13,6 +13,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestRunner};
 
 use crate::common::*;
+use crate::fd;
 
 /// Floor (fixed), table on it, cup on the table, a hold of the cup by the
 /// table (any two bodies will do for the rows).
@@ -47,27 +48,14 @@ fn model() -> Model {
         .unwrap()
 }
 
+/// C(q) with the witness table `w`.
 fn values(model: &Model, q: &[f64], w: &[Witness]) -> Vec<f64> {
-    let mut ev = model.evaluation();
-    ev.witnesses_mut().copy_from_slice(w);
-    ev.evaluate_values(model, q, &[]).expect("evaluate");
-    ev.values().to_vec()
+    fd::values_with(model, q, &[], w)
 }
 
+/// Central-difference C_q with the witness table `w`.
 fn fd(model: &Model, q: &[f64], w: &[Witness], h: f64) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(model.n_rows(), model.n_coords());
-    let mut x = q.to_vec();
-    for col in 0..q.len() {
-        x[col] = q[col] + h;
-        let plus = values(model, &x, w);
-        x[col] = q[col] - h;
-        let minus = values(model, &x, w);
-        for r in 0..plus.len() {
-            j[(r, col)] = (plus[r] - minus[r]) / (2.0 * h);
-        }
-        x[col] = q[col];
-    }
-    j
+    fd::fd_jacobian_with(model, q, &[], w, h)
 }
 
 #[test]

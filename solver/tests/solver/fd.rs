@@ -10,19 +10,43 @@
 //! grows, so the tolerance adds 10× the FD's own error estimate
 //! |FD(h) − FD(h/2)|, which is large only where curvature is.
 
+use haptloop_solver::constraint::witness::Witness;
 use haptloop_solver::{FingerTarget, Model};
 use nalgebra::DMatrix;
 
 /// C(q) by a fresh value-only evaluation.
 pub fn values(model: &Model, q: &[f64], targets: &[FingerTarget]) -> Vec<f64> {
+    values_with(model, q, targets, &[])
+}
+
+/// C(q) by a fresh value-only evaluation with the witness table `w` (the
+/// contact and semantic rows' parameters; empty: the model's own).
+pub fn values_with(model: &Model, q: &[f64], targets: &[FingerTarget], w: &[Witness]) -> Vec<f64> {
     let mut ev = model.evaluation();
+    if !w.is_empty() {
+        ev.witnesses_mut().copy_from_slice(w);
+    }
     ev.evaluate_values(model, q, targets).expect("evaluate");
     ev.values().to_vec()
 }
 
 /// Central-difference Jacobian with step `h`.
 pub fn fd_jacobian(model: &Model, q: &[f64], targets: &[FingerTarget], h: f64) -> DMatrix<f64> {
+    fd_jacobian_with(model, q, targets, &[], h)
+}
+
+/// [`fd_jacobian`] with the witness table `w` loaded first.
+pub fn fd_jacobian_with(
+    model: &Model,
+    q: &[f64],
+    targets: &[FingerTarget],
+    w: &[Witness],
+    h: f64,
+) -> DMatrix<f64> {
     let mut ev = model.evaluation();
+    if !w.is_empty() {
+        ev.witnesses_mut().copy_from_slice(w);
+    }
     let mut j = DMatrix::zeros(model.n_rows(), model.n_coords());
     let mut x = q.to_vec();
     for col in 0..q.len() {
