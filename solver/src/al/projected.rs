@@ -200,9 +200,10 @@ impl Projected {
     }
 
     /// Lets the design columns of `model` move, with metric `w_kg` each (see
-    /// `design`). Allocates.
-    pub fn with_design(mut self, model: &Model, w_kg: f64) -> Self {
-        self.design = DesignStep::new(model, w_kg);
+    /// `design`), keeping its `masked` equality rows (model row, ℓ) closed.
+    /// Allocates.
+    pub fn with_design(mut self, model: &Model, w_kg: f64, masked: &[(usize, f64)]) -> Self {
+        self.design = DesignStep::new(model, w_kg, masked);
         self
     }
 
@@ -302,7 +303,16 @@ impl Projected {
         let mut d_changed = false;
         if let Some(design) = &mut self.design {
             d_changed = design
-                .correct(ev, fb, &self.k_inv, q, &mut self.d, &mut self.y, step)
+                .correct(
+                    ev,
+                    fb,
+                    &self.k_inv,
+                    q,
+                    &mut self.d,
+                    &self.r,
+                    &mut self.y,
+                    step,
+                )
                 .map_err(|()| StepError::Solve)?;
         }
         let scale = fb.row_scale();

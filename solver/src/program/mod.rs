@@ -205,6 +205,7 @@ impl Program {
         .with_design(
             &model,
             objective::design_metric_kg(&model, feedback.mean_mass_kg()),
+            &masked_equalities(&model, &scaling, &redundancy.rows),
         );
         let objective = objective::ObjectivePull::new(&model, feedback.mean_mass_kg());
         let mut friction_slot = vec![false; model.contact().slots];
@@ -365,6 +366,17 @@ impl Program {
 }
 
 /// The limits documented on [`DivergenceLimits`].
+/// The masked rows that are equalities (joints), with their ℓ: the ones a
+/// moving design must keep closed (`al/design_closure.rs`). Masked
+/// inequality rows (a contact the joints already hold) stay out.
+fn masked_equalities(model: &Model, scaling: &Scaling, masked: &[usize]) -> Vec<(usize, f64)> {
+    masked
+        .iter()
+        .filter(|&&i| model.rows()[i].sense == crate::Sense::Equality)
+        .map(|&i| (i, scaling.ell[i]))
+        .collect()
+}
+
 fn divergence_limits(
     s: &Scaling,
     settings: &SolverSettings,
