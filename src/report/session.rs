@@ -196,6 +196,7 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             "  witness → fast loop: {} updates, latency mean {:.1} ticks, max {} ticks; slow-loop contact cycle mean {:.0} µs, max {:.0} µs",
             c.updates, c.latency_ticks_mean, c.latency_ticks_max, c.cycle_us_mean, c.cycle_us_max
         );
+        let _ = writeln!(out, "  {}", speed_limit_line(c));
     }
     if let Some(sem) = &s.semantic {
         super::semantic::lines(&mut out, sem);
@@ -269,5 +270,25 @@ fn design_lines(out: &mut String, s: &Summary) {
                 v.start, v.end, v.min, v.max, o.kind, o.weight
             );
         }
+    }
+}
+
+/// The contact speed limit and what it cost: `contact_distance` per slow
+/// cycle bounds every shaped body's motion, so a small contact distance
+/// makes a fingertip lag its device, in free air too.
+fn speed_limit_line(c: &super::summary::Contact) -> String {
+    let head = format!(
+        "contact speed limit {:.3} m/s (contact_distance per 5 ms slow-loop cycle)",
+        c.speed_limit_m_per_s
+    );
+    if c.speed_limited_ticks == 0 {
+        format!("{head}: never reached")
+    } else {
+        format!(
+            "{head}: held a body back in {} ticks; the largest finger tracking error then {:.2} mm \
+             (raise [solver] contact_distance for faster motion)",
+            c.speed_limited_ticks,
+            c.speed_limit_lag_max_m * 1e3
+        )
     }
 }

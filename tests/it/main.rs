@@ -14,6 +14,7 @@ mod scene_format;
 mod scenes;
 mod semantic;
 mod session;
+mod solver_honesty;
 mod stability;
 mod sweep;
 mod trust;

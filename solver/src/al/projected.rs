@@ -111,6 +111,8 @@ pub(crate) struct Projected {
     reach: Vec<(usize, f64)>,
     /// How far the last taken step moved a shaped body's points, metres.
     moved_m: f64,
+    /// Whether the contact speed limit shortened the last step.
+    speed_limited: bool,
     /// The design columns' correction (models with design variables).
     design: Option<DesignStep>,
 }
@@ -184,6 +186,7 @@ impl Projected {
                 })
                 .collect(),
             moved_m: 0.0,
+            speed_limited: false,
             design: None,
         }
     }
@@ -211,6 +214,11 @@ impl Projected {
     /// without a contact speed limit).
     pub fn last_moved_m(&self) -> f64 {
         self.moved_m
+    }
+
+    /// Whether the contact speed limit shortened the last step.
+    pub fn last_speed_limited(&self) -> bool {
+        self.speed_limited
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -358,7 +366,8 @@ impl Projected {
                     .sqrt();
                 moved = moved.max(step * (dr + 2.0 * radius * de));
             }
-            if moved > contact_step_m {
+            self.speed_limited = moved > contact_step_m;
+            if self.speed_limited {
                 step *= contact_step_m / moved;
                 size *= contact_step_m / moved;
                 moved = contact_step_m;
@@ -366,6 +375,7 @@ impl Projected {
             self.moved_m = moved;
         } else {
             self.moved_m = 0.0;
+            self.speed_limited = false;
         }
         // Predicted values of the inactive inequality rows after the step
         // (and the update of C_q d).

@@ -115,6 +115,8 @@ pub struct Program {
     contact_step_m: f64,
     /// What is left of it in the current tick.
     step_budget_m: f64,
+    /// The contact speed limit held a body back in this tick.
+    speed_limited: bool,
     /// Scratch: each finger's coupling error at the last force solve.
     prev_error_buf: Vec<nalgebra::Vector3<f64>>,
     /// Per witness-table slot: a friction stick row (its anchor is the fast
@@ -236,6 +238,7 @@ impl Program {
             activations: 0,
             last_dt_s: 1e-3,
             step_budget_m: f64::INFINITY,
+            speed_limited: false,
             contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
             objective,
