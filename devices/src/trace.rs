@@ -27,12 +27,15 @@
 //!
 //! The row at t = 0 is the reading the device was registered with. Floats are
 //! written with Rust's shortest round-trip formatting, so parsing a file gives
-//! back the recorded `f64` values bit for bit (NaN is written `NaN`). Lines
-//! `# key: value` may appear anywhere; `scene`, `model` and `rate_hz` are
-//! required, times must increase strictly.
+//! back the recorded `f64` values bit for bit. Lines `# key: value` may appear
+//! anywhere; `scene`, `model` and `rate_hz` are required, `model` and
+//! `rate_hz` before the column names. Reading back checks every value
+//! ([`Trace::parse_from`]): times are whole periods and increase strictly,
+//! every number is finite and in range; a file is read streaming, at most
+//! [`MAX_TRACE_BYTES`] and [`MAX_TRACE_ROWS`] rows.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -43,7 +46,8 @@ use crossbeam::queue::ArrayQueue;
 use nalgebra::Vector3;
 
 use crate::device::ARM_JOINTS;
-use crate::error::TraceError;
+use crate::error::{TraceError, check_not_truncated, next_line, open_limited, quote};
+use crate::phantom::PhantomModel;
 
 const MAGIC: &str = "# haptloop-trace v2";
 const COLUMNS: &str =
@@ -213,10 +217,7 @@ impl TraceStream {
         let mut name = path.file_name().unwrap_or_default().to_os_string();
         name.push(".partial");
         let partial = path.with_file_name(name);
-        let io = |source| TraceError::Io {
-            path: partial.clone(),
-            source,
-        };
+        let io = |source| TraceError::io(&partial, "write", source);
         let mut w = BufWriter::new(File::create(&partial).map_err(io)?);
         write_header(&mut w, &self.header).map_err(io)?;
         self.file = Some((w, partial, path.to_owned()));
@@ -228,10 +229,7 @@ impl TraceStream {
         let mut n = 0;
         while let Some(row) = self.queue.rows.pop() {
             if let Some((w, partial, _)) = &mut self.file {
-                write_row(w, &row).map_err(|source| TraceError::Io {
-                    path: partial.clone(),
-                    source,
-                })?;
+                write_row(w, &row).map_err(|source| TraceError::io(partial, "write", source))?;
             }
             n += 1;
         }
@@ -255,17 +253,12 @@ impl TraceStream {
         self.drain()?;
         let dropped = self.dropped();
         if let Some((mut w, partial, path)) = self.file.take() {
-            let io = |source| TraceError::Io {
-                path: partial.clone(),
-                source,
-            };
+            let io = |source| TraceError::io(&partial, "write", source);
             writeln!(w, "# dropped_rows: {dropped}").map_err(io)?;
             w.flush().map_err(io)?;
             drop(w);
-            std::fs::rename(&partial, &path).map_err(|source| TraceError::Io {
-                path: path.clone(),
-                source,
-            })?;
+            std::fs::rename(&partial, &path)
+                .map_err(|source| TraceError::io(&path, "write", source))?;
         }
         Ok(dropped)
     }
@@ -354,35 +347,60 @@ impl Trace {
 
     /// Writes the trace to `path`.
     pub fn save(&self, path: &Path) -> Result<(), TraceError> {
-        let io = |source| TraceError::Io {
-            path: path.to_owned(),
-            source,
-        };
+        let io = |source| TraceError::io(path, "write", source);
         let file = std::fs::File::create(path).map_err(io)?;
         let mut w = std::io::BufWriter::new(file);
         self.write_to(&mut w)?;
         w.flush().map_err(io)
     }
 
-    /// Reads a trace file.
+    /// Reads a trace file of at most [`MAX_TRACE_BYTES`], streaming (the
+    /// text is never held whole); see [`Trace::parse`] for what is checked.
     pub fn load(path: &Path) -> Result<Self, TraceError> {
-        Self::parse(&TraceError::read(path)?, &path.display().to_string())
+        const WHAT: &str = "a device trace";
+        let mut reader = open_limited(path, WHAT, MAX_TRACE_BYTES)?;
+        let parsed = Self::parse_from(&mut reader, &path.display().to_string());
+        // A file cut at the limit fails to parse on its last line: the size
+        // is the reason, not that line.
+        check_not_truncated(path, WHAT, MAX_TRACE_BYTES, reader.limit())?;
+        parsed
     }
 
     /// Parses the text format; `source_name` labels errors.
     pub fn parse(text: &str, source_name: &str) -> Result<Self, TraceError> {
+        Self::parse_from(&mut text.as_bytes(), source_name)
+    }
+
+    /// Parses the text format line by line from `reader`. Every value read
+    /// back is checked: the header (`scene`, `model` of a known device,
+    /// `rate_hz` > 0) comes before the column names; times are whole
+    /// periods of the rate and increase; counts are within half a turn;
+    /// every force, offset and orientation component is finite; a command
+    /// is at most [`MAX_COMMAND_N`], a force sent to the device at most the
+    /// model's peak force (the safety layer's clamp), the orientation a unit
+    /// quaternion; at most [`MAX_TRACE_ROWS`] rows.
+    pub fn parse_from(reader: &mut impl BufRead, source_name: &str) -> Result<Self, TraceError> {
         let err = |line: usize, msg: String| TraceError::parse(source_name, line, msg);
-        let mut lines = text.lines().enumerate();
-        match lines.next() {
-            Some((_, l)) if l.trim() == MAGIC => {}
-            Some((_, l)) => return Err(err(1, format!("expected `{MAGIC}`, found `{l}`"))),
-            None => return Err(err(1, "empty file".into())),
+        let (mut bytes, mut line) = (Vec::new(), String::new());
+        let mut n = 1;
+        if !next_line(reader, &mut bytes, &mut line, source_name, n)? {
+            return Err(err(1, "empty file".into()));
+        }
+        if line.trim() != MAGIC {
+            return Err(err(
+                1,
+                format!("expected `{MAGIC}`, found `{}`", quote(&line)),
+            ));
         }
         let (mut scene, mut model, mut rate_hz, mut dropped) = (None, None, None, 0u64);
-        let mut rows = Vec::new();
-        let mut columns_seen = false;
-        for (i, raw) in lines {
-            let (n, line) = (i + 1, raw.trim());
+        let mut rows: Vec<TraceRow> = Vec::new();
+        let mut check: Option<RowCheck> = None;
+        loop {
+            n += 1;
+            if !next_line(reader, &mut bytes, &mut line, source_name, n)? {
+                break;
+            }
+            let line = line.trim();
             if line.is_empty() {
                 continue;
             }
@@ -391,15 +409,22 @@ impl Trace {
                     let v = v.trim();
                     match k.trim() {
                         "scene" => scene = Some(v.to_owned()),
-                        "model" => model = Some(v.to_owned()),
+                        "model" => {
+                            let m = PhantomModel::by_name(v).map_err(|e| err(n, e.to_string()))?;
+                            model = Some((v.to_owned(), m));
+                        }
                         "rate_hz" => {
-                            rate_hz = Some(v.parse::<u32>().map_err(|_| {
-                                err(n, format!("rate_hz `{v}` is not a positive integer"))
-                            })?)
+                            rate_hz =
+                                Some(v.parse::<u32>().ok().filter(|r| *r > 0).ok_or_else(|| {
+                                    err(
+                                        n,
+                                        format!("rate_hz `{}` is not a positive integer", quote(v)),
+                                    )
+                                })?)
                         }
                         "dropped_rows" => {
                             dropped = v.parse().map_err(|_| {
-                                err(n, format!("dropped_rows `{v}` is not an integer"))
+                                err(n, format!("dropped_rows `{}` is not an integer", quote(v)))
                             })?
                         }
                         _ => {}
@@ -407,14 +432,37 @@ impl Trace {
                 }
                 continue;
             }
-            if !columns_seen {
+            if check.is_none() {
                 if line != COLUMNS {
-                    return Err(err(n, format!("expected column header `{COLUMNS}`")));
+                    return Err(err(
+                        n,
+                        format!(
+                            "expected column header `{COLUMNS}`, found `{}`",
+                            quote(line)
+                        ),
+                    ));
                 }
-                columns_seen = true;
+                let (Some((_, m)), Some(r)) = (&model, rate_hz) else {
+                    return Err(err(
+                        n,
+                        "the header must give `# model:` and `# rate_hz:` before the column names"
+                            .into(),
+                    ));
+                };
+                check = Some(RowCheck::new(m, r));
                 continue;
             }
-            let row = parse_row(line).map_err(|m| err(n, m))?;
+            let Some(c) = check.as_ref() else { continue };
+            if rows.len() >= MAX_TRACE_ROWS {
+                return Err(err(
+                    n,
+                    format!(
+                        "more than {MAX_TRACE_ROWS} rows: a device trace holds at most that many"
+                    ),
+                ));
+            }
+            let row = parse_row(line).and_then(|r| c.check(&r).map(|()| r));
+            let row = row.map_err(|m| err(n, m))?;
             if let Some(last) = rows.last().map(|r: &TraceRow| r.time)
                 && row.time <= last
             {
@@ -432,15 +480,106 @@ impl Trace {
         let scene = scene.ok_or_else(|| err(1, "header has no `# scene:` line".into()))?;
         let model = model.ok_or_else(|| err(1, "header has no `# model:` line".into()))?;
         let rate_hz = rate_hz.ok_or_else(|| err(1, "header has no `# rate_hz:` line".into()))?;
+        if check.is_none() {
+            return Err(err(n, format!("no column header `{COLUMNS}`")));
+        }
         Ok(Self {
             header: TraceHeader {
                 scene,
-                model,
+                model: model.0,
                 rate_hz,
             },
             rows,
             dropped,
         })
+    }
+}
+
+/// Largest device-trace file [`Trace::load`] reads: 512 MiB.
+pub const MAX_TRACE_BYTES: u64 = 512 << 20;
+/// Most rows a device trace may hold: 2²¹ = 2 097 152, 35 minutes at 1 kHz
+/// (held in memory for the replay: 136 bytes each, 285 MB at most).
+pub const MAX_TRACE_ROWS: usize = 1 << 21;
+/// Largest force command a trace row may hold, N: no haptic command comes
+/// near it (the safety layer clamps to a few newtons), so a larger one means
+/// the file is not a recording.
+pub const MAX_COMMAND_N: f64 = 1e6;
+
+/// What every row of a trace of one model at one rate must satisfy.
+struct RowCheck {
+    model: &'static PhantomModel,
+    period_ns: u64,
+}
+
+impl RowCheck {
+    fn new(model: &'static PhantomModel, rate_hz: u32) -> Self {
+        Self {
+            model,
+            period_ns: 1_000_000_000 / u64::from(rate_hz),
+        }
+    }
+
+    fn check(&self, r: &TraceRow) -> Result<(), String> {
+        let t = r.time.as_nanos() as u64;
+        if !t.is_multiple_of(self.period_ns) {
+            return Err(format!(
+                "t_ns {t} is not a whole number of periods ({} ns at this trace's rate_hz)",
+                self.period_ns
+            ));
+        }
+        let half_turn = i64::from(self.model.counts_per_rev / 2);
+        if let Some(j) = (0..3).find(|&j| i64::from(r.counts[j]).abs() > half_turn) {
+            return Err(format!(
+                "c{j} = {} is more than half a turn ({half_turn} counts of the {})",
+                r.counts[j], self.model.name
+            ));
+        }
+        let columns = COLUMNS.split(',').collect::<Vec<_>>();
+        let named = |k: usize| format!("column {} (`{}`)", k + 1, columns[k]);
+        let values = [
+            (4, r.command_n_device),
+            (7, r.output_n_device),
+            (10, r.hand_offset_m_device),
+        ];
+        for (k0, v) in values {
+            if let Some(i) = (0..3).find(|&i| !v[i].is_finite()) {
+                return Err(format!(
+                    "{} is {}: every value must be finite",
+                    named(k0 + i),
+                    v[i]
+                ));
+            }
+        }
+        let q = r.orientation_wxyz;
+        if let Some(i) = (0..4).find(|&i| !q[i].is_finite()) {
+            return Err(format!(
+                "{} is {}: every value must be finite",
+                named(13 + i),
+                q[i]
+            ));
+        }
+        let cmd = r.command_n_device.norm();
+        if cmd > MAX_COMMAND_N {
+            return Err(format!(
+                "the command cmd_* has magnitude {cmd:e} N, above {MAX_COMMAND_N:e} N: not a recorded command"
+            ));
+        }
+        let out = r.output_n_device.norm();
+        let peak = self.model.peak_force_n;
+        if out > peak * (1.0 + 1e-9) {
+            return Err(format!(
+                "the force sent out_* has magnitude {out} N, above the {}'s peak of {peak} N \
+                 (the safety layer clamps to it)",
+                self.model.name
+            ));
+        }
+        let norm = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+        if (norm - 1.0).abs() > 1e-6 {
+            return Err(format!(
+                "the orientation qw..qz has norm {norm}, not 1: not a rotation"
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -452,16 +591,16 @@ fn parse_row(line: &str) -> Result<TraceRow, String> {
     let int = |k: usize| {
         fields[k]
             .parse::<i64>()
-            .map_err(|_| format!("column {} `{}` is not an integer", k + 1, fields[k]))
+            .map_err(|_| format!("column {} `{}` is not an integer", k + 1, quote(fields[k])))
     };
     let float = |k: usize| {
         fields[k]
             .parse::<f64>()
-            .map_err(|_| format!("column {} `{}` is not a number", k + 1, fields[k]))
+            .map_err(|_| format!("column {} `{}` is not a number", k + 1, quote(fields[k])))
     };
     let t_ns = fields[0]
         .parse::<u64>()
-        .map_err(|_| format!("t_ns `{}` is not a non-negative integer", fields[0]))?;
+        .map_err(|_| format!("t_ns `{}` is not a non-negative integer", quote(fields[0])))?;
     let count = |k: usize| {
         int(k).and_then(|v| i32::try_from(v).map_err(|_| format!("count `{v}` out of range")))
     };
@@ -486,10 +625,10 @@ mod tests {
         TraceRow {
             time: Duration::from_millis(k),
             counts: [k as i32, -(k as i32), 7],
-            command_n_device: Vector3::new(0.1 * k as f64, 1.0 / 3.0, f64::NAN),
+            command_n_device: Vector3::new(0.1 * k as f64, 1.0 / 3.0, -7.25e4),
             output_n_device: Vector3::new(-1e-300, 2.5, 0.0),
             hand_offset_m_device: Vector3::new(std::f64::consts::PI * 1e-3, 0.0, -0.0),
-            orientation_wxyz: [0.5, -0.5, 0.5, 1.0 / 3.0],
+            orientation_wxyz: [0.5, -0.5, 0.5, -0.5],
         }
     }
 
@@ -546,14 +685,65 @@ mod tests {
             e.starts_with("x.trace:1: expected `# haptloop-trace v2`"),
             "{e}"
         );
-        let e = Trace::parse(&format!("{MAGIC}\n# rate_hz: 1000\n{COLUMNS}\n"), "x.trace")
-            .unwrap_err()
-            .to_string();
+        let e = Trace::parse(
+            &format!("{MAGIC}\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n"),
+            "x.trace",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("no `# scene:`"), "{e}");
         let row = |t: u64| format!("{t},0,0,0,0,0,0,0,0,0,0,0,0,1,0,0,0\n");
-        let e = Trace::parse(&format!("{head}{}{}{}", row(0), row(2), row(1)), "x.trace")
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("x.trace:8: t_ns 1 does not follow"), "{e}");
+        let e = Trace::parse(
+            &format!("{head}{}{}{}", row(0), row(2_000_000), row(1_000_000)),
+            "x.trace",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("x.trace:8: t_ns 1000000 does not follow"),
+            "{e}"
+        );
+    }
+
+    /// Every value read back is checked, each refusal names the line and
+    /// what is wrong; a binary line is quoted clipped, never whole.
+    #[test]
+    fn every_value_read_back_is_checked() {
+        let head =
+            format!("{MAGIC}\n# scene: s\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n");
+        let good = "1000000,0,-3,2,0,-1.25,0,0,-0.5,0,0,-0.005,0,1,0,0,0";
+        assert!(Trace::parse(&format!("{head}{good}\n"), "x.trace").is_ok());
+        let field = |k: usize, v: &str| {
+            let mut f: Vec<&str> = good.split(',').collect();
+            f[k] = v;
+            f.join(",")
+        };
+        let cases = [
+            (field(4, "NaN"), "column 5 (`cmd_x`) is NaN"),
+            (field(5, "inf"), "column 6 (`cmd_y`) is inf"),
+            (field(6, "1e308"), "above 1e6 N"),
+            (field(8, "5.0"), "above the phantom-omni's peak of 3.3 N"),
+            (field(9, "-inf"), "column 10 (`out_z`) is -inf"),
+            (field(11, "NaN"), "column 12 (`hand_y`) is NaN"),
+            (field(13, "2"), "norm 2, not 1"),
+            (field(2, "9000"), "more than half a turn"),
+            (field(0, "1000001"), "not a whole number of periods"),
+        ];
+        for (row, want) in cases {
+            let e = Trace::parse(&format!("{head}{row}\n"), "x.trace")
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("x.trace:6: ") && e.contains(want), "{e}");
+        }
+        let binary = format!("{MAGIC}\n{}\n", "\u{1}x".repeat(100_000));
+        let e = Trace::parse(&binary, "b.trace").unwrap_err().to_string();
+        assert!(
+            e.starts_with("b.trace:2: the line is longer than 4096 bytes"),
+            "{e}"
+        );
+        assert!(e.len() < 400, "{} characters", e.len());
+        let late = format!("{MAGIC}\n# scene: s\n{COLUMNS}\n# model: phantom-omni\n");
+        let e = Trace::parse(&late, "x.trace").unwrap_err().to_string();
+        assert!(e.starts_with("x.trace:3: the header must give"), "{e}");
     }
 }
