@@ -9,3 +9,5 @@ pub mod semantic;
 pub mod session;
 pub mod summary;
 pub mod sweep;
+pub mod units;
+pub mod warnings;

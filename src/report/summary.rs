@@ -206,6 +206,8 @@ impl Reference {
         };
         let missing = if let Some(why) = o.slow.reference_unsupported {
             Some(format!("not measured: {why}"))
+        } else if o.fingers.is_empty() {
+            Some("not measured: the scene has no fingers, so no force to compare".to_string())
         } else if r.compared > 0 {
             None
         } else if r.captured == 0 {
@@ -414,6 +416,100 @@ pub struct ObjectiveFigure {
     pub value: DesignFigure,
 }
 
+/// What one device's own limits did, in ticks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DeviceLimits {
+    /// Device name.
+    pub device: String,
+    /// Ticks the tip was outside the workspace box (at a mechanical stop).
+    pub outside_workspace_ticks: u64,
+    /// Ticks the command was clamped to the peak force.
+    pub peak_clamp_ticks: u64,
+    /// Ticks a motor torque saturated.
+    pub motor_saturation_ticks: u64,
+    /// Ticks the thermal model cut the force to the continuous rating.
+    pub thermal_cut_ticks: u64,
+}
+
+impl From<&crate::session::DeviceLimitTicks> for DeviceLimits {
+    fn from(d: &crate::session::DeviceLimitTicks) -> Self {
+        DeviceLimits {
+            device: d.device.clone(),
+            outside_workspace_ticks: d.outside_workspace,
+            peak_clamp_ticks: d.peak_clamp,
+            motor_saturation_ticks: d.motor_saturation,
+            thermal_cut_ticks: d.thermal_cut,
+        }
+    }
+}
+
+/// One replayed device against its recording.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReplayDevice {
+    /// Device name.
+    pub device: String,
+    /// Ticks whose force sent to the device was compared with the recorded
+    /// one.
+    pub compared: u64,
+    /// Of those, ticks where they differ.
+    pub diverged: u64,
+    /// Session time of the first that differs, s.
+    pub first_divergence_s: Option<f64>,
+    /// Largest difference, N.
+    #[serde(with = "super::figure")]
+    pub max_difference_n: f64,
+}
+
+/// A replay against its recording: every device's forces, bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Replay {
+    /// `reproduced` or `DIVERGED` and where.
+    pub verdict: String,
+    /// Per device.
+    pub devices: Vec<ReplayDevice>,
+}
+
+impl Replay {
+    fn of(limits: &[crate::session::DeviceLimitTicks]) -> Option<Replay> {
+        let devices: Vec<ReplayDevice> = limits
+            .iter()
+            .filter_map(|d| {
+                let r = d.replay?;
+                Some(ReplayDevice {
+                    device: d.device.clone(),
+                    compared: r.compared,
+                    diverged: r.diverged,
+                    first_divergence_s: r.first_divergence.map(|t| t.as_secs_f64()),
+                    max_difference_n: r.max_difference_n,
+                })
+            })
+            .collect();
+        if devices.is_empty() {
+            return None;
+        }
+        let compared: u64 = devices.iter().map(|d| d.compared).sum();
+        let verdict = match devices.iter().find(|d| d.diverged > 0) {
+            None => format!(
+                "reproduced: the force sent to every device equals the recording's on all {compared} ticks compared"
+            ),
+            Some(d) => format!(
+                "DIVERGED: device `{}` was sent a force that differs from the recording's on {} of {} ticks, \
+                 first at t = {} s",
+                d.device,
+                d.diverged,
+                d.compared,
+                d.first_divergence_s.unwrap_or(f64::NAN)
+            ),
+        };
+        Some(Replay { verdict, devices })
+    }
+
+    /// True if any device's forces differ from the recording's.
+    pub fn diverged(&self) -> bool {
+        self.devices.iter().any(|d| d.diverged > 0)
+    }
+}
+
 /// The whole summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -434,7 +530,7 @@ pub struct Summary {
     /// Missed deadlines by kind.
     pub misses: MissCounts,
     /// Wake-up lateness; `null` in deterministic mode, whose mock clock
-    /// has none to measure.
+    /// has none to measure (`clock_note` says so).
     pub lateness_ns: Option<Percentiles>,
     /// Tick compute time: the scheduler's in real time; in deterministic mode
     /// (whose scheduler runs on the mock clock) the monotonic clock's whole
@@ -444,8 +540,12 @@ pub struct Summary {
     pub stages_ns: Stages,
     /// Start-to-start period.
     pub period_ns: Percentiles,
-    /// First device read → last force write, per tick.
-    pub read_to_write_ns: Percentiles,
+    /// First device read → last force write, per tick; `null` in
+    /// deterministic mode (`clock_note` says why).
+    pub read_to_write_ns: Option<Percentiles>,
+    /// Which clock the timing figures come from, and why any is `null`.
+    #[serde(default)]
+    pub clock_note: String,
     /// Constraint violation.
     pub violation: Violation,
     /// Finger tracking error (attachment point vs device tip), m, all fingers.
@@ -477,6 +577,18 @@ pub struct Summary {
     pub granted: Option<Granted>,
     /// True if stopped early (Ctrl-C).
     pub stopped_early: bool,
+    /// Per device: the ticks its own limits acted (workspace stops, peak
+    /// clamp, motor saturation, thermal cut).
+    #[serde(default)]
+    pub device_limits: Vec<DeviceLimits>,
+    /// A replay's comparison with its recording (absent when not
+    /// replaying).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<Replay>,
+    /// What the user should know before trusting the figures: forces the
+    /// device could not render, a replay that diverged. Empty when none.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Wall-clock seconds (not deterministic).
     pub wall_clock_s: f64,
     /// How each design-variable component moved, m: `"<joint>.<var>"` or
@@ -526,7 +638,16 @@ impl Summary {
             },
             stages_ns: Stages::of(&s.stages),
             period_ns: o.report.period_ns.into(),
-            read_to_write_ns: s.read_to_write.summary().into(),
+            read_to_write_ns: (!o.plan.deterministic).then(|| s.read_to_write.summary().into()),
+            clock_note: if o.plan.deterministic {
+                "deterministic: the scheduler ran on a mock clock, which never wakes late and \
+                 takes no time between a device read and a force write, so lateness_ns and \
+                 read_to_write_ns are null and period_ns is exactly the period; compute_ns, \
+                 stages_ns, slow_loop.step_ns and wall_clock_s are measured on the monotonic clock"
+                    .into()
+            } else {
+                "real time: every timing figure is measured on the monotonic clock".into()
+            },
             violation: Violation {
                 max: v_max,
                 rms: if o.joint_rows == 0 {
@@ -657,6 +778,9 @@ impl Summary {
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,
+            device_limits: o.device_limits.iter().map(DeviceLimits::from).collect(),
+            replay: Replay::of(&o.device_limits),
+            warnings: super::warnings::of(o),
             wall_clock_s: o.wall_clock_s,
             design: o
                 .design
