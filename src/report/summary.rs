@@ -490,7 +490,8 @@ impl Replay {
         let compared: u64 = devices.iter().map(|d| d.compared).sum();
         let verdict = match devices.iter().find(|d| d.diverged > 0) {
             None => format!(
-                "reproduced: the force sent to every device equals the recording's on all {compared} ticks compared"
+                "reproduced: every force sent to the device{} equals the recording's ({compared} writes compared)",
+                if devices.len() == 1 { "" } else { "s" }
             ),
             Some(d) => format!(
                 "DIVERGED: device `{}` was sent a force that differs from the recording's on {} of {} ticks, \
