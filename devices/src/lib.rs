@@ -41,6 +41,7 @@ pub mod replay;
 pub mod rig;
 pub mod safety;
 pub mod trace;
+mod trace_read;
 
 pub use device::{
     ARM_JOINTS, Device, DeviceFault, DeviceInfo, DeviceLimits, DeviceReading, MotorReport,
