@@ -13,6 +13,7 @@
 //! (printed with file:line:column or the cause chain); 2 a usage error.
 
 pub mod cli;
+pub mod export;
 pub mod report;
 pub mod scenes;
 pub mod session;

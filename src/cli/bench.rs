@@ -78,6 +78,8 @@ struct Violation {
     max: f64,
     /// RMS over ticks of the length rows' RMS, m.
     rms: f64,
+    /// Largest angle-row violation of any tick, rad.
+    max_rad: f64,
 }
 
 /// What `--json` writes.
@@ -162,6 +164,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         violation: Violation {
             max: s.violation.max,
             rms: s.violation.rms,
+            max_rad: s.violation.max_rad,
         },
         solver_failures: s.safety.solver_failures,
     };
@@ -228,8 +231,8 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
     );
     let _ = write!(
         out,
-        "constraint violation: max {:.2e} m, RMS {:.2e} m; solver failures: {}",
-        b.violation.max, b.violation.rms, b.solver_failures
+        "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m; solver failures: {}",
+        b.violation.max, b.violation.max_rad, b.violation.rms, b.solver_failures
     );
     out
 }
