@@ -203,17 +203,30 @@ impl Evaluation {
             frames,
             targets,
             witnesses,
+            flex: &model.flex_anchors,
         };
         let (blocks, vals) = jacobian.blocks_and_values_mut();
+        let flexible = !model.flex_anchors.is_empty();
         for ((g, info), b) in model.geometry.iter().zip(&model.constraints).zip(blocks) {
             let c = &mut values[info.rows.clone()];
             if jac {
                 let [f0, f1] = g.frames();
+                let flex = if flexible {
+                    g.anchors().map(|a| match a {
+                        crate::constraint::block::Param3::Flex(i) => {
+                            Some(&model.flex_anchors[i as usize])
+                        }
+                        _ => None,
+                    })
+                } else {
+                    [None, None]
+                };
                 let mut sink = Block {
                     vals: &mut vals[b.start..b.start + c.len() * b.width],
                     width: b.width,
                     pos: b.pos,
                     frames: [&frames[f0], &frames[f1]],
+                    flex,
                 };
                 g.eval(&x, c, &mut sink);
             } else {

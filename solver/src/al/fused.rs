@@ -155,6 +155,7 @@ impl Fused {
             frames: &self.frames,
             targets,
             witnesses,
+            flex: &model.flex_anchors,
         };
         let mut sink = GradSink {
             rows: [RowGrad::default(); MAX_ROWS],

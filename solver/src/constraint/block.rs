@@ -23,6 +23,9 @@ pub(crate) struct Ctx<'a> {
     pub targets: &'a [FingerTarget],
     /// The witness table (contact rows' parameters).
     pub witnesses: &'a [crate::constraint::witness::Witness],
+    /// The model's deforming points (`Param3::Flex` indexes them; empty
+    /// for a rigid model).
+    pub flex: &'a [crate::flexible::anchor::FlexAnchor],
 }
 
 impl Ctx<'_> {
@@ -36,6 +39,7 @@ impl Ctx<'_> {
         match *p {
             Param3::Const(v) => v,
             Param3::Free(col) => Vector3::new(self.q[col], self.q[col + 1], self.q[col + 2]),
+            Param3::Flex(i) => self.flex[i as usize].point(self.q),
         }
     }
 
@@ -48,11 +52,14 @@ impl Ctx<'_> {
     }
 }
 
-/// A 3-vector that is a constant or a free design variable (its column in q).
+/// A 3-vector that is a constant, a free design variable (its column in
+/// q), or a point of a flexible body that moves with its deformation (an
+/// index into the model's deforming points, `crate::flexible::anchor`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Param3 {
     Const(Vector3<f64>),
     Free(usize),
+    Flex(u32),
 }
 
 /// A scalar that is a constant or a free design variable (its column in q).
@@ -129,7 +136,9 @@ pub(crate) struct Point {
 }
 
 impl Pair {
-    /// Column groups of the two bodies and of any free anchors.
+    /// Column groups of the two bodies and of any free anchors (a flexible
+    /// anchor's deformation columns are added by `Model::constraint_groups`,
+    /// which knows where they are).
     pub fn groups(&self) -> Groups {
         let mut g: Groups = [None; SLOTS];
         for end in 0..2 {
@@ -300,6 +309,9 @@ pub(crate) struct Block<'a> {
     pub pos: [u16; SLOTS],
     /// Frames of the two ends (for Ω and Rᵀ).
     pub frames: [&'a BodyFrame; 2],
+    /// A deforming anchor at either end: its anchor slot holds the
+    /// deformation columns, ∂/∂q_f = Φᵀ Rᵀ n (`None` on rigid models).
+    pub flex: [Option<&'a crate::flexible::anchor::FlexAnchor>; 2],
 }
 
 impl Sink for Block<'_> {
@@ -318,7 +330,11 @@ impl Sink for Block<'_> {
             let p = self.pos[Slot::anchor(end) as usize];
             if p != u16::MAX {
                 let dk = f.rot.tr_mul(&g.lin[end]);
-                self.vals[base + p as usize..base + p as usize + 3].copy_from_slice(dk.as_slice());
+                let at = base + p as usize;
+                match self.flex[end] {
+                    None => self.vals[at..at + 3].copy_from_slice(dk.as_slice()),
+                    Some(a) => a.gradient(&dk, &mut self.vals[at..at + a.width()]),
+                }
             }
             let p = self.pos[Slot::origin(end) as usize];
             if p != u16::MAX {

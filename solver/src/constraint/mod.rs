@@ -137,6 +137,27 @@ impl Geometry {
         }
     }
 
+    /// The anchors of the two ends (constants for the kinds without a pair
+    /// of anchors): where a flexible body's deforming points are found.
+    pub fn anchors(&self) -> [block::Param3; 2] {
+        let none = [block::Param3::Const(nalgebra::Vector3::zeros()); 2];
+        match self {
+            Self::Spherical(j) => j.pair.anchor,
+            Self::Perpendicular(j) => j.pair.anchor,
+            Self::Universal(j) => j.pair.anchor,
+            Self::Revolute(j) => j.pair.anchor,
+            Self::Prismatic(j) => j.pair.anchor,
+            Self::Weld(j) => j.pair.anchor,
+            Self::Distance(j) => j.pair.anchor,
+            Self::PointPlane(j) => j.pair.anchor,
+            Self::Finger(j) => j.pair.anchor,
+            Self::Limit(j) => j.pair().anchor,
+            Self::Contact(c) => c.pair.anchor,
+            Self::Surface(s) => s.pair.anchor,
+            Self::QuatNorm(_) | Self::Bound(_) => none,
+        }
+    }
+
     /// Writes this constraint's rows of C into `c` and of C_q into `sink`.
     #[inline]
     pub fn eval<S: Sink>(&self, x: &Ctx, c: &mut [f64], sink: &mut S) {

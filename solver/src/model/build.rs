@@ -148,6 +148,13 @@ impl ModelBuilder {
         let mut frames: Vec<BodyFrame> = bodies.iter().map(initial_frame).collect();
         frames.push(BodyFrame::IDENTITY);
         let mut cx = Compiler::new(&bodies, &by_name, &frames, &body_cols, col);
+        for (i, s) in self.bodies.iter().enumerate() {
+            if let Some(beam) = s.flexible {
+                let id = BodyId(i as u32);
+                let beam = crate::flexible::beam::Beam::new(beam, bodies[i].mass_kg);
+                cx.flexible(id, crate::flexible::body::FlexBody::new(id, beam));
+            }
+        }
         // Free positions of fixed bodies: the first design columns.
         let mut origin_cols = vec![None; bodies.len()];
         for (i, s) in self.bodies.iter().enumerate() {
@@ -185,7 +192,26 @@ impl ModelBuilder {
             fingers.push(finger);
             out.push(info, geometry);
         }
-        let (design_vars, dv_q0, len, characteristic_length) = cx.finish();
+        let (design_vars, dv_q0, len, characteristic_length, flexible, flex_anchors) = cx.finish();
+        let aux = flexible
+            .iter()
+            .enumerate()
+            .map(|(k, fb)| {
+                let name = format!("{}.flex", bodies[fb.body.index()].name);
+                let h = fb.beam.stiffness();
+                super::auxiliary::AuxBlock::new(
+                    name,
+                    super::auxiliary::AuxOwner::Flexible(k),
+                    super::auxiliary::Rest::Zero,
+                    fb.col,
+                    &h,
+                )
+                .ok_or_else(|| BuildError::Flexible {
+                    owner: Owner::Body(bodies[fb.body.index()].name.clone()),
+                    why: "its stiffness matrix is not positive definite".into(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         for (i, b) in bodies.iter().enumerate() {
             if let Some(col) = body_cols[i] {
                 let info = ConstraintInfo {
@@ -221,6 +247,7 @@ impl ModelBuilder {
             q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
         }
         q0.extend_from_slice(&dv_q0);
+        q0.resize(len, 0.0); // undeformed flexible bodies
         let body_coords = col;
         let mut model = Model {
             id: next_model_id(),
@@ -231,6 +258,7 @@ impl ModelBuilder {
                 origin_cols,
                 design_vars,
                 body_coords,
+                aux,
                 len,
             },
             geometry: out.geometry,
@@ -243,6 +271,8 @@ impl ModelBuilder {
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
+            flexible,
+            flex_anchors,
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;
@@ -467,6 +497,23 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             return Err(BuildError::DuplicateFree {
                 owner: owner(),
                 param,
+            });
+        }
+    }
+    if let Some(beam) = &s.flexible {
+        let why = if s.fixed {
+            Some("a flexible body must move (weld it to a fixed body at x = 0 to clamp it)".into())
+        } else if s.shape.is_some() {
+            Some("a flexible body takes part in no contact: its shape would not bend".into())
+        } else {
+            beam.check()
+                .err()
+                .map(|(field, why)| format!("flexible `{field}` {why}"))
+        };
+        if let Some(why) = why {
+            return Err(BuildError::Flexible {
+                owner: owner(),
+                why,
             });
         }
     }

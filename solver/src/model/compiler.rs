@@ -30,6 +30,15 @@ pub(super) struct Compiler<'a> {
     design_vars: Vec<DesignVar>,
     dv_q0: Vec<f64>,
     pub lever: f64,
+    /// Per body: its index among the flexible bodies.
+    flexible: Vec<Option<usize>>,
+    /// The flexible bodies (columns assigned by `finish`).
+    pub flex_bodies: Vec<crate::flexible::body::FlexBody>,
+    /// Deforming anchors, their columns relative to their body's block
+    /// until `finish`.
+    anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    /// Per anchor: its flexible body.
+    anchor_body: Vec<usize>,
 }
 
 impl<'a> Compiler<'a> {
@@ -49,13 +58,92 @@ impl<'a> Compiler<'a> {
             design_vars: Vec::new(),
             dv_q0: Vec::new(),
             lever: 1e-3,
+            flexible: vec![None; bodies.len()],
+            flex_bodies: Vec::new(),
+            anchors: Vec::new(),
+            anchor_body: Vec::new(),
         }
     }
 
-    /// Design variables, their initial values, the total coordinate count and
-    /// the characteristic length.
-    pub fn finish(self) -> (Vec<DesignVar>, Vec<f64>, usize, f64) {
-        (self.design_vars, self.dv_q0, self.next_col, self.lever)
+    /// Declares `body` flexible (its beam compiled).
+    pub fn flexible(&mut self, body: BodyId, beam: crate::flexible::body::FlexBody) {
+        self.flexible[body.index()] = Some(self.flex_bodies.len());
+        self.flex_bodies.push(beam);
+    }
+
+    /// Whether `body` is flexible.
+    pub fn is_flexible(&self, body: BodyId) -> bool {
+        self.flexible[body.index()].is_some()
+    }
+
+    /// The parameter of body point `k` of `body` (body frame): a constant,
+    /// or on a flexible body off its clamp a deforming anchor. A point
+    /// beyond the beam's span is an error.
+    pub fn anchor(
+        &mut self,
+        owner: &Owner,
+        body: BodyId,
+        k: Vector3<f64>,
+    ) -> Result<Param3, BuildError> {
+        let Some(fb) = self.flexible[body.index()] else {
+            return Ok(Param3::Const(k));
+        };
+        let beam = &self.flex_bodies[fb].beam;
+        if !beam.covers(k.x) {
+            let [x0, x1] = beam.spec.span_m;
+            return Err(BuildError::Flexible {
+                owner: owner.clone(),
+                why: format!(
+                    "the point at x = {} m of flexible body `{}` lies off its span [{x0}, {x1}] m",
+                    k.x,
+                    self.bodies[body.index()].name
+                ),
+            });
+        }
+        let a = crate::flexible::anchor::FlexAnchor {
+            k,
+            col: 0,
+            modes: beam.modes(),
+            shape: beam.shape(k.x),
+        };
+        if a.is_rigid() {
+            return Ok(Param3::Const(k));
+        }
+        self.anchors.push(a);
+        self.anchor_body.push(fb);
+        Ok(Param3::Flex(self.anchors.len() as u32 - 1))
+    }
+
+    /// Design variables, their initial values, the total coordinate count,
+    /// the characteristic length, and the flexible bodies with their
+    /// deforming anchors (their columns after the design variables).
+    #[allow(clippy::type_complexity)]
+    pub fn finish(
+        mut self,
+    ) -> (
+        Vec<DesignVar>,
+        Vec<f64>,
+        usize,
+        f64,
+        Vec<crate::flexible::body::FlexBody>,
+        Vec<crate::flexible::anchor::FlexAnchor>,
+    ) {
+        let mut col = self.next_col;
+        for fb in &mut self.flex_bodies {
+            fb.col = col;
+            col += fb.width();
+        }
+        for (a, &b) in self.anchors.iter_mut().zip(&self.anchor_body) {
+            a.col = self.flex_bodies[b].col;
+        }
+        (
+            self.design_vars,
+            self.dv_q0,
+            col,
+            self.lever,
+            self.flex_bodies,
+            self.anchors,
+        )
     }
 
     pub fn resolve(&self, owner: &Owner, name: &str) -> Result<BodyId, BuildError> {
@@ -224,12 +312,23 @@ pub(super) fn compile_finger(
     let point = Vector3::from(s.point_m);
     cx.lever = cx.lever.max(point.norm());
     let world = cx.frames.len() - 1;
+    let anchor = cx.anchor(&owner, body, point)?;
+    let rigid = s.grasp == Grasp::Rigid;
+    if rigid && matches!(anchor, Param3::Flex(_)) {
+        return Err(BuildError::Flexible {
+            owner,
+            why: format!(
+                "a rigid grasp holds the orientation of flexible body `{}`'s frame, which is its \
+                 section at x = 0 only: put the point there, or use a point grasp",
+                s.body
+            ),
+        });
+    }
     let pair = Pair {
         frame: [body.index(), world],
         col: [Some(col), None],
-        anchor: [Param3::Const(point), Param3::Const(Vector3::zeros())],
+        anchor: [anchor, Param3::Const(Vector3::zeros())],
     };
-    let rigid = s.grasp == Grasp::Rigid;
     let kind = if rigid {
         ConstraintKind::RigidFinger
     } else {

@@ -210,6 +210,42 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Par
             (DesignParam::Length, Param1::Free(_)) | (DesignParam::Position, _) => {}
         }
     }
+    // Points of flexible bodies deform with them (`crate::flexible`).
+    for end in 0..2 {
+        let body = j.bodies[end];
+        if !cx.is_flexible(body) {
+            continue;
+        }
+        anchor[end] = match anchor[end] {
+            Param3::Const(k) => cx.anchor(&j.owner, body, k)?,
+            _ => {
+                return Err(BuildError::Flexible {
+                    owner: j.owner.clone(),
+                    why: format!(
+                        "the anchor on flexible body `{}` cannot be a design variable",
+                        s.bodies[end]
+                    ),
+                });
+            }
+        };
+    }
+    let uses_axes = |end: usize| match s.kind {
+        JointKind::Spherical | JointKind::Distance | JointKind::Perpendicular => false,
+        JointKind::PointOnPlane => end == 1,
+        _ => true,
+    };
+    for end in 0..2 {
+        if uses_axes(end) && matches!(anchor[end], Param3::Flex(_)) {
+            return Err(BuildError::Flexible {
+                owner: j.owner.clone(),
+                why: format!(
+                    "a `{}` joint uses the axes of flexible body `{}`, which are its section's at \
+                     x = 0 only: anchor it there (or use a spherical or distance joint)",
+                    s.kind, s.bodies[end]
+                ),
+            });
+        }
+    }
     let pair = Pair {
         frame: [bi, bj],
         col: [cx.body_cols[bi], cx.body_cols[bj]],

@@ -52,6 +52,10 @@ pub struct BodySpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the freed position (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// A flexible body's beam (Nelson & Cohen §4; see
+    /// [`crate::flexible`]): its points bend with 2 × `modes` deformation
+    /// coordinates. `None`: rigid.
+    pub flexible: Option<crate::flexible::BeamSpec>,
 }
 
 impl BodySpec {
@@ -69,6 +73,7 @@ impl BodySpec {
             friction: 0.0,
             free: Vec::new(),
             bounds: None,
+            flexible: None,
         }
     }
 
@@ -131,6 +136,12 @@ impl BodySpec {
     /// Sets bounds on the freed position.
     pub fn bounds(mut self, bounds: Bounds) -> Self {
         self.bounds = Some(bounds);
+        self
+    }
+
+    /// Makes the body flexible: it bends as `beam`.
+    pub fn flexible(mut self, beam: crate::flexible::BeamSpec) -> Self {
+        self.flexible = Some(beam);
         self
     }
 }

@@ -36,6 +36,7 @@ impl Centred {
             frames: &g.frames,
             targets: &[],
             witnesses: &[],
+            flex: &g.flex,
         };
         let l = &self.limits[k];
         let (s, rg) = l.coordinate(&x);

@@ -55,6 +55,7 @@
 //! whole session tick without the devices, the scenes' settings): four-bar
 //! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
+mod auxiliary;
 mod contact;
 mod converged;
 mod objective;
@@ -157,6 +158,12 @@ impl Program {
             return Err(ProgramError::Unsupported(
                 "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
                  `update = \"projected\"`",
+            ));
+        }
+        if settings.update == UpdateRule::Gradient && !model.layout().aux_blocks().is_empty() {
+            return Err(ProgramError::Unsupported(
+                "the gradient update (Eq. 3) does not cover flexible bodies or surface \
+                 contacts: this scene needs `update = \"projected\"`",
             ));
         }
         // The scene's `finger` and `least_astonishment` weights.

@@ -91,11 +91,14 @@ impl Program {
         if o.eval.gradient(&self.model, &self.q, &mut o.grad).is_err() {
             return;
         }
-        let nb = self.model.layout().body_coords();
+        let design = self.model.layout().design_range();
         match self.settings.update {
             UpdateRule::Projected => {
                 self.feedback.apply_inverse_mass(&o.grad, &mut o.shift);
-                for (s, g) in o.shift[nb..].iter_mut().zip(&o.grad[nb..]) {
+                for (s, g) in o.shift[design.clone()]
+                    .iter_mut()
+                    .zip(&o.grad[design.clone()])
+                {
                     *s = g / o.design_kg;
                 }
                 let k = o.energy_kg;

@@ -112,6 +112,23 @@ impl Program {
                 }
             }
         }
+        // Auxiliary blocks (flexible deformations, surface parameters), by
+        // name and width.
+        let (na, oa) = (new_m.layout().aux_blocks(), old_m.layout().aux_blocks());
+        let (n_start, o_start) = (self.feedback.motion.aux_start, mo.aux_start);
+        for (i, b) in na.iter().enumerate() {
+            let found = match_index(i, oa.len(), |a, c| na[a].name == oa[c].name);
+            if let Some(j) = found.filter(|&j| oa[j].width == b.width) {
+                let (n, o) = (b.offset, oa[j].offset);
+                self.q[n..n + b.width].copy_from_slice(&old.q[o..o + b.width]);
+                self.feedback.motion.q_prev[n..n + b.width]
+                    .copy_from_slice(&mo.q_prev[o..o + b.width]);
+                let (nm, om) = (n - n_start, o - o_start);
+                let m = &mut self.feedback.motion;
+                m.aux_v[nm..nm + b.width].copy_from_slice(&mo.aux_v[om..om + b.width]);
+                m.aux_a[nm..nm + b.width].copy_from_slice(&mo.aux_a[om..om + b.width]);
+            }
+        }
         self.feedback.motion.ticks = mo.ticks;
         self.q_ref.copy_from_slice(&self.q);
         // Multipliers of surviving constraints.
