@@ -95,6 +95,14 @@ pub const BUILTIN: &[Builtin] = &[
         name: "dodge",
         text: include_str!("../scenes/dodge.toml"),
     },
+    Builtin {
+        name: "flexible-ik",
+        text: include_str!("../scenes/flexible-ik.toml"),
+    },
+    Builtin {
+        name: "dodge-belly",
+        text: include_str!("../scenes/dodge-belly.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

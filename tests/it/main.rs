@@ -9,6 +9,7 @@ mod bench;
 mod contact;
 mod design;
 mod docs;
+mod flexible;
 mod reference;
 mod scene_format;
 mod scenes;

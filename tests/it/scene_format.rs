@@ -121,6 +121,10 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
         }),
         ("shape", after("[[body]]\n", "shape = { zz_unknown = 1 }\n")),
         (
+            "flexible",
+            after("[[body]]\n", "flexible = { zz_unknown = 1 }\n"),
+        ),
+        (
             "capsule",
             after(
                 "[[body]]\n",

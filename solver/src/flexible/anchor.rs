@@ -69,7 +69,7 @@ impl FlexAnchor {
     }
 
     /// True when the point does not move with the deformation (the clamp,
-    /// x = 0: φ = φ′ = 0 there).
+    /// x = x_c: φ = φ′ = 0 there).
     pub fn is_rigid(&self) -> bool {
         self.shape.phi[..self.modes]
             .iter()

@@ -1,11 +1,12 @@
 //! The beam of a flexible body: Euler–Bernoulli bending along the body's x
 //! axis in its y and z directions, by a Rayleigh–Ritz basis of monomials
-//! clamped to the body frame at x = 0.
+//! clamped to the body frame at x = x_c (the `clamp`, default 0).
 //!
-//! With ℓ = max(|x₀|, |x₁|) over the span [x₀, x₁] and ξ = x/ℓ, the n shape
-//! functions of each direction are φ_j = ξ^(j+2), j = 0 … n − 1: zero value and
-//! zero slope at the origin (the floating frame is the beam's tangent frame
-//! there), polynomials of degree 2 … n + 1. Deflections v(x) (along y) and
+//! With ℓ = max(|x₀ − x_c|, |x₁ − x_c|) over the span [x₀, x₁] and
+//! ξ = (x − x_c)/ℓ, the n shape functions of each direction are
+//! φ_j = ξ^(j+2), j = 0 … n − 1: zero value and zero slope at the clamp (the
+//! floating frame is the beam's tangent frame there; its origin stays the
+//! body's, its centre of mass), polynomials of degree 2 … n + 1. Deflections v(x) (along y) and
 //! w(x) (along z) are
 //!
 //! ```text
@@ -39,8 +40,12 @@ pub const MAX_MODES: usize = 4;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BeamSpec {
     /// `[x₀, x₁]`: the beam's extent along the body's x axis, metres, body
-    /// frame, with x₀ ≤ 0 ≤ x₁ and x₀ < x₁ (the body frame is the clamp).
+    /// frame, x₀ < x₁.
     pub span_m: [f64; 2],
+    /// x_c: the section (body x, metres, on the span) where the body frame
+    /// is the beam's tangent frame: points there do not move with the
+    /// deformation, and joints that use the body's axes sit there.
+    pub clamp_m: f64,
     /// Bending stiffness EI for deflection along the body's y and z axes,
     /// N·m² (> 0).
     pub stiffness_n_m2: [f64; 2],
@@ -49,10 +54,12 @@ pub struct BeamSpec {
 }
 
 impl BeamSpec {
-    /// A beam over `span_m` with the same EI in both directions.
+    /// A beam over `span_m` clamped at x = 0, with the same EI in both
+    /// directions.
     pub fn new(span_m: [f64; 2], ei_n_m2: f64, modes: usize) -> Self {
         Self {
             span_m,
+            clamp_m: 0.0,
             stiffness_n_m2: [ei_n_m2; 2],
             modes,
         }
@@ -60,14 +67,19 @@ impl BeamSpec {
 
     /// ℓ, the normalising length, metres.
     pub fn scale_m(&self) -> f64 {
-        self.span_m[0].abs().max(self.span_m[1].abs())
+        (self.span_m[0] - self.clamp_m)
+            .abs()
+            .max((self.span_m[1] - self.clamp_m).abs())
     }
 
     /// What is wrong with the spec, if anything: `(field, why)`.
     pub fn check(&self) -> Result<(), (&'static str, &'static str)> {
         let [x0, x1] = self.span_m;
-        if !(x0.is_finite() && x1.is_finite() && x0 <= 0.0 && x1 >= 0.0 && x1 > x0) {
-            return Err(("span", "must be finite with x0 <= 0 <= x1 and x0 < x1"));
+        if !(x0.is_finite() && x1.is_finite() && x1 > x0) {
+            return Err(("span", "must be finite with x0 < x1"));
+        }
+        if !(self.clamp_m >= x0 && self.clamp_m <= x1) {
+            return Err(("clamp", "must lie on the span"));
         }
         if !self
             .stiffness_n_m2
@@ -113,7 +125,8 @@ impl Beam {
     pub fn new(spec: BeamSpec, mass_kg: f64) -> Self {
         let n = spec.modes;
         let l = spec.scale_m();
-        let xi = [spec.span_m[0] / l, spec.span_m[1] / l];
+        let c = spec.clamp_m;
+        let xi = [(spec.span_m[0] - c) / l, (spec.span_m[1] - c) / l];
         let mu = mass_kg / (spec.span_m[1] - spec.span_m[0]);
         let deg = |j: usize| j as i32 + 2;
         let unit_stiffness = DMatrix::from_fn(n, n, |i, j| {
@@ -163,7 +176,7 @@ impl Beam {
     /// φ_j and φ_j′ at body x.
     pub fn shape(&self, x: f64) -> Shape {
         let l = self.spec.scale_m();
-        let xi = x / l;
+        let xi = (x - self.spec.clamp_m) / l;
         let mut s = Shape {
             phi: [0.0; MAX_MODES],
             slope: [0.0; MAX_MODES],
@@ -201,14 +214,17 @@ mod tests {
     /// on a span across the origin.
     #[test]
     fn matrices_match_quadrature() {
-        let spec = BeamSpec::new([-0.05, 0.12], 1.0, 4);
+        let spec = BeamSpec {
+            clamp_m: -0.02,
+            ..BeamSpec::new([-0.05, 0.12], 1.0, 4)
+        };
         let beam = Beam::new(spec, 0.3);
         let mu = 0.3 / 0.17;
-        let l = 0.12;
-        let phi = |j: usize, x: f64| (x / l).powi(j as i32 + 2);
+        let (l, c) = (0.14, -0.02);
+        let phi = |j: usize, x: f64| ((x - c) / l).powi(j as i32 + 2);
         let dd = |j: usize, x: f64| {
             let d = j as i32 + 2;
-            f64::from(d * (d - 1)) / (l * l) * (x / l).powi(d - 2)
+            f64::from(d * (d - 1)) / (l * l) * ((x - c) / l).powi(d - 2)
         };
         for i in 0..4 {
             let g = simpson(|x| mu * phi(i, x), -0.05, 0.12);

@@ -15,10 +15,10 @@
 //! compiles exactly as before.
 //!
 //! **Joints and fingers** attach at any point of the span: a point off the
-//! clamp (x ≠ 0) becomes a deforming anchor (`Param3::Flex`), so spherical,
+//! clamp (x ≠ x_c) becomes a deforming anchor (`Param3::Flex`), so spherical,
 //! distance and point-on-plane joints, point fingers and objectives' points
 //! follow the deformation. Axes are the floating frame's, which is the
-//! beam's section at x = 0 only: a joint that uses axes or a relative
+//! beam's section at the clamp x_c only: a joint that uses axes or a relative
 //! orientation (revolute, universal, prismatic, fixed, point-on-plane on the
 //! flexible side's plane) or a rigid grasp must sit at the clamp, or the
 //! build says so.

@@ -502,7 +502,7 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     }
     if let Some(beam) = &s.flexible {
         let why = if s.fixed {
-            Some("a flexible body must move (weld it to a fixed body at x = 0 to clamp it)".into())
+            Some("a flexible body must move (weld it to a fixed body at its clamp)".into())
         } else if s.shape.is_some() {
             Some("a flexible body takes part in no contact: its shape would not bend".into())
         } else {

@@ -76,6 +76,12 @@ impl<'a> Compiler<'a> {
         self.flexible[body.index()].is_some()
     }
 
+    /// The clamp x of flexible body `body`, metres.
+    pub fn clamp_of(&self, body: BodyId) -> Option<f64> {
+        let k = self.flexible[body.index()]?;
+        Some(self.flex_bodies[k].beam.spec.clamp_m)
+    }
+
     /// The parameter of body point `k` of `body` (body frame): a constant,
     /// or on a flexible body off its clamp a deforming anchor. A point
     /// beyond the beam's span is an error.
@@ -314,13 +320,14 @@ pub(super) fn compile_finger(
     let world = cx.frames.len() - 1;
     let anchor = cx.anchor(&owner, body, point)?;
     let rigid = s.grasp == Grasp::Rigid;
+    let clamp = cx.clamp_of(body).unwrap_or(0.0);
     if rigid && matches!(anchor, Param3::Flex(_)) {
         return Err(BuildError::Flexible {
             owner,
             why: format!(
                 "a rigid grasp holds the orientation of flexible body `{}`'s frame, which is its \
-                 section at x = 0 only: put the point there, or use a point grasp",
-                s.body
+                 section at its clamp (x = {} m) only: put the point there, or use a point grasp",
+                s.body, clamp
             ),
         });
     }

@@ -240,7 +240,7 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Par
                 owner: j.owner.clone(),
                 why: format!(
                     "a `{}` joint uses the axes of flexible body `{}`, which are its section's at \
-                     x = 0 only: anchor it there (or use a spherical or distance joint)",
+                     its clamp only: anchor it there (or use a spherical or distance joint)",
                     s.kind, s.bodies[end]
                 ),
             });

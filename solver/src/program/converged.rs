@@ -70,6 +70,8 @@ pub struct TickState {
     alpha: Vec<Vector3<f64>>,
     aux_v: Vec<f64>,
     aux_a: Vec<f64>,
+    /// The objectives' pull on flexible deformations (`program::objective`).
+    static_shift: Vec<f64>,
     ticks: u32,
     prev_error: Vec<Vector3<f64>>,
     last_targets: Vec<FingerTarget>,
@@ -135,6 +137,7 @@ impl Program {
         copy(&mut out.alpha, &mo.alpha);
         copy(&mut out.aux_v, &mo.aux_v);
         copy(&mut out.aux_a, &mo.aux_a);
+        copy(&mut out.static_shift, self.static_shift());
         out.ticks = mo.ticks;
         copy(&mut out.prev_error, self.feedback.prev_errors_snapshot());
         copy(&mut out.last_targets, &self.last_targets);
@@ -182,6 +185,7 @@ impl Program {
             return Err(ProgramError::NonFinite { index });
         }
         self.load_motion(before, &before.q_prev);
+        self.set_static_shift(&before.static_shift);
         self.feedback.forced.fill(false);
         self.q.copy_from_slice(&before.q);
         self.lambda.copy_from_slice(&before.lambda);

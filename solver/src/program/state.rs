@@ -162,6 +162,7 @@ impl Program {
                 self.outputs[k] = old.outputs[j];
             }
         }
+        self.set_static_shift(old.static_shift());
         self.adopt_friction(old);
         self.adopt_semantic(old);
         let _ = self.refresh();

@@ -219,6 +219,15 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.friction = b.friction.as_ref().map_or(0.0, |m| *m.get_ref());
     spec.free = b.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = b.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.flexible = b.flexible.as_ref().map(|f| {
+        let f = f.get_ref();
+        crate::flexible::BeamSpec {
+            span_m: f.span.get(),
+            clamp_m: f.clamp.unwrap_or(0.0),
+            stiffness_n_m2: [f.stiffness, f.stiffness_z.unwrap_or(f.stiffness)],
+            modes: f.modes.map_or(3, |m| m as usize),
+        }
+    });
     spec
 }
 
@@ -595,7 +604,7 @@ impl LoadedScene {
                     | BuildError::OutOfRange {
                         field: "position", ..
                     } => f.position.as_ref().map_or(f.name.span(), Spanned::span),
-                    BuildError::NonFinite { .. } => {
+                    BuildError::NonFinite { .. } | BuildError::Flexible { .. } => {
                         f.point.as_ref().map_or(f.name.span(), Spanned::span)
                     }
                     BuildError::BadFingertip {
@@ -651,6 +660,7 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
         } => or_name(b.density.as_ref().map(Spanned::span)),
         BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
         BuildError::BadFriction { .. } => or_name(b.friction.as_ref().map(Spanned::span)),
+        BuildError::Flexible { .. } => or_name(b.flexible.as_ref().map(Spanned::span)),
         BuildError::UnsupportedBodyFree { .. } | BuildError::DuplicateFree { .. } => {
             let dup = matches!(e, BuildError::DuplicateFree { .. });
             or_name(
@@ -740,7 +750,8 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         | BuildError::OutOfRange {
             field: "anchors", ..
         }
-        | BuildError::CoincidentAnchors { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
+        | BuildError::CoincidentAnchors { .. }
+        | BuildError::Flexible { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
         BuildError::NonFinite {
             field: "length", ..
         }

@@ -207,6 +207,30 @@ pub struct BodySection {
     /// Bounds on the freed position.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// A flexible body's beam (Nelson & Cohen §4).
+    #[serde(default)]
+    pub flexible: Option<Spanned<FlexibleSpec>>,
+}
+
+/// `flexible = { span, clamp, stiffness, stiffness_z, modes }`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlexibleSpec {
+    /// `[x0, x1]` along the body's x axis, m, body frame.
+    pub span: Arr<f64, 2>,
+    /// Where on the span the body frame is the beam's tangent frame, m
+    /// (default 0).
+    #[serde(default)]
+    pub clamp: Option<f64>,
+    /// EI for deflection along the body's y axis (and z unless
+    /// `stiffness_z`), N·m².
+    pub stiffness: f64,
+    /// EI for deflection along z, N·m² (default: `stiffness`).
+    #[serde(default)]
+    pub stiffness_z: Option<f64>,
+    /// Shape functions per direction (default 3).
+    #[serde(default)]
+    pub modes: Option<u32>,
 }
 
 /// `shape = { … }`.

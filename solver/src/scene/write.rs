@@ -61,6 +61,17 @@ fn body(out: &mut String, b: &BodySpec) {
             let _ = writeln!(out, "shape = {{ convex = [{}] }}", pts.join(", "));
         }
     }
+    if let Some(f) = &b.flexible {
+        let _ = writeln!(
+            out,
+            "flexible = {{ span = {}, clamp = {}, stiffness = {}, stiffness_z = {}, modes = {} }}",
+            arr(&f.span_m),
+            num(f.clamp_m),
+            num(f.stiffness_n_m2[0]),
+            num(f.stiffness_n_m2[1]),
+            f.modes
+        );
+    }
     out.push('\n');
 }
 

@@ -29,6 +29,7 @@ pub fn cantilever(modes: usize) -> Model {
             .inertia([1e-6, 2e-4, 2e-4])
             .flexible(BeamSpec {
                 span_m: [0.0, L],
+                clamp_m: 0.0,
                 stiffness_n_m2: [EI, 2.0 * EI],
                 modes,
             }),
@@ -64,6 +65,7 @@ pub fn belly(gravity: bool) -> Model {
             .inertia([2e-5, 2e-4, 2e-4])
             .flexible(BeamSpec {
                 span_m: [-0.08, 0.08],
+                clamp_m: 0.0,
                 stiffness_n_m2: [0.02, 0.03],
                 modes: 3,
             }),
