@@ -103,6 +103,10 @@ pub const BUILTIN: &[Builtin] = &[
         name: "dodge-belly",
         text: include_str!("../scenes/dodge-belly.toml"),
     },
+    Builtin {
+        name: "ball-bowl",
+        text: include_str!("../scenes/ball-bowl.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

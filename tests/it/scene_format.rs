@@ -136,6 +136,14 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
             replace("kind = \"revolute\"", "kind = \"zz_unknown\""),
         ),
         (
+            "surface",
+            after("[[joint]]\n", "surface = { zz_unknown = 1 }\n"),
+        ),
+        (
+            "type values",
+            after("[[joint]]\n", "surface = { type = \"zz_unknown\" }\n"),
+        ),
+        (
             "free values",
             after("[[joint]]\n", "free = [\"zz_unknown\"]\n"),
         ),

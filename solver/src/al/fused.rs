@@ -156,6 +156,8 @@ impl Fused {
             targets,
             witnesses,
             flex: &model.flex_anchors,
+            surfaces: &model.surfaces,
+            rolling: &[],
         };
         let mut sink = GradSink {
             rows: [RowGrad::default(); MAX_ROWS],

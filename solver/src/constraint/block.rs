@@ -26,6 +26,10 @@ pub(crate) struct Ctx<'a> {
     /// The model's deforming points (`Param3::Flex` indexes them; empty
     /// for a rigid model).
     pub flex: &'a [crate::flexible::anchor::FlexAnchor],
+    /// The model's surface contacts (`crate::parametric`; empty without).
+    pub surfaces: &'a [crate::parametric::SurfaceContact],
+    /// The rolling rows' tick-start anchors (`crate::parametric::rolling`).
+    pub rolling: &'a [crate::parametric::rolling::RollAnchor],
 }
 
 impl Ctx<'_> {
@@ -77,6 +81,8 @@ pub(crate) enum Slot {
     BodyJ = 1,
     AnchorI = 2,
     AnchorJ = 3,
+    /// A distance joint's free length (1 column), or a surface contact's
+    /// (u, v) (2 columns): written through `Sink::set` only.
     Length = 4,
     /// The free position (3 design columns, world frame) of a fixed body at
     /// end 0 or 1 (see `Model::constraint_groups`).

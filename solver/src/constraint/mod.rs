@@ -16,6 +16,7 @@
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
+//! | `crate::parametric` | `on_surface` (3 rows, m, with (u, v) columns) and `rolling` (2 rows, m) | 3 / 2 | m |
 //! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
@@ -59,6 +60,8 @@ pub(crate) enum Geometry {
     Contact(witness::ContactRows),
     Bound(bound::DesignBound),
     Surface(surface::SurfaceRows),
+    OnSurface(crate::parametric::contact::OnSurface),
+    Rolling(crate::parametric::rolling::Rolling),
 }
 
 impl Geometry {
@@ -79,6 +82,8 @@ impl Geometry {
             Self::Contact(c) => c.rows as usize,
             Self::Bound(b) => b.rows(),
             Self::Surface(s) => s.rows as usize,
+            Self::OnSurface(_) => crate::parametric::contact::OnSurface::ROWS,
+            Self::Rolling(_) => crate::parametric::rolling::Rolling::ROWS,
         }
     }
 
@@ -112,6 +117,8 @@ impl Geometry {
             Self::Contact(c) => c.pair.groups(),
             Self::Bound(b) => b.groups(),
             Self::Surface(s) => s.pair.groups(),
+            Self::OnSurface(s) => s.pair.groups(),
+            Self::Rolling(r) => r.pair.groups(),
         }
     }
 
@@ -134,6 +141,8 @@ impl Geometry {
             // Raw values only, like the norm row.
             Self::Bound(_) => [0, 0],
             Self::Surface(s) => s.pair.frame,
+            Self::OnSurface(s) => s.pair.frame,
+            Self::Rolling(r) => r.pair.frame,
         }
     }
 
@@ -154,6 +163,8 @@ impl Geometry {
             Self::Limit(j) => j.pair().anchor,
             Self::Contact(c) => c.pair.anchor,
             Self::Surface(s) => s.pair.anchor,
+            Self::OnSurface(s) => s.pair.anchor,
+            Self::Rolling(r) => r.pair.anchor,
             Self::QuatNorm(_) | Self::Bound(_) => none,
         }
     }
@@ -176,6 +187,8 @@ impl Geometry {
             Self::Contact(j) => j.eval(x, c, sink),
             Self::Bound(j) => j.eval(x, c, sink),
             Self::Surface(j) => j.eval(x, c, sink),
+            Self::OnSurface(j) => j.eval(x, c, sink),
+            Self::Rolling(j) => j.eval(x, c, sink),
         }
     }
 }

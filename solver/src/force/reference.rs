@@ -112,6 +112,7 @@ pub fn reference_finger_wrenches(
         })
         .collect();
     let mut ev = model.evaluation();
+    ev.anchor_rolling(model, q);
     ev.evaluate(model, q, &targets)?;
     let cq = ev.jacobian().to_dense();
     let nb0 = model.layout().body_coords();

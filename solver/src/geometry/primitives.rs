@@ -298,6 +298,8 @@ pub fn value_at(w: &Witness, pa: &Pose3, pb: &Pose3) -> (f64, Vector3<f64>) {
         targets: &[],
         witnesses: std::slice::from_ref(w),
         flex: &[],
+        surfaces: &[],
+        rolling: &[],
     };
     let pair = Pair {
         frame: [0, 1],

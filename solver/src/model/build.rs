@@ -168,9 +168,11 @@ impl ModelBuilder {
 
         let mut out = Assembler::default();
         let mut limits = Vec::new();
+        let mut rolls = Vec::new();
         let mut joint_names = HashMap::new();
         for (k, spec) in self.joints.iter().enumerate() {
-            let (info, geometry, limit) = compile_joint(k, spec, &mut cx)?;
+            let (info, geometry, limit, roll) = compile_joint(k, spec, &mut cx)?;
+            rolls.extend(roll);
             if spec.name.is_some() && joint_names.insert(info.name.clone(), ()).is_some() {
                 return Err(BuildError::DuplicateName {
                     owner: Owner::Joint(info.name),
@@ -192,26 +194,8 @@ impl ModelBuilder {
             fingers.push(finger);
             out.push(info, geometry);
         }
-        let (design_vars, dv_q0, len, characteristic_length, flexible, flex_anchors) = cx.finish();
-        let aux = flexible
-            .iter()
-            .enumerate()
-            .map(|(k, fb)| {
-                let name = format!("{}.flex", bodies[fb.body.index()].name);
-                let h = fb.beam.stiffness();
-                super::auxiliary::AuxBlock::new(
-                    name,
-                    super::auxiliary::AuxOwner::Flexible(k),
-                    super::auxiliary::Rest::Zero,
-                    fb.col,
-                    &h,
-                )
-                .ok_or_else(|| BuildError::Flexible {
-                    owner: Owner::Body(bodies[fb.body.index()].name.clone()),
-                    why: "its stiffness matrix is not positive definite".into(),
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let fin = cx.finish()?;
+        let (design_vars, len, characteristic_length) = (fin.design_vars, fin.len, fin.lever);
         for (i, b) in bodies.iter().enumerate() {
             if let Some(col) = body_cols[i] {
                 let info = ConstraintInfo {
@@ -224,6 +208,15 @@ impl ModelBuilder {
                 };
                 out.push(info, Geometry::QuatNorm(QuatNorm { col }));
             }
+        }
+        // Rolling joints' no-slip rows (equalities; anchors per tick).
+        let mut rolling = Vec::with_capacity(rolls.len());
+        for (slot, (info, mut g)) in rolls.into_iter().enumerate() {
+            if let Geometry::Rolling(r) = &mut g {
+                r.slot = slot as u32;
+            }
+            rolling.push(out.infos.len());
+            out.push(info, g);
         }
         // Pinned design components (equalities), then the joint limits and
         // the design bounds (inequalities).
@@ -246,7 +239,7 @@ impl ModelBuilder {
             q0.extend_from_slice(b.position_m.as_slice());
             q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
         }
-        q0.extend_from_slice(&dv_q0);
+        q0.extend_from_slice(&fin.q0_tail);
         q0.resize(len, 0.0); // undeformed flexible bodies
         let body_coords = col;
         let mut model = Model {
@@ -258,7 +251,7 @@ impl ModelBuilder {
                 origin_cols,
                 design_vars,
                 body_coords,
-                aux,
+                aux: fin.aux,
                 len,
             },
             geometry: out.geometry,
@@ -271,8 +264,10 @@ impl ModelBuilder {
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
-            flexible,
-            flex_anchors,
+            flexible: fin.flex_bodies,
+            flex_anchors: fin.anchors,
+            surfaces: fin.surfaces,
+            rolling,
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;

@@ -39,6 +39,26 @@ pub(super) struct Compiler<'a> {
     anchors: Vec<crate::flexible::anchor::FlexAnchor>,
     /// Per anchor: its flexible body.
     anchor_body: Vec<usize>,
+    /// Surface contacts (their (u, v) columns assigned by `finish`), each
+    /// with its joint's name, initial (u, v) and metric, kg/m².
+    surfaces: Vec<(crate::parametric::SurfaceContact, String, [f64; 2], f64)>,
+}
+
+/// What [`Compiler::finish`] hands back.
+pub(super) struct Finished {
+    pub design_vars: Vec<DesignVar>,
+    /// Initial values of the design variables, then of the surface
+    /// contacts' (u, v); the flexible deformations start at 0.
+    pub q0_tail: Vec<f64>,
+    pub len: usize,
+    pub lever: f64,
+    pub flex_bodies: Vec<crate::flexible::body::FlexBody>,
+    pub anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    pub surfaces: Vec<crate::parametric::SurfaceContact>,
+    /// The auxiliary blocks, in column order: surface contacts' (u, v),
+    /// then flexible deformations (rest 0 last, as `program::objective`
+    /// needs).
+    pub aux: Vec<super::auxiliary::AuxBlock>,
 }
 
 impl<'a> Compiler<'a> {
@@ -62,7 +82,22 @@ impl<'a> Compiler<'a> {
             flex_bodies: Vec::new(),
             anchors: Vec::new(),
             anchor_body: Vec::new(),
+            surfaces: Vec::new(),
         }
+    }
+
+    /// Registers a surface contact of joint `name` starting at `uv0` with
+    /// metric `metric_kg` per m² on (u, v); its index.
+    pub fn surface(
+        &mut self,
+        name: &str,
+        contact: crate::parametric::SurfaceContact,
+        uv0: [f64; 2],
+        metric_kg: f64,
+    ) -> u32 {
+        self.surfaces
+            .push((contact, name.to_owned(), uv0, metric_kg));
+        self.surfaces.len() as u32 - 1
     }
 
     /// Declares `body` flexible (its beam compiled).
@@ -120,36 +155,58 @@ impl<'a> Compiler<'a> {
         Ok(Param3::Flex(self.anchors.len() as u32 - 1))
     }
 
-    /// Design variables, their initial values, the total coordinate count,
-    /// the characteristic length, and the flexible bodies with their
-    /// deforming anchors (their columns after the design variables).
-    #[allow(clippy::type_complexity)]
-    pub fn finish(
-        mut self,
-    ) -> (
-        Vec<DesignVar>,
-        Vec<f64>,
-        usize,
-        f64,
-        Vec<crate::flexible::body::FlexBody>,
-        Vec<crate::flexible::anchor::FlexAnchor>,
-    ) {
+    /// Assigns the auxiliary columns after the design variables (surface
+    /// contacts, then flexible bodies) and hands everything back.
+    pub fn finish(mut self) -> Result<Finished, BuildError> {
+        use super::auxiliary::{AuxBlock, AuxOwner, Rest};
         let mut col = self.next_col;
-        for fb in &mut self.flex_bodies {
+        let mut aux = Vec::new();
+        let mut q0_tail = self.dv_q0;
+        let mut surfaces = Vec::with_capacity(self.surfaces.len());
+        for (k, (mut sc, name, uv0, metric)) in self.surfaces.into_iter().enumerate() {
+            sc.uv_col = col;
+            let h = nalgebra::DMatrix::from_diagonal_element(2, 2, metric);
+            aux.extend(AuxBlock::new(
+                format!("{name}.uv"),
+                AuxOwner::Surface(k),
+                Rest::Current,
+                col,
+                &h,
+            ));
+            q0_tail.extend_from_slice(&uv0);
+            surfaces.push(sc);
+            col += 2;
+        }
+        for (k, fb) in self.flex_bodies.iter_mut().enumerate() {
             fb.col = col;
+            let name = format!("{}.flex", self.bodies[fb.body.index()].name);
+            let block = AuxBlock::new(
+                name,
+                AuxOwner::Flexible(k),
+                Rest::Zero,
+                col,
+                &fb.beam.stiffness(),
+            )
+            .ok_or_else(|| BuildError::Flexible {
+                owner: Owner::Body(self.bodies[fb.body.index()].name.clone()),
+                why: "its stiffness matrix is not positive definite".into(),
+            })?;
+            aux.push(block);
             col += fb.width();
         }
         for (a, &b) in self.anchors.iter_mut().zip(&self.anchor_body) {
             a.col = self.flex_bodies[b].col;
         }
-        (
-            self.design_vars,
-            self.dv_q0,
-            col,
-            self.lever,
-            self.flex_bodies,
-            self.anchors,
-        )
+        Ok(Finished {
+            design_vars: self.design_vars,
+            q0_tail,
+            len: col,
+            lever: self.lever,
+            flex_bodies: self.flex_bodies,
+            anchors: self.anchors,
+            surfaces,
+            aux,
+        })
     }
 
     pub fn resolve(&self, owner: &Owner, name: &str) -> Result<BodyId, BuildError> {

@@ -365,6 +365,17 @@ pub enum BuildError {
         /// The model's owner (the scene).
         owner: Owner,
     },
+    /// An `on_surface` or `rolling` joint that cannot be built (see
+    /// [`crate::parametric`]).
+    #[error("{owner}: {why}")]
+    Surface {
+        /// The joint.
+        owner: Owner,
+        /// The key at fault: `surface`, `radius`, `anchors` or `kind`.
+        field: &'static str,
+        /// What is wrong, with the values.
+        why: String,
+    },
     /// A flexible body, or a joint or finger on one, that cannot be built
     /// (see [`crate::flexible`]).
     #[error("{owner}: {why}")]
@@ -426,7 +437,8 @@ impl BuildError {
             | BadFingertip { owner, .. }
             | BadFriction { owner, .. }
             | AlreadyDerived { owner }
-            | Flexible { owner, .. } => owner,
+            | Flexible { owner, .. }
+            | Surface { owner, .. } => owner,
         }
     }
 }

@@ -22,9 +22,9 @@ pub use error::{BuildError, Owner};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
 pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{
-    BodySpec, Bounds, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG,
-    DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape,
-    UnknownName,
+    BodySpec, Bounds, ContactSurface, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M,
+    DEFAULT_MASS_KG, DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind,
+    JointSpec, Shape, UnknownName,
 };
 pub use surface::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 
@@ -99,6 +99,10 @@ pub struct Model {
     pub(crate) flexible: Vec<crate::flexible::body::FlexBody>,
     /// The deforming points `Param3::Flex` indexes.
     pub(crate) flex_anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    /// Surface contacts (`crate::parametric`; `Ctx::surfaces`).
+    pub(crate) surfaces: Vec<crate::parametric::SurfaceContact>,
+    /// The rolling constraints (their indices; the anchor table's order).
+    pub(crate) rolling: Vec<usize>,
 }
 
 fn next_model_id() -> u64 {
@@ -278,6 +282,11 @@ impl Model {
                 if let Some(c) = self.layout.origin_cols.get(f).copied().flatten() {
                     groups[Slot::origin(end) as usize] = Some((c, 3));
                 }
+            }
+            if let crate::constraint::Geometry::OnSurface(s) = g
+                && let Some(sc) = self.surfaces.get(s.index as usize)
+            {
+                groups[Slot::Length as usize] = Some((sc.uv_col, 2));
             }
             if !self.flex_anchors.is_empty() {
                 for (end, a) in g.anchors().iter().enumerate() {

@@ -37,6 +37,8 @@ impl Centred {
             targets: &[],
             witnesses: &[],
             flex: &g.flex,
+            surfaces: &[],
+            rolling: &[],
         };
         let l = &self.limits[k];
         let (s, rg) = l.coordinate(&x);

@@ -1,5 +1,5 @@
 //! The auxiliary blocks' part of a tick (`model::auxiliary`): where the
-//! update's anchor q₀ puts their columns.
+//! update's anchor q₀ puts their columns; and the rolling rows' anchors.
 
 use super::Program;
 use crate::model::Rest;
@@ -18,6 +18,18 @@ impl Program {
             if b.rest == Rest::Zero {
                 self.q_goal[b.offset..b.offset + b.width].fill(0.0);
             }
+        }
+    }
+
+    /// Anchors the rolling rows (`crate::parametric::rolling`) at the
+    /// current q, the start of a tick: each tick's steps then keep the
+    /// contact point's displacement since this q free of slip.
+    ///
+    /// # Real-time
+    /// No allocation; O(rolling constraints).
+    pub(super) fn anchor_rolling(&mut self) {
+        if !self.model.rolling.is_empty() {
+            self.ev.anchor_rolling(&self.model, &self.q);
         }
     }
 }

@@ -194,6 +194,7 @@ impl Program {
         }
         self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
         self.rest_aux();

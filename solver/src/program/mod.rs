@@ -172,6 +172,7 @@ impl Program {
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
         let mut ev = model.evaluation();
+        ev.anchor_rolling(&model, model.q0());
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
         // Rows dependent within their body pair never enter A's pattern.

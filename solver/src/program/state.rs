@@ -26,6 +26,7 @@ impl Program {
         }
         self.q.copy_from_slice(q);
         self.q_ref.copy_from_slice(q);
+        self.anchor_rolling();
         self.feedback.motion.reset(q);
         // A failed refresh (a q that cannot be evaluated) shows up as the
         // status of the next tick.
@@ -62,6 +63,7 @@ impl Program {
             self.q_ref[i] += d;
             self.feedback.motion.q_prev[i] += d;
         }
+        self.anchor_rolling();
         let _ = self.refresh();
         Ok(())
     }

@@ -146,6 +146,7 @@ impl Program {
         self.q_ref.copy_from_slice(&self.q);
         self.q_goal.copy_from_slice(&self.q);
         self.rest_aux();
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         let status = match self.iterations(targets, iterations) {
             Ok(_) => match self.diverged_state() {
@@ -266,6 +267,7 @@ impl Program {
     ) -> TickReport {
         self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
         self.rest_aux();
@@ -370,6 +372,7 @@ impl Program {
             self.q_ref.copy_from_slice(&self.q);
             self.q_goal.copy_from_slice(&self.q);
             self.rest_aux();
+            self.anchor_rolling();
             if let Err(status) = self.assembly_step(targets) {
                 self.q.copy_from_slice(&self.q_ref);
                 self.lambda.copy_from_slice(&self.saved_lambda);

@@ -197,6 +197,38 @@ fn joint_kind(k: JointKindSpec) -> JointKind {
         JointKindSpec::Distance => JointKind::Distance,
         JointKindSpec::Perpendicular => JointKind::Perpendicular,
         JointKindSpec::PointOnPlane => JointKind::PointOnPlane,
+        JointKindSpec::OnSurface => JointKind::OnSurface,
+        JointKindSpec::Rolling => JointKind::Rolling,
+    }
+}
+
+fn contact_surface(s: &super::spec::SurfaceSection) -> crate::ContactSurface {
+    use super::spec::SurfaceTypeSpec as T;
+    use crate::parametric::SurfaceKind as K;
+    let r = s.radius.unwrap_or(f64::NAN);
+    let kind = match s.kind {
+        T::Plane => K::Plane,
+        T::Bowl => K::Sphere {
+            radius_m: r,
+            concave: true,
+        },
+        T::Dome => K::Sphere {
+            radius_m: r,
+            concave: false,
+        },
+        T::Trough => K::Cylinder {
+            radius_m: r,
+            concave: true,
+        },
+        T::Ridge => K::Cylinder {
+            radius_m: r,
+            concave: false,
+        },
+    };
+    crate::ContactSurface {
+        kind,
+        origin_m: s.origin.map_or([0.0; 3], |o| o.get()),
+        orientation_wxyz: s.orientation.map_or([1.0, 0.0, 0.0, 0.0], |q| q.get()),
     }
 }
 
@@ -352,6 +384,8 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
     spec.free = j.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = j.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.surface = j.surface.as_ref().map(|x| contact_surface(x.get_ref()));
+    spec.radius_m = j.radius.as_ref().map(|x| *x.get_ref());
     spec
 }
 
@@ -752,6 +786,12 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         }
         | BuildError::CoincidentAnchors { .. }
         | BuildError::Flexible { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
+        BuildError::Surface { field, .. } => or_head(match *field {
+            "radius" => j.radius.as_ref().map(Spanned::span),
+            "anchors" => j.anchors.as_ref().map(Spanned::span),
+            "kind" => Some(j.kind.span()),
+            _ => j.surface.as_ref().map(Spanned::span),
+        }),
         BuildError::NonFinite {
             field: "length", ..
         }

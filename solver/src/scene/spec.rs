@@ -284,6 +284,10 @@ pub enum JointKindSpec {
     Perpendicular,
     /// 1 row.
     PointOnPlane,
+    /// 3 rows + (u, v).
+    OnSurface,
+    /// 3 + 2 rows + (u, v).
+    Rolling,
 }
 
 /// A name in `free = [...]`.
@@ -368,6 +372,46 @@ pub struct JointSection {
     /// Bounds on the design variables.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// `on_surface` and `rolling`: body j's surface.
+    #[serde(default)]
+    pub surface: Option<Spanned<SurfaceSection>>,
+    /// `on_surface` and `rolling`: the ball's radius, m.
+    #[serde(default)]
+    pub radius: Option<Spanned<f64>>,
+}
+
+/// `surface = { type, radius, origin, orientation }` of a joint.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSection {
+    /// The surface's shape.
+    #[serde(rename = "type")]
+    pub kind: SurfaceTypeSpec,
+    /// Sphere or cylinder radius, m.
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// Origin of its local frame, m, body j's frame.
+    #[serde(default)]
+    pub origin: Option<Vec3>,
+    /// Its local frame, `[w, x, y, z]`, local → body.
+    #[serde(default)]
+    pub orientation: Option<Quat>,
+}
+
+/// `type = "…"` of a surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceTypeSpec {
+    /// The local xy plane.
+    Plane,
+    /// A sphere seen from inside.
+    Bowl,
+    /// A sphere seen from outside.
+    Dome,
+    /// A cylinder along local x seen from inside.
+    Trough,
+    /// A cylinder along local x seen from outside.
+    Ridge,
 }
 
 /// `[[device]]`.

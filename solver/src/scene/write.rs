@@ -101,6 +101,28 @@ fn joint(out: &mut String, j: &JointSpec) {
             .collect();
         let _ = writeln!(out, "free = [{}]", names.join(", "));
     }
+    if let Some(s) = &j.surface {
+        use crate::parametric::SurfaceKind as K;
+        let (kind, radius) = match s.kind {
+            K::Plane => ("plane", None),
+            K::Sphere { radius_m, concave } => {
+                (if concave { "bowl" } else { "dome" }, Some(radius_m))
+            }
+            K::Cylinder { radius_m, concave } => {
+                (if concave { "trough" } else { "ridge" }, Some(radius_m))
+            }
+        };
+        let radius = radius.map_or(String::new(), |r| format!(", radius = {}", num(r)));
+        let _ = writeln!(
+            out,
+            "surface = {{ type = \"{kind}\"{radius}, origin = {}, orientation = {} }}",
+            arr(&s.origin_m),
+            arr(&s.orientation_wxyz)
+        );
+    }
+    if let Some(r) = j.radius_m {
+        let _ = writeln!(out, "radius = {}", num(r));
+    }
     out.push('\n');
 }
 

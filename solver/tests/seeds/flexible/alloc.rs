@@ -4,7 +4,7 @@ use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::{FingerTarget, SolverSettings, TickOutcome};
 use nalgebra::Vector3;
 
-use crate::common::{DT, belly, program};
+use crate::flexible::common::{DT, belly, program};
 
 #[test]
 fn flexible_ticks_allocate_nothing() {

@@ -6,7 +6,7 @@
 use haptloop_solver::{FingerTarget, Model};
 use nalgebra::{DMatrix, Vector3};
 
-use crate::common::{Lcg, belly, cantilever};
+use crate::flexible::common::{Lcg, belly, cantilever};
 
 fn fd(model: &Model, q: &[f64], t: &[FingerTarget], h: f64) -> DMatrix<f64> {
     let mut ev = model.evaluation();

@@ -6,7 +6,7 @@
 use haptloop_solver::{BodyId, FingerTarget, SolverSettings, reference_finger_wrenches};
 use nalgebra::Vector3;
 
-use crate::common::{DT, EI, L, cantilever, program};
+use crate::flexible::common::{DT, EI, L, cantilever, program};
 
 /// Pulls the tip to `target` (a ramp over 100 ticks, then 600 ticks held)
 /// and returns the program.
