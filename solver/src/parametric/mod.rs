@@ -40,7 +40,8 @@ pub use contact::SurfaceContact;
 
 /// The metric of a surface contact's (u, v) columns per kilogram of the
 /// point's body, per m²: small, so the update slides the contact freely
-/// and Eq. 7's weight H⁻¹ on its balance is large (the force normal to the
-/// surface to about this relative size, measured 1e-12 in the tests).
+/// and Eq. 7's weight H⁻¹ on its balance is large (a ball held on a bowl's
+/// slope loads the finger with its tangential weight to 1e-9 N in the
+/// tests: the contact force is normal).
 pub const UV_METRIC: f64 = 1e-3;
 pub use surface::{Surface, SurfaceKind, SurfacePoint};
