@@ -70,17 +70,18 @@ impl FlexBody {
         let (w, n) = (self.width(), self.beam.modes());
         let qf = &q[self.col..self.col + w];
         let g_body = rot.tr_mul(g);
-        for i in 0..w {
-            let mut f = 0.0;
-            for j in 0..w {
-                f -= self.stiffness[i * w + j] * qf[j] + self.mass[i * w + j] * qdd[j];
-            }
+        for (i, o) in out.iter_mut().enumerate().take(w) {
+            let (k, m) = (
+                &self.stiffness[i * w..(i + 1) * w],
+                &self.mass[i * w..(i + 1) * w],
+            );
+            let f: f64 = (0..w).map(|j| -(k[j] * qf[j] + m[j] * qdd[j])).sum();
             let (dir, j) = if i < n {
                 (g_body.y, i)
             } else {
                 (g_body.z, i - n)
             };
-            out[i] = f + self.beam.load[j.min(MAX_MODES - 1)] * dir;
+            *o = f + self.beam.load[j.min(MAX_MODES - 1)] * dir;
         }
     }
 

@@ -84,9 +84,9 @@ impl AuxBlock {
     #[inline]
     pub(crate) fn apply_inverse(&self, g: &[f64], out: &mut [f64]) {
         let (o, w) = (self.offset, self.width);
-        for i in 0..w {
+        for (i, x) in out[o..o + w].iter_mut().enumerate() {
             let row = &self.inv_metric[i * w..(i + 1) * w];
-            out[o + i] = row.iter().zip(&g[o..o + w]).map(|(a, b)| a * b).sum();
+            *x = row.iter().zip(&g[o..o + w]).map(|(a, b)| a * b).sum();
         }
     }
 
@@ -94,9 +94,9 @@ impl AuxBlock {
     #[inline]
     pub(crate) fn inverse_times(&self, c: &[f64], out: &mut [f64]) {
         let w = self.width;
-        for i in 0..w {
+        for (i, x) in out.iter_mut().enumerate().take(w) {
             let row = &self.inv_metric[i * w..(i + 1) * w];
-            out[i] = row.iter().zip(c).map(|(a, b)| a * b).sum();
+            *x = row.iter().zip(c).map(|(a, b)| a * b).sum();
         }
     }
 

@@ -116,7 +116,7 @@ fn surface_contact(j: &Checked, pair: Pair, cx: &mut Compiler) -> Result<Geometr
         ));
     };
     let radius = s.radius_m.unwrap_or(0.0);
-    if !(radius.is_finite() && radius >= 0.0 && radius <= 10.0) {
+    if !(0.0..=10.0).contains(&radius) {
         return Err(bad(
             "radius",
             format!("`radius` = {radius} must be finite, in [0, 10] m"),
@@ -343,12 +343,12 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Par
         }
     }
     // Points of flexible bodies deform with them (`crate::flexible`).
-    for end in 0..2 {
+    for (end, a) in anchor.iter_mut().enumerate() {
         let body = j.bodies[end];
         if !cx.is_flexible(body) {
             continue;
         }
-        anchor[end] = match anchor[end] {
+        *a = match *a {
             Param3::Const(k) => cx.anchor(&j.owner, body, k)?,
             _ => {
                 return Err(BuildError::Flexible {
@@ -370,8 +370,8 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Par
         JointKind::PointOnPlane => end == 1,
         _ => true,
     };
-    for end in 0..2 {
-        if uses_axes(end) && matches!(anchor[end], Param3::Flex(_)) {
+    for (end, a) in anchor.iter().enumerate() {
+        if uses_axes(end) && matches!(a, Param3::Flex(_)) {
             return Err(BuildError::Flexible {
                 owner: j.owner.clone(),
                 why: format!(

@@ -138,7 +138,7 @@ mod tests {
     #[test]
     fn log_rotation_is_finite_at_identity() {
         let r = Rotation3::from_euler_angles(0.3, -1.1, 2.0).into_inner();
-        assert_eq!(log_rotation(&(r * r.transpose())).norm() < 1e-15, true);
+        assert!(log_rotation(&(r * r.transpose())).norm() < 1e-15);
         for v in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(1e-9, 0.0, 2e-9)] {
             let m = Rotation3::from_scaled_axis(v).into_inner();
             assert!((log_rotation(&m) - v).norm() < 1e-15 * (1.0 + v.norm()) + 1e-24);

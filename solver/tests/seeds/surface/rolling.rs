@@ -97,8 +97,13 @@ fn a_ball_rolled_around_a_circle_matches_the_closed_form() {
     // One lap without spin: the closed form, to second order in the tick
     // (measured 2.6e-5 rad at 1 kHz, 6.5e-6 at 2 kHz, 1.6e-6 at 4 kHz of a
     // 21.9 rad turn).
-    let half = lap(a, 8000, 5e-4);
     assert!(l.error < 5e-5, "lap rotation off by {:e} rad", l.error);
+    if cfg!(debug_assertions) {
+        // The second lap is 8000 ticks: 20 s unoptimised; the release
+        // suite checks the order.
+        return;
+    }
+    let half = lap(a, 8000, 5e-4);
     assert!(
         half.error < l.error / 3.5,
         "not second order: {:e} at 1 kHz, {:e} at 2 kHz",
