@@ -43,7 +43,7 @@ impl Ctx<'_> {
         match *p {
             Param3::Const(v) => v,
             Param3::Free(col) => Vector3::new(self.q[col], self.q[col + 1], self.q[col + 2]),
-            Param3::Flex(i) => self.flex[i as usize].point(self.q),
+            Param3::Flex(i) => flex_point(self.flex, i, self.q),
         }
     }
 
@@ -54,6 +54,23 @@ impl Ctx<'_> {
             Param1::Free(col) => self.q[col],
         }
     }
+}
+
+/// The deformed point of a flexible body's anchor `i`: out of line and
+/// cold, so the rigid path's `Ctx::vec3` stays two arms of straight code
+/// (inlined into every anchor's evaluation; the flexible arm inline cost a
+/// rigid four-bar 20 % of its evaluation, `haptloop bench`).
+#[cold]
+#[inline(never)]
+fn flex_point(flex: &[crate::flexible::anchor::FlexAnchor], i: u32, q: &[f64]) -> Vector3<f64> {
+    flex[i as usize].point(q)
+}
+
+/// Φᵀ d into a flexible anchor's columns (out of line, as [`flex_point`]).
+#[cold]
+#[inline(never)]
+fn flex_gradient(a: &crate::flexible::anchor::FlexAnchor, d: &Vector3<f64>, out: &mut [f64]) {
+    a.gradient(d, out);
 }
 
 /// A 3-vector that is a constant, a free design variable (its column in
@@ -339,7 +356,7 @@ impl Sink for Block<'_> {
                 let at = base + p as usize;
                 match self.flex[end] {
                     None => self.vals[at..at + 3].copy_from_slice(dk.as_slice()),
-                    Some(a) => a.gradient(&dk, &mut self.vals[at..at + a.width()]),
+                    Some(a) => flex_gradient(a, &dk, &mut self.vals[at..at + a.width()]),
                 }
             }
             let p = self.pos[Slot::origin(end) as usize];
