@@ -14,6 +14,8 @@ mod flexible {
     mod statics;
 }
 
+mod errors;
+
 mod surface {
     mod alloc;
     pub(crate) mod common;
