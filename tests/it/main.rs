@@ -20,6 +20,7 @@ mod replay;
 mod said;
 mod scene_format;
 mod scenes;
+mod seeds;
 mod semantic;
 mod session;
 mod solver_honesty;

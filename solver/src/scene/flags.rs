@@ -52,6 +52,8 @@ fn kind_name(k: JointKindSpec) -> &'static str {
         JointKindSpec::Distance => "distance",
         JointKindSpec::Perpendicular => "perpendicular",
         JointKindSpec::PointOnPlane => "point_on_plane",
+        JointKindSpec::OnSurface => "on_surface",
+        JointKindSpec::Rolling => "rolling",
     }
 }
 
