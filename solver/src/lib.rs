@@ -116,6 +116,7 @@ pub use model::{
     FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model,
     ModelBuilder, Owner, PlaneOwner, PointPlaneSpec, Shape, UnknownName,
 };
+pub use model::{GearKind, GearSpec, MAX_GEAR_TEETH};
 pub use model::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 pub use objective::{
     Objective, ObjectiveEval, ObjectiveKind, ObjectiveSpec, Objectives, ObstacleSpec,

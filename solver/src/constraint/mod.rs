@@ -16,6 +16,8 @@
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
+//! | `gear.rs` | gear pair: two revolutes at a ratio of whole numbers, Fig. 12 | 1 | angle |
+//! | `rack_pinion.rs` | rack and pinion: a prismatic following a revolute | 1 | m |
 //! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
@@ -25,12 +27,14 @@ pub(crate) mod block;
 pub(crate) mod bound;
 pub(crate) mod distance;
 pub(crate) mod finger;
+pub(crate) mod gear;
 pub(crate) mod limit;
 mod meta;
 pub(crate) mod perpendicular;
 pub(crate) mod point_plane;
 pub(crate) mod prismatic;
 pub(crate) mod quat_norm;
+pub(crate) mod rack_pinion;
 pub(crate) mod revolute;
 pub(crate) mod spherical;
 pub(crate) mod surface;
@@ -59,6 +63,8 @@ pub(crate) enum Geometry {
     Contact(witness::ContactRows),
     Bound(bound::DesignBound),
     Surface(surface::SurfaceRows),
+    Gear(gear::Gear),
+    RackPinion(rack_pinion::RackPinion),
 }
 
 impl Geometry {
@@ -79,6 +85,8 @@ impl Geometry {
             Self::Contact(c) => c.rows as usize,
             Self::Bound(b) => b.rows(),
             Self::Surface(s) => s.rows as usize,
+            Self::Gear(_) => gear::Gear::ROWS,
+            Self::RackPinion(_) => rack_pinion::RackPinion::ROWS,
         }
     }
 
@@ -112,6 +120,8 @@ impl Geometry {
             Self::Contact(c) => c.pair.groups(),
             Self::Bound(b) => b.groups(),
             Self::Surface(s) => s.pair.groups(),
+            Self::Gear(j) => j.pair.groups(),
+            Self::RackPinion(j) => j.pair.groups(),
         }
     }
 
@@ -134,6 +144,8 @@ impl Geometry {
             // Raw values only, like the norm row.
             Self::Bound(_) => [0, 0],
             Self::Surface(s) => s.pair.frame,
+            Self::Gear(j) => j.pair.frame,
+            Self::RackPinion(j) => j.pair.frame,
         }
     }
 
@@ -155,6 +167,8 @@ impl Geometry {
             Self::Contact(j) => j.eval(x, c, sink),
             Self::Bound(j) => j.eval(x, c, sink),
             Self::Surface(j) => j.eval(x, c, sink),
+            Self::Gear(j) => j.eval(x, c, sink),
+            Self::RackPinion(j) => j.eval(x, c, sink),
         }
     }
 }

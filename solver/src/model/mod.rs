@@ -8,6 +8,7 @@ mod build;
 mod compiler;
 mod contact;
 mod error;
+mod gears;
 mod inequality;
 mod joints;
 mod layout;
@@ -17,6 +18,7 @@ mod surface;
 pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};
+pub use gears::{GearKind, GearSpec, MAX_GEAR_TEETH};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
 pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{

@@ -366,6 +366,9 @@ impl LoadedScene {
         for j in &s.joints {
             builder.joint(joint_spec(j));
         }
+        for g in &s.gears {
+            builder.gear(super::gear::gear_spec(g));
+        }
         for f in &s.fingers {
             let point = f.point.as_ref().map_or([0.0; 3], |p| p.get_ref().get());
             let body = || {
@@ -613,6 +616,20 @@ impl LoadedScene {
                     .filter(|&k| &crate::objective::display_name(&specs, k) == name)
                     .nth(usize::from(matches!(e, BuildError::DuplicateName { .. })));
                 k.map_or(whole, |k| objective_field(&s.objectives[k], e))
+            }
+            Owner::Gear(name) => {
+                let dup = matches!(e, BuildError::DuplicateName { .. });
+                let named: Vec<_> = s
+                    .gears
+                    .iter()
+                    .filter(|g| g.name.get_ref() == name)
+                    .collect();
+                match (named.first(), dup) {
+                    (Some(g), false) => super::gear::gear_field(g, e),
+                    // Used twice among gears: the second; else it repeats a joint's.
+                    (Some(g), true) => named.get(1).unwrap_or(g).name.span(),
+                    (None, _) => whole,
+                }
             }
             Owner::Inequality(_) => whole,
         };

@@ -16,6 +16,7 @@ mod compile;
 mod compile_semantic;
 mod error;
 mod flags;
+mod gear;
 mod polygon;
 mod semantic;
 pub mod spec;

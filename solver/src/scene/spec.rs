@@ -10,6 +10,8 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
 
+pub use super::gear::{GearKindSpec, GearSection};
+
 /// A 3-vector in the file: `[x, y, z]`.
 pub type Vec3 = Arr<f64, 3>;
 /// A quaternion in the file: `[w, x, y, z]` (normalised on load).
@@ -77,6 +79,9 @@ pub struct SceneFile {
     /// `[[joint]]` tables, in file order.
     #[serde(default, rename = "joint")]
     pub joints: Vec<JointSection>,
+    /// `[[gear]]` tables, in file order.
+    #[serde(default, rename = "gear")]
+    pub gears: Vec<GearSection>,
     /// `[[device]]` tables, in file order.
     #[serde(default, rename = "device")]
     pub devices: Vec<DeviceSection>,

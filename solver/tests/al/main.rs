@@ -9,6 +9,7 @@ mod common;
 mod convergence;
 mod design;
 mod force;
+mod gears;
 mod limits;
 mod planar;
 mod program;
