@@ -95,6 +95,22 @@ pub const BUILTIN: &[Builtin] = &[
         name: "dodge",
         text: include_str!("../scenes/dodge.toml"),
     },
+    Builtin {
+        name: "stewart-3rsu",
+        text: include_str!("../scenes/stewart-3rsu.toml"),
+    },
+    Builtin {
+        name: "quarter-torus",
+        text: include_str!("../scenes/quarter-torus.toml"),
+    },
+    Builtin {
+        name: "four-bar-cardan",
+        text: include_str!("../scenes/four-bar-cardan.toml"),
+    },
+    Builtin {
+        name: "piston",
+        text: include_str!("../scenes/piston.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.
