@@ -276,7 +276,8 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         })?;
         extra += ", bodies.csv, contact.svg";
     }
-    if !o.recorder.design_names.is_empty() {
+    // Joint torques alone (the last columns) are not plotted.
+    if o.recorder.design_names.len() > o.recorder.design_torques {
         produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
         extra += ", design.svg";
     }

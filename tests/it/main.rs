@@ -17,4 +17,5 @@ mod semantic;
 mod session;
 mod stability;
 mod sweep;
+mod torque;
 mod trust;

@@ -23,7 +23,8 @@
 //! 4 moving bodies, 28 coordinates; 26 joint rows and 4 norms, of rank 27:
 //! the Cardan's centre is already on both shafts' axes, so its 3 spherical
 //! rows repeat the bearings'; 1 degree of freedom (rank-tested). Finger `index`:
-//! a point at the crank's end B. Gravity −z.
+//! a point at the crank's end B. Gravity −z. The crank pivot reports its
+//! motor torque (§5.2).
 
 use std::f64::consts::PI;
 
@@ -114,7 +115,8 @@ pub fn four_bar_cardan_builder() -> ModelBuilder {
     let cross1 = (pc - pb).normalize().cross(&z);
     let joints = [
         m.joint(K::Revolute, "ground", "crank", pa, Some([z; 2]))
-            .named("crank-pivot"),
+            .named("crank-pivot")
+            .report_torque(),
         m.joint(K::Spherical, "crank", "coupler", pb, None)
             .named("crank-coupler"),
         m.joint(K::Universal, "coupler", "shaft1", pc, Some([cross1, z]))

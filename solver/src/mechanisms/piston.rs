@@ -24,7 +24,9 @@
 //! crank repeats one row (its loop is planar), so the rank is 76 and the
 //! mechanism has 1 degree of freedom (rank-tested); the fast loop masks the
 //! four repeated rows. Finger `index`: a point on the flywheel rim, 4 cm from
-//! the axis, 3 cm in front of cylinder 0. Gravity −z.
+//! the axis, 3 cm in front of cylinder 0. Gravity −z. The main bearing
+//! reports its motor torque (§5.2): what a starter motor on the crankshaft
+//! would need to turn the engine as the hand does.
 
 use std::f64::consts::PI;
 
@@ -90,7 +92,8 @@ pub fn piston_builder() -> ModelBuilder {
     );
     let mut joints = vec![
         m.joint(K::Revolute, "ground", "crankshaft", mid, Some([x; 2]))
-            .named("main"),
+            .named("main")
+            .report_torque(),
         m.joint(K::Revolute, "ground", "camshaft", cam_at, Some([x; 2]))
             .named("cam"),
         m.joint(K::Revolute, "ground", "pump", pump_at, Some([x; 2]))

@@ -175,6 +175,7 @@ impl ModelBuilder {
         let mut out = Assembler::default();
         let mut limits = Vec::new();
         let mut joint_names = HashMap::new();
+        let mut torque_joints = Vec::new();
         for (k, spec) in self.joints.iter().enumerate() {
             let (info, geometry, limit) = compile_joint(k, spec, &mut cx)?;
             if spec.name.is_some() && joint_names.insert(info.name.clone(), ()).is_some() {
@@ -183,6 +184,18 @@ impl ModelBuilder {
                 });
             }
             limits.extend(limit.map(|(info, g)| (info, g, ConstraintId(k as u32))));
+            if spec.report_torque {
+                if !matches!(
+                    info.kind,
+                    ConstraintKind::Revolute | ConstraintKind::Prismatic
+                ) {
+                    return Err(BuildError::TorqueJointKind {
+                        owner: Owner::Joint(info.name),
+                        kind: spec.kind,
+                    });
+                }
+                torque_joints.push(ConstraintId(k as u32));
+            }
             out.push(info, geometry);
         }
         let n_joints = self.joints.len();
@@ -269,6 +282,7 @@ impl ModelBuilder {
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
+            torque_joints,
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;

@@ -331,6 +331,16 @@ pub enum BuildError {
         /// The joint.
         joint: String,
     },
+    /// `report_torque` on a joint without an axis coordinate.
+    #[error(
+        "{owner}: a {kind} joint has no axis to report a torque about; `report_torque` needs a revolute or prismatic joint"
+    )]
+    TorqueJointKind {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
     /// A gear names a joint of the wrong kind (or the same joint twice).
     #[error("{owner}: joint `{joint}` is a {kind} joint; {want}")]
     GearJoint {
@@ -457,6 +467,7 @@ impl BuildError {
             | ChainJointKind { owner, .. }
             | UnknownJoint { owner, .. }
             | NoLimits { owner, .. }
+            | TorqueJointKind { owner, .. }
             | GearJoint { owner, .. }
             | GearBodies { owner, .. }
             | GearRatio { owner, .. }

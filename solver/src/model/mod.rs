@@ -95,6 +95,8 @@ pub struct Model {
     pub(crate) contact: ContactLayout,
     pub(crate) objectives: crate::objective::Objectives,
     pub(crate) semantic: SemanticLayout,
+    /// Joints whose motor torque is reported (`report_torque`), in joint order.
+    pub(crate) torque_joints: Vec<ConstraintId>,
 }
 
 fn next_model_id() -> u64 {
@@ -120,6 +122,12 @@ impl Model {
             .iter()
             .position(|b| b.name == name)
             .map(|i| BodyId(i as u32))
+    }
+
+    /// The joints whose motor torque (or force) is reported, in joint order
+    /// (`report_torque`; revolute or prismatic joints).
+    pub fn torque_joints(&self) -> &[ConstraintId] {
+        &self.torque_joints
     }
 
     /// The fingers, in builder order (also the order of the targets slice).

@@ -295,6 +295,10 @@ pub struct JointSpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the design variables `free` lists (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// Report the torque (revolute, N·m) or force (prismatic, N) a motor on
+    /// this joint's axis would need to produce the mechanism's motion
+    /// (Nelson & Cohen §5.2; `force::torque`).
+    pub report_torque: bool,
 }
 
 impl JointSpec {
@@ -310,7 +314,14 @@ impl JointSpec {
             limits: None,
             free: Vec::new(),
             bounds: None,
+            report_torque: false,
         }
+    }
+
+    /// Reports this joint's motor torque (see [`JointSpec::report_torque`]).
+    pub fn report_torque(mut self) -> Self {
+        self.report_torque = true;
+        self
     }
 
     /// Sets the name.

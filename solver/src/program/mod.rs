@@ -302,6 +302,14 @@ impl Program {
         &self.outputs
     }
 
+    /// The torque (N·m; N on a prismatic joint) a motor on each of the
+    /// model's [`torque_joints`](Model::torque_joints) would need to make
+    /// the last tick's motion in place of the fingers (Nelson & Cohen §5.2;
+    /// `force::torque`); NaN after a failed tick.
+    pub fn joint_torques(&self) -> &[f64] {
+        self.feedback.joint_torques_out()
+    }
+
     /// The last tick's report.
     pub fn last_report(&self) -> &TickReport {
         &self.report

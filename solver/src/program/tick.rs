@@ -334,6 +334,7 @@ impl Program {
         // The stored Jacobian and factor may come from the failed state.
         let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
+        self.feedback.clear_torques();
         TickReport {
             iterations,
             status,

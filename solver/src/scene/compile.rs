@@ -343,6 +343,7 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
     spec.free = j.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = j.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.report_torque = j.report_torque.as_ref().is_some_and(|x| *x.get_ref());
     spec
 }
 
@@ -780,6 +781,7 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         | BuildError::BoundsShape { .. }
         | BuildError::BoundsReversed { .. }
         | BuildError::OutsideBounds { .. } => or_head(j.bounds.as_ref().map(Spanned::span)),
+        BuildError::TorqueJointKind { .. } => or_head(j.report_torque.as_ref().map(Spanned::span)),
         BuildError::UnsupportedFree { param, .. } | BuildError::DuplicateFree { param, .. } => {
             let want = match param {
                 DesignParam::Length => FreeSpec::Length,

@@ -349,6 +349,9 @@ pub struct JointSection {
     /// Bounds on the design variables.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// Report the torque a motor on this joint's axis would need (§5.2).
+    #[serde(default)]
+    pub report_torque: Option<Spanned<bool>>,
 }
 
 /// `[[device]]`.

@@ -90,6 +90,9 @@ fn joint(out: &mut String, j: &JointSpec) {
             .collect();
         let _ = writeln!(out, "free = [{}]", names.join(", "));
     }
+    if j.report_torque {
+        let _ = writeln!(out, "report_torque = true");
+    }
     out.push('\n');
 }
 

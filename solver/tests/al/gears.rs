@@ -31,6 +31,11 @@ const TILT: f64 = 0.4;
 /// the finger at radius `R_F` straight up; the driven one, 0.1 m along x,
 /// carries its mass `ARM` from its axis at angle `phi` above horizontal.
 fn gear_pair(phi: f64) -> Model {
+    gear_pair_with_motor(phi, None)
+}
+
+/// [`gear_pair`] with `report_torque` on the axle `motor`.
+fn gear_pair_with_motor(phi: f64, motor: Option<&str>) -> Model {
     let mut b = ModelBuilder::new();
     b.gravity(G);
     b.body(BodySpec::fixed("ground"));
@@ -43,17 +48,21 @@ fn gear_pair(phi: f64) -> Model {
             .inertia([5e-4, 8e-4, 5e-4]),
     );
     let y = [0.0, 1.0, 0.0];
-    b.joint(
+    let motor_on = |j: JointSpec| match (motor, &j.name) {
+        (Some(m), Some(n)) if m == n => j.report_torque(),
+        _ => j,
+    };
+    b.joint(motor_on(
         JointSpec::new(JointKind::Revolute, "ground", "drive")
             .named("drive-axle")
             .axes(y, y),
-    );
-    b.joint(
+    ));
+    b.joint(motor_on(
         JointSpec::new(JointKind::Revolute, "ground", "driven")
             .named("driven-axle")
             .anchors([0.1, 0.0, 0.0], (Vector3::new(0.1, 0.0, 0.0) - com).into())
             .axes(y, y),
-    );
+    ));
     b.gear(GearSpec::gear("mesh", "drive-axle", "driven-axle", RHO));
     b.finger(FingerSpec::point("index", "drive", [0.0, 0.0, R_F]));
     b.build().expect("gear pair builds")
@@ -163,6 +172,27 @@ fn eq_7_transmits_torque_by_the_gear_ratio() {
             "φ {phi}: finger torque {applied} N·m, expected {tau1}"
         );
         assert!(f.z.abs() < 1e-9 * f.norm().max(1e-12) && f.y.abs() < 1e-9);
+    }
+}
+
+/// §5.2's joint torque through the gears: a motor on the drive axle must
+/// hold −ρ τ₂ against the driven gear's weight, one on the driven axle −τ₂
+/// (τ₂ = m g l cos φ, gravity's torque about +y), whatever the finger does.
+#[test]
+fn a_motor_torque_is_transmitted_by_the_gear_ratio() {
+    for phi in [0.0f64, 0.7, 2.5] {
+        let tau2 = M2 * 9.81 * ARM * phi.cos();
+        for (axle, expected) in [("drive-axle", -RHO * tau2), ("driven-axle", -tau2)] {
+            let model = gear_pair_with_motor(phi, Some(axle));
+            let targets = model.initial_targets();
+            let mut p = program(model, SolverSettings::default());
+            hold(&mut p, &targets, 5);
+            let tau = p.joint_torques()[0];
+            assert!(
+                (tau - expected).abs() < 1e-9 * M2 * 9.81 * ARM,
+                "φ {phi}, motor on {axle}: {tau} N·m, expected {expected}"
+            );
+        }
     }
 }
 

@@ -15,4 +15,5 @@ mod planar;
 mod program;
 mod redundant;
 mod rules;
+mod torque;
 mod unreachable;
