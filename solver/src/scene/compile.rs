@@ -264,30 +264,29 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             directions: o.directions.as_ref().map_or(Vec::new(), |d| {
                 d.get_ref().iter().map(|v| v.get()).collect()
             }),
+            angular_directions: o.angular_directions.as_ref().map_or(Vec::new(), |d| {
+                d.get_ref().iter().map(|v| v.get()).collect()
+            }),
+            closure: names(&o.closure),
         },
         ObjectiveKindSpec::Obstacle => ObjectiveSpec::Obstacle {
             name,
             weight,
-            points: o.points.as_ref().map_or(Vec::new(), |p| {
-                p.get_ref()
-                    .iter()
-                    .map(|r| {
-                        let r = r.get_ref();
-                        (
-                            r.body.get_ref().clone(),
-                            r.point.map_or([0.0; 3], |p| p.get()),
-                        )
-                    })
-                    .collect()
-            }),
-            obstacle: match (&o.obstacle, &o.obstacle_body) {
-                (Some(p), _) => ObstacleSpec::World(p.get_ref().get()),
-                (None, b) => ObstacleSpec::Body {
-                    body: b.as_ref().map_or(String::new(), |b| b.get_ref().clone()),
-                    point_m: point(&o.obstacle_point),
-                },
-            },
+            points: avoiding(o),
+            obstacle: obstacle(o),
             distance_m: o.distance.as_ref().map_or(0.0, |d| *d.get_ref()),
+        },
+        ObjectiveKindSpec::InverseDistance => ObjectiveSpec::InverseDistance {
+            name,
+            weight,
+            points: avoiding(o),
+            obstacle: obstacle(o),
+        },
+        ObjectiveKindSpec::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
+            name,
+            weight,
+            chain: names(&o.chain),
+            point_m: point(&o.point),
         },
         ObjectiveKindSpec::StraightLine => ObjectiveSpec::StraightLine {
             name,
@@ -304,6 +303,37 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             name,
             weight,
             joints: names(&o.joints),
+        },
+    }
+}
+
+/// An `obstacle` or `inverse_distance` objective's `points`.
+fn avoiding(o: &ObjectiveSection) -> Vec<(String, [f64; 3])> {
+    o.points.as_ref().map_or(Vec::new(), |p| {
+        p.get_ref()
+            .iter()
+            .map(|r| {
+                let r = r.get_ref();
+                (
+                    r.body.get_ref().clone(),
+                    r.point.map_or([0.0; 3], |p| p.get()),
+                )
+            })
+            .collect()
+    })
+}
+
+/// An `obstacle` or `inverse_distance` objective's obstacle (validated:
+/// exactly one of `obstacle`, `obstacle_body`).
+fn obstacle(o: &ObjectiveSection) -> ObstacleSpec {
+    match (&o.obstacle, &o.obstacle_body) {
+        (Some(p), _) => ObstacleSpec::World(p.get_ref().get()),
+        (None, b) => ObstacleSpec::Body {
+            body: b.as_ref().map_or(String::new(), |b| b.get_ref().clone()),
+            point_m: o
+                .obstacle_point
+                .as_ref()
+                .map_or([0.0; 3], |p| p.get_ref().get()),
         },
     }
 }
@@ -705,6 +735,7 @@ fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
     match e {
         BuildError::UnknownBody { body, .. } => or_head(
             in_list(&o.chain, body)
+                .or_else(|| in_list(&o.closure, body))
                 .or_else(|| {
                     o.points.as_ref().and_then(|p| {
                         p.get_ref()
@@ -716,7 +747,9 @@ fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
                 .or_else(|| o.body.as_ref().map(Spanned::span))
                 .or_else(|| o.obstacle_body.as_ref().map(Spanned::span)),
         ),
-        BuildError::ChainNotJoined { b, .. } => or_head(in_list(&o.chain, b)),
+        BuildError::ChainNotJoined { b, .. } => {
+            or_head(in_list(&o.chain, b).or_else(|| in_list(&o.closure, b)))
+        }
         BuildError::ChainJointKind { .. } => or_head(o.chain.as_ref().map(Spanned::span)),
         BuildError::UnknownJoint { joint, .. } | BuildError::NoLimits { joint, .. } => {
             or_head(in_list(&o.joints, joint))

@@ -497,6 +497,10 @@ pub enum ObjectiveKindSpec {
     StraightLine,
     /// Joints kept away from their limits.
     JointLimitDistance,
+    /// Eq. 15 as written: 1 / the nearest point's distance.
+    InverseDistance,
+    /// A chain's reachable volume.
+    WorkspaceVolume,
 }
 
 /// `{ body = "…", point = [x, y, z] }` in an objective's `points`.
@@ -535,6 +539,12 @@ pub struct ObjectiveSection {
     /// dexterity: task directions, world frame.
     #[serde(default)]
     pub directions: Option<Spanned<Vec<Vec3>>>,
+    /// dexterity: angular task directions (Eq. 13's angular rows), world frame.
+    #[serde(default)]
+    pub angular_directions: Option<Spanned<Vec<Vec3>>>,
+    /// dexterity: bodies closing the chain into a loop, back to its base.
+    #[serde(default)]
+    pub closure: Option<Spanned<Vec<Spanned<String>>>>,
     /// obstacle: the body points kept away.
     #[serde(default)]
     pub points: Option<Spanned<Vec<Spanned<PointRef>>>>,
@@ -582,6 +592,8 @@ impl ObjectiveSection {
             chain,
             point,
             directions,
+            angular_directions,
+            closure,
             points,
             obstacle,
             obstacle_body,

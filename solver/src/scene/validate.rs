@@ -111,7 +111,15 @@ impl Checker<'_> {
             K::LeastAstonishment => ("least_astonishment", &["weight", "design_weight"], &[]),
             K::Dexterity => (
                 "dexterity",
-                &["name", "weight", "chain", "point", "directions"],
+                &[
+                    "name",
+                    "weight",
+                    "chain",
+                    "point",
+                    "directions",
+                    "angular_directions",
+                    "closure",
+                ],
                 &["chain"],
             ),
             K::Obstacle => (
@@ -133,6 +141,23 @@ impl Checker<'_> {
                 &["body", "line_point", "direction"],
             ),
             K::JointLimitDistance => ("joint_limit_distance", &["name", "weight", "joints"], &[]),
+            K::InverseDistance => (
+                "inverse_distance",
+                &[
+                    "name",
+                    "weight",
+                    "points",
+                    "obstacle",
+                    "obstacle_body",
+                    "obstacle_point",
+                ],
+                &["points"],
+            ),
+            K::WorkspaceVolume => (
+                "workspace_volume",
+                &["name", "weight", "chain", "point"],
+                &["chain"],
+            ),
         };
         let keys = o.keys();
         for (key, span) in &keys {
@@ -155,7 +180,7 @@ impl Checker<'_> {
                 return Err(self.err(o.kind.span(), format!("a {name} objective needs `{need}`")));
             }
         }
-        if kind == K::Obstacle {
+        if matches!(kind, K::Obstacle | K::InverseDistance) {
             match (&o.obstacle, &o.obstacle_body) {
                 (Some(_), Some(b)) => {
                     return Err(self.err(
@@ -166,7 +191,7 @@ impl Checker<'_> {
                 (None, None) => {
                     return Err(self.err(
                         o.kind.span(),
-                        "an obstacle objective needs `obstacle = [x, y, z]` (a world point) or `obstacle_body` (a body's point)",
+                        format!("an {name} objective needs `obstacle = [x, y, z]` (a world point) or `obstacle_body` (a body's point)"),
                     ));
                 }
                 (Some(_), None) => {

@@ -162,6 +162,8 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
         point_m: [0.0; 3],
         directions: Vec::new(),
+        angular_directions: Vec::new(),
+        closure: Vec::new(),
     });
     b.objective(ObjectiveSpec::StraightLine {
         name: None,
