@@ -260,8 +260,8 @@ fn coupling(
     let world = cx.frames.len() - 1;
     let mut moving: Vec<(usize, usize)> = Vec::new(); // (frame, column)
     let mut map = [[None; 2]; 2];
-    for (k, p) in pairs.iter().enumerate() {
-        for end in 0..2 {
+    for (p, ends) in pairs.iter().zip(map.iter_mut()) {
+        for (end, slot) in ends.iter_mut().enumerate() {
             let Some(col) = p.col[end] else { continue };
             let f = p.frame[end];
             let at = match moving.iter().position(|&(g, _)| g == f) {
@@ -271,7 +271,7 @@ fn coupling(
                     moving.len() - 1
                 }
             };
-            map[k][end] = Some(at as u8);
+            *slot = Some(at as u8);
         }
     }
     if moving.len() > 2 {

@@ -192,6 +192,9 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
     Ok(out)
 }
 
+/// Body points kept away from an obstacle (body, point in its frame).
+type Avoiding = Vec<(BodyId, Vector3<f64>)>;
+
 /// The avoiding points and the obstacle of `obstacle` and
 /// `inverse_distance`.
 fn avoided(
@@ -200,7 +203,7 @@ fn avoided(
     obstacle: &ObstacleSpec,
     owner: &dyn Fn() -> Owner,
     bad: Bad,
-) -> Result<(Vec<(BodyId, Vector3<f64>)>, Obstacle), BuildError> {
+) -> Result<(Avoiding, Obstacle), BuildError> {
     let finite = |field: &'static str, v: &[f64]| {
         if v.iter().all(|x| x.is_finite()) {
             Ok(())

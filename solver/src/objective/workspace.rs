@@ -95,7 +95,8 @@ impl Workspace {
         let n = self.links.len();
         let (r_max, r_min, longest) = shell((0..n).map(|k| self.length(q, k).0));
         let v = shell_volume(r_max, r_min);
-        if !(v > 0.0) {
+        // Also a NaN volume: no gradient.
+        if v.is_nan() || v <= 0.0 {
             return self.value(q);
         }
         let c = -w * self.scale_m2 / 3.0 / v;

@@ -81,7 +81,7 @@ fn tick_allocates_nothing_sphere_toy() {
 fn tick_allocates_nothing_piston_with_joint_torques() {
     let src = haptloop_solver::mechanisms::piston_builder();
     let mut b = haptloop_solver::ModelBuilder::new();
-    b.gravity(src.gravity_m_s2().into());
+    b.gravity(src.gravity_m_s2());
     for s in src.body_specs() {
         b.body(s.clone());
     }
