@@ -269,3 +269,39 @@ impl DesignColumns {
             .map(|g| &g[1..])
     }
 }
+
+/// The design flags of a run (`[[design_flag]]`, `--design-on/off`): the
+/// fast loop switches each variable on or off at its session time, before
+/// the tick that starts at or after it (Nelson & Cohen §3's flags).
+///
+/// # Real-time
+/// [`DesignSchedule::apply`] allocates nothing: a cursor over a list made
+/// before the run.
+#[derive(Debug, Clone, Default)]
+pub struct DesignSchedule {
+    /// (time, design variable index, on), by time.
+    events: Vec<(f64, usize, bool)>,
+    next: usize,
+}
+
+impl DesignSchedule {
+    /// From the scene's switches (sorted by time). Allocates.
+    pub fn new(flags: &[haptloop_solver::scene::DesignFlagDecl]) -> Self {
+        Self {
+            events: flags.iter().map(|f| (f.at_s, f.var, f.on)).collect(),
+            next: 0,
+        }
+    }
+
+    /// Applies every switch due at `t_s` to `program`.
+    #[inline]
+    pub fn apply(&mut self, t_s: f64, program: &mut Program) {
+        while let Some(&(at, var, on)) = self.events.get(self.next) {
+            if at > t_s {
+                break;
+            }
+            let _ = program.set_design_active(var, on);
+            self.next += 1;
+        }
+    }
+}

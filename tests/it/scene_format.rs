@@ -141,6 +141,10 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
         ),
         ("[[gear]]", format!("{base}\n[[gear]]\nzz_unknown = 1\n")),
         (
+            "[[design_flag]]",
+            format!("{base}\n[[design_flag]]\nzz_unknown = 1\n"),
+        ),
+        (
             "[[gear]] kind values",
             format!("{base}\n[[gear]]\nkind = \"zz_unknown\"\n"),
         ),

@@ -57,6 +57,7 @@
 
 mod contact;
 mod converged;
+mod design_flags;
 mod objective;
 mod report;
 mod semantic;
@@ -129,6 +130,8 @@ pub struct Program {
     objective: Option<objective::ObjectivePull>,
     /// Snap ramps and grouped carrying (models with semantic rows).
     semantic: Option<semantic::SemanticState>,
+    /// Per design column: switched off (`design_flags`).
+    design_off: Vec<bool>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -241,6 +244,7 @@ impl Program {
             semantic: semantic::SemanticState::new(&model),
             friction_slot,
             friction_pair,
+            design_off: vec![false; n - model.layout().body_coords()],
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
             g: vec![0.0; n],

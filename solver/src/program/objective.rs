@@ -114,6 +114,12 @@ impl Program {
                 }
             }
         }
+        // Switched-off design variables stay put.
+        for (s, &off) in o.shift[nb..].iter_mut().zip(&self.design_off) {
+            if off {
+                *s = 0.0;
+            }
+        }
         let size = o
             .shift
             .iter()

@@ -188,7 +188,10 @@ impl Program {
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
-                UpdateRule::Gradient => self.gradient_step(targets).map(|()| Step::Taken(0.0)),
+                UpdateRule::Gradient => self.gradient_step(targets).map(|()| {
+                    self.hold_design_off();
+                    Step::Taken(0.0)
+                }),
                 UpdateRule::Projected => self.projected_step(targets, self.settings.step, allowed),
             };
             match done {

@@ -164,6 +164,9 @@ pub struct CompiledScene {
     pub semantic: Option<crate::semantic::SemanticSpec>,
     /// The contact fingers' scheduled holds.
     pub holds: Vec<HoldDecl>,
+    /// Design variables switched on and off during the run, by time
+    /// (`[[design_flag]]`, plus any `--design-on` / `--design-off`).
+    pub design_flags: Vec<super::DesignFlagDecl>,
 }
 
 fn settings(s: &SolverSection) -> SceneSettings {
@@ -439,6 +442,7 @@ impl LoadedScene {
         );
         let semantic = self.compile_semantic(&model, penetration)?;
         let holds = self.compile_holds(&model);
+        let design_flags = self.compile_design_flags(&model)?;
 
         let devices = s
             .devices
@@ -486,6 +490,7 @@ impl LoadedScene {
                 .sum(),
             semantic,
             holds,
+            design_flags,
         })
     }
 

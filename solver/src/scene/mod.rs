@@ -14,6 +14,7 @@
 
 mod compile;
 mod compile_semantic;
+mod design_flags;
 mod error;
 mod flags;
 mod gear;
@@ -25,6 +26,7 @@ mod write;
 
 pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
 pub use compile_semantic::HoldDecl;
+pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_switches};
 pub use error::SceneError;
 pub use flags::Flagged;
 pub use write::mechanism_tables;

@@ -91,6 +91,9 @@ pub struct SceneFile {
     /// `[[objective]]` tables, in file order.
     #[serde(default, rename = "objective")]
     pub objectives: Vec<ObjectiveSection>,
+    /// `[[design_flag]]` tables: design variables switched on and off.
+    #[serde(default, rename = "design_flag")]
+    pub design_flags: Vec<super::design_flags::DesignFlagSection>,
     /// `[labels]`: each key is ≤ every label in its list (a partial order).
     #[serde(default)]
     pub labels: BTreeMap<Spanned<String>, Spanned<Vec<Spanned<String>>>>,

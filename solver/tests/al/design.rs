@@ -225,3 +225,59 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         assert!(p.objective_reports().iter().all(|v| v.is_finite()));
     }
 }
+
+/// Nelson & Cohen §3's flags: the strut's free length switched off stays
+/// exactly where it is while the finger pulls 3 cm outward (the bob stays on
+/// its circle), and switched back on it follows the finger; under both
+/// update rules. A hand-over and a saved tick state carry the flag.
+#[test]
+fn a_design_variable_switched_off_holds_and_switched_on_moves_again() {
+    for update in [UpdateRule::Projected, UpdateRule::Gradient] {
+        let model = strut(None);
+        let col = model.layout().design_vars()[0].offset;
+        let mut p = program(model.clone(), update);
+        p.set_design_active(0, false).unwrap();
+        assert!(!p.design_active(0));
+        let mut t = p.model().initial_targets();
+        for k in 0..300 {
+            t[0].position_m.x = 0.1 + 0.03 * (k as f64 / 100.0).min(1.0);
+            let r = p.tick(&t, DT);
+            assert_eq!(r.status, TickOutcome::Ok, "{update:?}, tick {k}");
+            assert_eq!(p.q()[col], 0.1, "{update:?}, tick {k}: the length moved");
+            // Eq. 3 holds a strut the finger pulls on to its penalty's
+            // balance (tens of µm); the projected step to round-off.
+            let tol = if update == UpdateRule::Gradient {
+                1e-4
+            } else {
+                1e-9
+            };
+            assert!(
+                r.max_violation_m < tol,
+                "{update:?}: {:e}",
+                r.max_violation_m
+            );
+        }
+        // A replacement program (a hand-over) and a replayed tick keep it off.
+        let mut fresh = program(model.clone(), update);
+        fresh.adopt_state(&p);
+        assert!(!fresh.design_active(0));
+        let before = p.tick_state();
+        p.tick(&t, DT);
+        let after = p.tick_state();
+        let mut reference = program(model, UpdateRule::Projected);
+        let c = reference
+            .converged_tick(&before, &after, &t, DT.as_secs_f64(), 1e-12, 50)
+            .unwrap();
+        assert_eq!(c.status, TickOutcome::Ok);
+        assert_eq!(reference.q()[col], 0.1, "{update:?}: the replay moved it");
+        p.set_design_active(0, true).unwrap();
+        for _ in 0..600 {
+            p.tick(&t, DT);
+        }
+        let length = p.q()[col];
+        assert!(
+            (length - 0.13).abs() < 2e-3,
+            "{update:?}: switched on, length {length}"
+        );
+    }
+}
