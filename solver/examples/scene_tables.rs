@@ -13,7 +13,7 @@ fn main() {
         [n, d] => (n.as_str(), d.clone()),
         _ => {
             eprintln!(
-                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered|piston|stewart-3rsu|four-bar-cardan|quarter-torus> <device-name>"
+                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered|piston|stewart-3rsu|four-bar-cardan|quarter-torus|bennett|lattice|lattice-RxC|chain|chain-N> <device-name>"
             );
             std::process::exit(2);
         }
@@ -27,6 +27,26 @@ fn main() {
         "stewart-3rsu" => mechanisms::stewart_3rsu_builder(),
         "four-bar-cardan" => mechanisms::four_bar_cardan_builder(),
         "quarter-torus" => mechanisms::quarter_torus_builder(mechanisms::TORUS_GAP_M),
+        "bennett" => mechanisms::bennett_builder(),
+        "lattice" => mechanisms::lattice_builder(),
+        "chain" => mechanisms::chain_builder(),
+        sized if sized.starts_with("lattice-") => {
+            let shape = sized["lattice-".len()..]
+                .split_once('x')
+                .and_then(|(r, c)| Some((r.parse().ok()?, c.parse().ok()?)));
+            let Some((rows, cols)) = shape else {
+                eprintln!("sized lattices: lattice-RxC, e.g. lattice-2x8");
+                std::process::exit(2);
+            };
+            mechanisms::lattice_sized(rows, cols)
+        }
+        sized if sized.starts_with("chain-") => {
+            let Ok(links) = sized["chain-".len()..].parse() else {
+                eprintln!("sized chains: chain-N, e.g. chain-16");
+                std::process::exit(2);
+            };
+            mechanisms::chain_sized(links)
+        }
         sized if sized.starts_with("sphere-toy-") => {
             let shape = sized["sphere-toy-".len()..]
                 .parse()
@@ -40,7 +60,7 @@ fn main() {
         }
         other => {
             eprintln!(
-                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N, cluttered, piston, stewart-3rsu, four-bar-cardan or quarter-torus"
+                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N, cluttered, piston, stewart-3rsu, four-bar-cardan, quarter-torus, bennett, lattice, lattice-RxC, chain or chain-N"
             );
             std::process::exit(2);
         }

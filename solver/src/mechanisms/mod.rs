@@ -11,22 +11,33 @@
 //! | [`quarter_torus`] (Figs. 6/7) | 4 | 4 R in a loop | point on a part | 7 (floating) |
 //! | [`four_bar_cardan`] (Fig. 11) | 4 (+ ground) | 3 R, S, 2 U | point on the crank | 1 |
 //! | [`piston`] (Fig. 12) | 11 (+ ground) | 7 R, 4 S, 4 P, 2 gears | point on the flywheel | 1 |
+//! | [`bennett`] | 3 (+ ground) | 4 R (3 rows redundant) | point on the link opposite the ground | 1 |
+//! | [`lattice`] | 132 bars (+ ground) | 196 R, planar (192 rows redundant) | point on a top corner bar | 4 |
+//! | [`chain`] | 64 (+ ground) | 63 U + 2 S, one long loop | point on the middle link | 126 |
 //!
 //! All are written in world coordinates first (joint points and axes) and
 //! converted to body-frame anchors and axes by a private `Assembly` helper, which makes
 //! the initial configuration exact.
 
+mod bennett;
 mod cardan;
+mod chain;
 mod cluttered;
 mod four_bar;
+mod lattice;
 mod piston;
 mod quarter_torus;
 mod sphere_toy;
 mod stewart;
 mod stewart_3rsu;
 
+pub use bennett::{BENNETT_A_M, BENNETT_B_M, bennett, bennett_builder};
+pub use chain::{CHAIN_LINK_KG, CHAIN_LINK_M, chain, chain_builder, chain_sized};
 pub use cluttered::{CLUTTER_SPACING_M, DRAGGED_HALF_M, clutter_side, cluttered_builder};
 pub use four_bar::{four_bar, four_bar_builder};
+pub use lattice::{
+    LATTICE_BAR_KG, LATTICE_BAR_M, lattice, lattice_builder, lattice_shape, lattice_sized,
+};
 pub use sphere_toy::{
     SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder, sphere_toy_shape, sphere_toy_sized,
 };
