@@ -60,6 +60,8 @@ use super::sym6::{det_adjugate, pseudo_inverse};
 use crate::BodyId;
 use crate::constraint::block::Param3;
 
+pub(crate) use super::dexterity_loop::DexScratch;
+
 /// The floor ε on det G (J̃ dimensionless): f never exceeds 1/√ε = 10⁴.
 pub const DET_FLOOR: f64 = 1e-8;
 
@@ -109,37 +111,6 @@ pub(crate) struct Dexterity {
     pub closed: bool,
 }
 
-/// Per-column buffers, allocated once by `ObjectiveEval`.
-#[derive(Debug, Clone)]
-pub(crate) struct DexScratch {
-    /// s_c, then J̃'s column, W_J's and W_H's.
-    s: Vec<Vector6<f64>>,
-    j: Vec<Vector6<f64>>,
-    wj: Vec<Vector6<f64>>,
-    wh: Vec<Vector6<f64>>,
-    /// H⁺ (n × 6, one row per column) and P (n × n, row-major).
-    hp: Vec<Vector6<f64>>,
-    p: Vec<f64>,
-    /// An orthonormal basis of H's row space (up to 6 rows of n).
-    basis: Vec<f64>,
-}
-
-impl DexScratch {
-    /// For chains of up to `columns` columns.
-    pub fn new(columns: usize) -> Self {
-        let v = vec![Vector6::zeros(); columns];
-        Self {
-            s: v.clone(),
-            j: v.clone(),
-            wj: v.clone(),
-            wh: v.clone(),
-            hp: v,
-            p: vec![0.0; columns * columns],
-            basis: vec![0.0; 6 * columns],
-        }
-    }
-}
-
 /// G's determinant and adjugate (padded to 6 × 6).
 struct Gram {
     det: f64,
@@ -186,7 +157,7 @@ impl Dexterity {
     }
 
     /// s_c and J̃'s columns into `x`; for a loop, H⁺ and P too.
-    fn columns(&self, g: &BodyGrad, q: &[f64], x: &mut DexScratch) -> Option<()> {
+    pub(super) fn columns(&self, g: &BodyGrad, q: &[f64], x: &mut DexScratch) -> Option<()> {
         let (tip, _) = self.tip(g);
         let r = self.reach_m;
         let n = self.columns.len();
@@ -217,50 +188,6 @@ impl Dexterity {
             self.projector(x);
         }
         Some(())
-    }
-
-    /// P = I − Σ_k u_k u_kᵀ over an orthonormal basis u_k of H's row space,
-    /// by modified Gram–Schmidt run twice ("twice is enough"): accurate to
-    /// round-off times H's condition, where I − H⁺H through (H Hᵀ)⁺ would
-    /// square it (F's value then carries that error, 1e-11 measured, and
-    /// finite differences of it go astray). A row whose part outside the
-    /// others is below [`LOOP_ROW_TOLERANCE`] of its length is dependent.
-    fn projector(&self, x: &mut DexScratch) {
-        let n = self.columns.len();
-        let mut basis = 0;
-        for row in 0..6 {
-            let u = &mut x.basis[basis * n..(basis + 1) * n];
-            for (c, v) in u.iter_mut().enumerate() {
-                *v = x.s[c][row];
-            }
-            let norm0 = u.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm0 == 0.0 {
-                continue;
-            }
-            for _ in 0..2 {
-                for k in 0..basis {
-                    let (done, rest) = x.basis.split_at_mut(basis * n);
-                    let b = &done[k * n..(k + 1) * n];
-                    let u = &mut rest[..n];
-                    let d: f64 = b.iter().zip(u.iter()).map(|(p, q)| p * q).sum();
-                    u.iter_mut().zip(b).for_each(|(q, p)| *q -= d * p);
-                }
-            }
-            let u = &mut x.basis[basis * n..(basis + 1) * n];
-            let norm = u.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm > LOOP_ROW_TOLERANCE * norm0 {
-                u.iter_mut().for_each(|v| *v /= norm);
-                basis += 1;
-            }
-        }
-        for a in 0..n {
-            for b in 0..n {
-                let q: f64 = (0..basis)
-                    .map(|k| x.basis[k * n + a] * x.basis[k * n + b])
-                    .sum();
-                x.p[a * n + b] = if a == b { 1.0 } else { 0.0 } - q;
-            }
-        }
     }
 
     /// G (padded with ones), its determinant and adjugate.
@@ -374,18 +301,6 @@ impl Dexterity {
             }
         }
         value
-    }
-
-    /// The loop's degrees of freedom at q: columns minus the rank of H.
-    /// Allocates (build time).
-    pub fn loop_dof(&self, g: &BodyGrad, q: &[f64]) -> usize {
-        let mut x = DexScratch::new(self.columns.len());
-        if self.columns(g, q, &mut x).is_none() {
-            return 0;
-        }
-        let n = self.columns.len();
-        let hht: Matrix6<f64> = x.s[..n].iter().map(|s| s * s.transpose()).sum();
-        pseudo_inverse(&hht, LOOP_RANK_TOLERANCE).map_or(0, |(_, rank)| n - rank)
     }
 
     /// W_J and W_H (see the module docs) into `x.wj`, `x.wh`.

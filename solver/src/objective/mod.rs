@@ -34,7 +34,9 @@
 //! values and gradients with zero allocation.
 
 mod compile;
+mod compile_chain;
 mod dexterity;
+mod dexterity_loop;
 mod grad;
 mod inverse_distance;
 mod joint_limit;
