@@ -64,6 +64,12 @@ pub enum ConstraintKind {
     Gear,
     /// A prismatic joint (rack) following a revolute (pinion): 1 row, m.
     RackPinion,
+    /// A point held on a parametric surface with its (u, v) coordinates
+    /// (Nelson & Cohen App. E; `crate::parametric`): 3 rows, m.
+    OnSurface,
+    /// A ball rolling without slipping on a surface: the contact point's
+    /// tangential displacement over a tick (nonholonomic): 2 rows, m.
+    Rolling,
 }
 
 impl ConstraintKind {
@@ -73,7 +79,7 @@ impl ConstraintKind {
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
             | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin
-            | SurfacePlane | SurfaceInclusion | Hold | RackPinion => {
+            | SurfacePlane | SurfaceInclusion | Hold | RackPinion | OnSurface | Rolling => {
                 return RowUnit::Length;
             }
             Perpendicular | RevoluteLimit | Gear => return RowUnit::Angle,
@@ -127,6 +133,8 @@ impl ConstraintKind {
             Hold => "hold",
             Gear => "gear",
             RackPinion => "rack_pinion",
+            OnSurface => "on_surface",
+            Rolling => "rolling",
         }
     }
 }

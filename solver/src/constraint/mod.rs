@@ -18,6 +18,7 @@
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
 //! | `gear.rs` | gear pair: two revolutes at a ratio of whole numbers, Fig. 12 | 1 | angle |
 //! | `rack_pinion.rs` | rack and pinion: a prismatic following a revolute | 1 | m |
+//! | `crate::parametric` | `on_surface` (3 rows, m, with (u, v) columns) and `rolling` (2 rows, m) | 3 / 2 | m |
 //! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
@@ -65,6 +66,8 @@ pub(crate) enum Geometry {
     Surface(surface::SurfaceRows),
     Gear(gear::Gear),
     RackPinion(rack_pinion::RackPinion),
+    OnSurface(crate::parametric::contact::OnSurface),
+    Rolling(crate::parametric::rolling::Rolling),
 }
 
 impl Geometry {
@@ -87,6 +90,8 @@ impl Geometry {
             Self::Surface(s) => s.rows as usize,
             Self::Gear(_) => gear::Gear::ROWS,
             Self::RackPinion(_) => rack_pinion::RackPinion::ROWS,
+            Self::OnSurface(_) => crate::parametric::contact::OnSurface::ROWS,
+            Self::Rolling(_) => crate::parametric::rolling::Rolling::ROWS,
         }
     }
 
@@ -122,6 +127,8 @@ impl Geometry {
             Self::Surface(s) => s.pair.groups(),
             Self::Gear(j) => j.pair.groups(),
             Self::RackPinion(j) => j.pair.groups(),
+            Self::OnSurface(s) => s.pair.groups(),
+            Self::Rolling(r) => r.pair.groups(),
         }
     }
 
@@ -146,6 +153,33 @@ impl Geometry {
             Self::Surface(s) => s.pair.frame,
             Self::Gear(j) => j.pair.frame,
             Self::RackPinion(j) => j.pair.frame,
+            Self::OnSurface(s) => s.pair.frame,
+            Self::Rolling(r) => r.pair.frame,
+        }
+    }
+
+    /// The anchors of the two ends (constants for the kinds without a pair
+    /// of anchors): where a flexible body's deforming points are found.
+    pub fn anchors(&self) -> [block::Param3; 2] {
+        let none = [block::Param3::Const(nalgebra::Vector3::zeros()); 2];
+        match self {
+            Self::Spherical(j) => j.pair.anchor,
+            Self::Perpendicular(j) => j.pair.anchor,
+            Self::Universal(j) => j.pair.anchor,
+            Self::Revolute(j) => j.pair.anchor,
+            Self::Prismatic(j) => j.pair.anchor,
+            Self::Weld(j) => j.pair.anchor,
+            Self::Distance(j) => j.pair.anchor,
+            Self::PointPlane(j) => j.pair.anchor,
+            Self::Finger(j) => j.pair.anchor,
+            Self::Limit(j) => j.pair().anchor,
+            Self::Contact(c) => c.pair.anchor,
+            Self::Surface(s) => s.pair.anchor,
+            Self::OnSurface(s) => s.pair.anchor,
+            Self::Rolling(r) => r.pair.anchor,
+            Self::Gear(j) => j.pair.anchor,
+            Self::RackPinion(j) => j.pair.anchor,
+            Self::QuatNorm(_) | Self::Bound(_) => none,
         }
     }
 
@@ -169,6 +203,8 @@ impl Geometry {
             Self::Surface(j) => j.eval(x, c, sink),
             Self::Gear(j) => j.eval(x, c, sink),
             Self::RackPinion(j) => j.eval(x, c, sink),
+            Self::OnSurface(j) => j.eval(x, c, sink),
+            Self::Rolling(j) => j.eval(x, c, sink),
         }
     }
 }

@@ -61,6 +61,8 @@ pub(crate) struct JointTorques {
     /// τ_i of the last solve: N·m (revolute) or N (prismatic); NaN when the
     /// last tick failed.
     pub torque: Vec<f64>,
+    /// The model's deforming points (a motor joint on a flexible body).
+    flex: Vec<crate::flexible::anchor::FlexAnchor>,
 }
 
 impl JointTorques {
@@ -93,6 +95,7 @@ impl JointTorques {
             r: vec![0.0; k],
             eig: vec![0.0; k * k],
             torque: vec![f64::NAN; k],
+            flex: model.flex_anchors.clone(),
         })
     }
 
@@ -123,6 +126,9 @@ impl JointTorques {
             frames: ev.frames(),
             targets: &[],
             witnesses: &[],
+            flex: &self.flex,
+            surfaces: &[],
+            rolling: &[],
         };
         let jac = ev.jacobian();
         for i in 0..k {

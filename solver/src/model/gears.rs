@@ -197,7 +197,7 @@ pub(super) fn compile_gear(
                 .pair
                 .anchor
                 .iter()
-                .any(|a| matches!(a, Param3::Free(_)))
+                .any(|a| matches!(a, Param3::Free(_) | Param3::Flex(_)))
                 || rack
                     .pair
                     .frame
@@ -209,11 +209,15 @@ pub(super) fn compile_gear(
                     joint: s.joints[1].clone(),
                 });
             }
+            // No flexible anchors here (refused above with design ones).
             let x = Ctx {
                 q: &[],
                 frames: cx.frames,
                 targets: &[],
                 witnesses: &[],
+                flex: &[],
+                surfaces: &[],
+                rolling: &[],
             };
             Geometry::RackPinion(RackPinion {
                 pair,

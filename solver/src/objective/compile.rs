@@ -301,6 +301,12 @@ fn workspace(
             }
         };
         let end = usize::from(pair.frame[1] == b.index());
+        if matches!(pair.anchor[end], Param3::Flex(_)) {
+            return Err(bad(
+                "chain",
+                "rigid bodies (a flexible body's links have no fixed length)",
+            ));
+        }
         Ok(pair.anchor[end])
     };
     let mut links = Vec::new();

@@ -65,6 +65,7 @@ pub(super) fn dexterity(
         let k0 = match p.anchor[0] {
             Param3::Const(v) => v,
             Param3::Free(c) => Vector3::new(model.q0()[c], model.q0()[c + 1], model.q0()[c + 2]),
+            Param3::Flex(i) => model.flex_anchors[i as usize].k,
         };
         points.push(f.point(&k0));
     }

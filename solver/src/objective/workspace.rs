@@ -54,6 +54,8 @@ fn at(q: &[f64], p: &Param3) -> Vector3<f64> {
     match *p {
         Param3::Const(v) => v,
         Param3::Free(c) => Vector3::new(q[c], q[c + 1], q[c + 2]),
+        // Refused when the objective is compiled (`objective::compile`).
+        Param3::Flex(_) => Vector3::repeat(f64::NAN),
     }
 }
 
