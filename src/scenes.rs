@@ -99,6 +99,22 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/dodge.toml"),
     },
     Builtin {
+        name: "stewart-3rsu",
+        text: include_str!("../scenes/stewart-3rsu.toml"),
+    },
+    Builtin {
+        name: "quarter-torus",
+        text: include_str!("../scenes/quarter-torus.toml"),
+    },
+    Builtin {
+        name: "four-bar-cardan",
+        text: include_str!("../scenes/four-bar-cardan.toml"),
+    },
+    Builtin {
+        name: "piston",
+        text: include_str!("../scenes/piston.toml"),
+    },
+    Builtin {
         name: "bennett",
         text: include_str!("../scenes/bennett.toml"),
     },

@@ -13,7 +13,7 @@ fn main() {
         [n, d] => (n.as_str(), d.clone()),
         _ => {
             eprintln!(
-                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered|bennett|lattice|lattice-RxC|chain|chain-N> <device-name>"
+                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered|piston|stewart-3rsu|four-bar-cardan|quarter-torus|bennett|lattice|lattice-RxC|chain|chain-N> <device-name>"
             );
             std::process::exit(2);
         }
@@ -23,6 +23,10 @@ fn main() {
         "stewart" => mechanisms::stewart_builder(),
         "sphere-toy" => mechanisms::sphere_toy_builder(),
         "cluttered" => mechanisms::cluttered_builder(100),
+        "piston" => mechanisms::piston_builder(),
+        "stewart-3rsu" => mechanisms::stewart_3rsu_builder(),
+        "four-bar-cardan" => mechanisms::four_bar_cardan_builder(),
+        "quarter-torus" => mechanisms::quarter_torus_builder(mechanisms::TORUS_GAP_M),
         "bennett" => mechanisms::bennett_builder(),
         "lattice" => mechanisms::lattice_builder(),
         "chain" => mechanisms::chain_builder(),
@@ -56,7 +60,7 @@ fn main() {
         }
         other => {
             eprintln!(
-                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N, cluttered, bennett, lattice, lattice-RxC, chain or chain-N"
+                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N, cluttered, piston, stewart-3rsu, four-bar-cardan, quarter-torus, bennett, lattice, lattice-RxC, chain or chain-N"
             );
             std::process::exit(2);
         }

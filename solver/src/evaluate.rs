@@ -126,6 +126,11 @@ impl Evaluation {
         &self.values
     }
 
+    /// Every body's frame at the last evaluation, then the world's.
+    pub(crate) fn frames(&self) -> &[BodyFrame] {
+        &self.frames
+    }
+
     /// C_q at the last successful [`evaluate`](Self::evaluate).
     pub fn jacobian(&self) -> &Jacobian {
         &self.jacobian

@@ -120,6 +120,7 @@ pub use model::{
     MAX_FINGERTIP_RADIUS_M, MAX_FRICTION, Model, ModelBuilder, Owner, PlaneOwner, PointPlaneSpec,
     Shape, UnknownName,
 };
+pub use model::{GearKind, GearSpec, MAX_GEAR_TEETH};
 pub use model::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 pub use objective::{
     Objective, ObjectiveEval, ObjectiveKind, ObjectiveSpec, Objectives, ObstacleSpec,

@@ -83,6 +83,15 @@ pub struct RunArgs {
     /// e.g. `dexterity:chain=[base,upper,fore],point=[0.1,0,0],weight=0.01`.
     #[arg(long, value_name = "KIND:KEY=VALUE,…")]
     pub objective: Vec<String>,
+    /// Switches a design variable off at a session time (repeatable):
+    /// `NAME@SECONDS`, e.g. `rocker.anchor_j@2.5`; held where it is until
+    /// switched on again (Nelson & Cohen's design flags; `[[design_flag]]`).
+    #[arg(long, value_name = "NAME@SECONDS")]
+    pub design_off: Vec<String>,
+    /// Switches a design variable back on at a session time (repeatable):
+    /// `NAME@SECONDS`.
+    #[arg(long, value_name = "NAME@SECONDS")]
+    pub design_on: Vec<String>,
 }
 
 impl Default for RunArgs {
@@ -105,6 +114,8 @@ impl Default for RunArgs {
             quiet: false,
             free: Vec::new(),
             objective: Vec::new(),
+            design_off: Vec::new(),
+            design_on: Vec::new(),
         }
     }
 }
@@ -146,7 +157,9 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     };
-    let scene = match with_design_flags(scene, &args.free, &args.objective) {
+    let scene = match with_design_flags(scene, &args.free, &args.objective)
+        .and_then(|s| with_design_switches(s, &args.design_on, &args.design_off))
+    {
         Ok(s) => s,
         Err(e) => {
             eprintln!("{e}");
@@ -331,6 +344,24 @@ fn with_design_flags(
     check_loaded(flagged.loaded.clone()).map_err(|e| flagged.attribute(e))
 }
 
+/// The scene with `--design-on` / `--design-off` switches added to its
+/// `[[design_flag]]` schedule. An error names the flag (exit status 2).
+pub fn with_design_switches(
+    mut scene: Scene,
+    on: &[String],
+    off: &[String],
+) -> Result<Scene, haptloop_solver::scene::SceneError> {
+    use haptloop_solver::scene::{design_switch, with_switches};
+    let model = &scene.compiled.model;
+    let switches = off
+        .iter()
+        .map(|v| design_switch(v, false, model))
+        .chain(on.iter().map(|v| design_switch(v, true, model)))
+        .collect::<Result<Vec<_>, _>>()?;
+    scene.compiled.design_flags = with_switches(&scene.compiled.design_flags, switches);
+    Ok(scene)
+}
+
 fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Result<()> {
     let write = |name: &str, text: String| write_atomic(&dir.join(name), text.as_bytes());
     write(
@@ -379,7 +410,8 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
         })?;
         extra += ", bodies.csv, contact.svg";
     }
-    if !o.recorder.design_names.is_empty() {
+    // Joint torques alone (the last columns) are not plotted.
+    if o.recorder.design_names.len() > o.recorder.design_torques {
         produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
         extra += ", design.svg";
     }

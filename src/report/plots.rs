@@ -250,6 +250,8 @@ pub fn design(path: &Path, o: &SessionOutcome) -> Result<()> {
     let (vars, objs) = r
         .design_series
         .split_at(r.design_variables.min(r.design_series.len()));
+    // Joint torques (at the end) are in trace.csv and summary.json only.
+    let objs = &objs[..objs.len().saturating_sub(r.design_torques)];
     let names = |from: usize, n: usize| -> Vec<&str> {
         r.design_names[from..from + n]
             .iter()

@@ -288,6 +288,19 @@ fn design_lines(out: &mut String, s: &Summary) {
             );
         }
     }
+    if !s.joint_torques.is_empty() {
+        let _ = writeln!(
+            out,
+            "joint torques (N·m; N on a slider), a motor's on each axis: start → end [min, max]"
+        );
+        for (name, d) in &s.joint_torques {
+            let _ = writeln!(
+                out,
+                "  {name:<24} {:>10.4} → {:>10.4}  [{:.4}, {:.4}]",
+                d.start, d.end, d.min, d.max
+            );
+        }
+    }
     if !s.objectives.is_empty() {
         let _ = writeln!(out, "objectives: start → end [min, max]");
         for (name, o) in &s.objectives {

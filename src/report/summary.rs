@@ -517,6 +517,10 @@ pub struct Summary {
     /// objectives).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub objectives: BTreeMap<String, ObjectiveFigure>,
+    /// Each named joint's motor torque over the run (Nelson & Cohen §5.2;
+    /// N·m, N on a prismatic joint; absent without `report_torque`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub joint_torques: BTreeMap<String, DesignFigure>,
 }
 
 impl Summary {
@@ -723,6 +727,12 @@ impl Summary {
                         },
                     )
                 })
+                .collect(),
+            joint_torques: o
+                .design
+                .torques
+                .iter()
+                .map(|(n, r)| (n.clone(), (*r).into()))
                 .collect(),
         }
     }

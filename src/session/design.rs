@@ -1,11 +1,14 @@
 //! What a designer sees of design variables and objectives: the fast loop
-//! tracks each design-variable component and each objective's reported
-//! value (start, end, min, max over the ticks that succeeded) and streams
-//! them, one group per tick, through a lock-free queue to the reporter,
-//! which adds them to `trace.csv` and `design.svg`.
+//! tracks each design-variable component, each objective's reported value
+//! and each named joint's motor torque (Nelson & Cohen §5.2, the joints with
+//! `report_torque`) (start, end, min, max over the ticks that succeeded) and
+//! streams them, one group per tick, through a lock-free queue to the
+//! reporter, which adds them to `trace.csv` and (but the torques)
+//! `design.svg`.
 //!
 //! The queue carries plain numbers: per tick the session time, then the
-//! design components, then the objectives' values (`width` + 1 numbers). The
+//! design components, the objectives' values and the joint torques
+//! (`width` + 1 numbers). The
 //! fast loop pushes a whole group or none (it checks the free room first; it
 //! is the only producer), before that tick's trace samples, so a reporter
 //! that has a tick's trace sample finds the tick's group complete.
@@ -45,6 +48,17 @@ impl Range4 {
         }
     }
 
+    /// Records a torque: the first finite one also becomes the start (no
+    /// torque is known before a tick has solved).
+    #[inline]
+    fn record_torque(&mut self, v: f64) {
+        if self.start.is_nan() && v.is_finite() {
+            *self = Self::at(v);
+        } else {
+            self.record(v);
+        }
+    }
+
     #[inline]
     fn record(&mut self, v: f64) {
         self.end = v;
@@ -67,6 +81,9 @@ pub struct DesignStats {
     pub variables: Vec<(String, Range4)>,
     /// Objectives: name, kind, weight and the range of the reported value.
     pub objectives: Vec<(String, String, f64, Range4)>,
+    /// Named joints' motor torques: `"<joint>"` (N·m; N on a prismatic
+    /// joint) and their ranges.
+    pub torques: Vec<(String, Range4)>,
     /// Groups the reporter's queue had no room for.
     pub dropped: u64,
 }
@@ -87,7 +104,8 @@ impl DesignTracker {
     pub fn new(model: &Model, q: &[f64]) -> Option<(Self, DesignColumns)> {
         let layout = model.layout();
         let terms = &model.objectives().terms;
-        if layout.design_coords() == 0 && terms.is_empty() {
+        let motors = model.torque_joints();
+        if layout.design_coords() == 0 && terms.is_empty() && motors.is_empty() {
             return None;
         }
         let cols = layout.body_coords()..model.n_coords();
@@ -104,20 +122,42 @@ impl DesignTracker {
             .zip(&reports)
             .map(|(t, &v)| (t.name.clone(), t.kind.to_string(), t.weight, Range4::at(v)))
             .collect();
-        let width = variables.len() + objectives.len();
+        // Not measured until the first tick has solved.
+        let torques: Vec<(String, Range4)> = motors
+            .iter()
+            .map(|c| {
+                (
+                    model.constraints()[c.index()].name.clone(),
+                    Range4::at(f64::NAN),
+                )
+            })
+            .collect();
+        let width = variables.len() + objectives.len() + torques.len();
         let queue = Arc::new(ArrayQueue::new(DESIGN_QUEUE_TICKS * (width + 1)));
+        let unit = |c: &haptloop_solver::ConstraintId| match model.constraints()[c.index()].kind {
+            haptloop_solver::ConstraintKind::Prismatic => "n",
+            _ => "nm",
+        };
         let names = variables
             .iter()
             .map(|(n, _)| format!("{n}_m"))
             .chain(objectives.iter().map(|(n, ..)| format!("objective_{n}")))
+            .chain(
+                torques
+                    .iter()
+                    .zip(motors)
+                    .map(|((n, _), c)| format!("torque_{n}_{}", unit(c))),
+            )
             .collect();
-        let columns = DesignColumns::new(queue.clone(), names, variables.len());
+        let mut columns = DesignColumns::new(queue.clone(), names, variables.len());
+        columns.torques = torques.len();
         Some((
             Self {
                 cols,
                 stats: DesignStats {
                     variables,
                     objectives,
+                    torques,
                     dropped: 0,
                 },
                 queue: Some(queue),
@@ -139,6 +179,7 @@ impl DesignTracker {
         }
         let values = &q[self.cols.clone()];
         let reports = program.objective_reports();
+        let torques = program.joint_torques();
         if solved {
             for ((_, r), &v) in self.stats.variables.iter_mut().zip(values) {
                 r.record(v);
@@ -146,9 +187,13 @@ impl DesignTracker {
             for ((.., r), &v) in self.stats.objectives.iter_mut().zip(reports) {
                 r.record(v);
             }
+            for ((_, r), &v) in self.stats.torques.iter_mut().zip(torques) {
+                r.record_torque(v);
+            }
         }
         let Some(queue) = &self.queue else { return };
-        let width = self.stats.variables.len() + self.stats.objectives.len();
+        let width =
+            self.stats.variables.len() + self.stats.objectives.len() + self.stats.torques.len();
         if queue.capacity() - queue.len() < width + 1 {
             self.stats.dropped += 1;
             return;
@@ -160,6 +205,9 @@ impl DesignTracker {
         for k in 0..self.stats.objectives.len() {
             let _ = queue.push(reports.get(k).copied().unwrap_or(f64::NAN));
         }
+        for k in 0..self.stats.torques.len() {
+            let _ = queue.push(torques.get(k).copied().unwrap_or(f64::NAN));
+        }
     }
 }
 
@@ -170,6 +218,8 @@ pub struct DesignColumns {
     pub names: Vec<String>,
     /// How many of `names` are design components.
     pub variables: usize,
+    /// How many of `names`, at the end, are joint torques.
+    pub torques: usize,
     partial: Vec<f64>,
     pending: VecDeque<Vec<f64>>,
 }
@@ -181,6 +231,7 @@ impl DesignColumns {
             partial: Vec::with_capacity(names.len() + 1),
             names,
             variables,
+            torques: 0,
             pending: VecDeque::new(),
         }
     }
@@ -216,5 +267,41 @@ impl DesignColumns {
             .front()
             .filter(|g| g[0] == t_s)
             .map(|g| &g[1..])
+    }
+}
+
+/// The design flags of a run (`[[design_flag]]`, `--design-on/off`): the
+/// fast loop switches each variable on or off at its session time, before
+/// the tick that starts at or after it (Nelson & Cohen §3's flags).
+///
+/// # Real-time
+/// [`DesignSchedule::apply`] allocates nothing: a cursor over a list made
+/// before the run.
+#[derive(Debug, Clone, Default)]
+pub struct DesignSchedule {
+    /// (time, design variable index, on), by time.
+    events: Vec<(f64, usize, bool)>,
+    next: usize,
+}
+
+impl DesignSchedule {
+    /// From the scene's switches (sorted by time). Allocates.
+    pub fn new(flags: &[haptloop_solver::scene::DesignFlagDecl]) -> Self {
+        Self {
+            events: flags.iter().map(|f| (f.at_s, f.var, f.on)).collect(),
+            next: 0,
+        }
+    }
+
+    /// Applies every switch due at `t_s` to `program`.
+    #[inline]
+    pub fn apply(&mut self, t_s: f64, program: &mut Program) {
+        while let Some(&(at, var, on)) = self.events.get(self.next) {
+            if at > t_s {
+                break;
+            }
+            let _ = program.set_design_active(var, on);
+            self.next += 1;
+        }
     }
 }

@@ -127,6 +127,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) inbox: Option<super::contact::WitnessInbox>,
     /// Design variables' and objectives' figures and trace (scenes with any).
     pub(super) design: Option<super::design::DesignTracker>,
+    /// Design variables switched on and off at their times.
+    pub(super) switches: super::design::DesignSchedule,
     /// Samples ticks for the converged reference (scenes it supports).
     pub(super) reference: Option<super::reference::ReferenceCapture>,
     /// The last tick was sampled for the reference.
@@ -214,6 +216,8 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 .contact
                 .record_latency(tick.index.saturating_sub(at));
         }
+        self.switches
+            .apply(now.as_secs_f64(), &mut self.program.program);
         self.timer.lap(Stage::Handover);
 
         for i in 0..self.targets.len() {

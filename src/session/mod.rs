@@ -303,6 +303,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         recorders,
         inbox,
         design,
+        switches: design::DesignSchedule::new(&scene.compiled.design_flags),
         reference: capture,
         sampled: false,
         timer: StageClock::default(),

@@ -64,6 +64,8 @@ pub struct Recorder {
     /// How many of `design_series` are design components (the rest are
     /// objectives).
     pub design_variables: usize,
+    /// How many of `design_series`, at the end, are joint torques.
+    pub design_torques: usize,
     expected_ticks: u64,
     /// |force| per finger.
     pub force: Vec<Series>,
@@ -104,6 +106,7 @@ impl Recorder {
             design_series: Vec::new(),
             design_names: Vec::new(),
             design_variables: 0,
+            design_torques: 0,
             expected_ticks: ticks,
             force: fingers.iter().map(|_| Series::with_budget(ticks)).collect(),
             violation: Series::with_budget(ticks),
@@ -126,6 +129,7 @@ impl Recorder {
         if let Some(d) = &design {
             self.design_names = d.names.clone();
             self.design_variables = d.variables;
+            self.design_torques = d.torques;
             self.design_series = d
                 .names
                 .iter()

@@ -8,9 +8,11 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod bench;
 mod contact;
 mod design;
+mod design_flags;
 mod docs;
 mod exits;
 mod export;
+mod figures;
 mod limits;
 mod load_bounds;
 mod messages;
@@ -26,4 +28,5 @@ mod session;
 mod solver_honesty;
 mod stability;
 mod sweep;
+mod torque;
 mod trust;

@@ -151,6 +151,15 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
             "[[objective]]",
             format!("{base}\n[[objective]]\nkind = \"finger\"\nzz_unknown = 1\n"),
         ),
+        ("[[gear]]", format!("{base}\n[[gear]]\nzz_unknown = 1\n")),
+        (
+            "[[design_flag]]",
+            format!("{base}\n[[design_flag]]\nzz_unknown = 1\n"),
+        ),
+        (
+            "[[gear]] kind values",
+            format!("{base}\n[[gear]]\nkind = \"zz_unknown\"\n"),
+        ),
         (
             "[[objective]] kind values",
             format!("{base}\n[[objective]]\nkind = \"zz_unknown\"\n"),

@@ -27,7 +27,8 @@
 //! bound (its d becomes q_c − b so that Δ_c = b − q_c, and it leaves the
 //! Woodbury set; ŷ₀ follows as ŷ₀ − Z_c δd_c, no new solve); a frozen column
 //! whose free step would point back inside is released. At most n_d + 2
-//! rounds. Pinned components (lo = hi) never enter: their d is set before
+//! rounds. A column switched off (Nelson & Cohen §3's flags, [`DesignStep::
+//! set_off`]) is frozen where it is and never released. Pinned components (lo = hi) never enter: their d is set before
 //! the right-hand side is formed ([`DesignStep::pin`]), so they cost no
 //! solve. The result satisfies the linearised joints exactly, so bounds
 //! never fight the joints.
@@ -85,6 +86,9 @@ pub(crate) struct DesignStep {
     masked: Option<MaskedRows>,
     /// Scratch: each column's fixed step offset while frozen.
     dd: Vec<f64>,
+    /// Per design column: switched off (Nelson & Cohen's flags: held where
+    /// it is, like a pin at its current value).
+    off: Vec<bool>,
 }
 
 impl DesignStep {
@@ -130,6 +134,7 @@ impl DesignStep {
             mg: vec![0.0; n],
             masked: MaskedRows::new(model, masked, n),
             dd: vec![0.0; n],
+            off: vec![false; n],
             cols,
         })
     }
@@ -177,14 +182,25 @@ impl DesignStep {
         Ok(())
     }
 
+    /// Switches design column `k` (index among the design columns) off
+    /// (held at its current value) or on.
+    pub fn set_off(&mut self, k: usize, off: bool) {
+        if let Some(f) = self.off.get_mut(k) {
+            *f = off;
+        }
+    }
+
     /// Sets d on the pinned components so that their step lands on the pin
-    /// (Δ_c = lo − q_c): call before the step's right-hand side is formed.
+    /// (Δ_c = lo − q_c), and on the switched-off ones so that they stay
+    /// (Δ_c = 0): call before the step's right-hand side is formed.
     ///
     /// # Real-time
     /// No allocation; O(n_d).
     pub fn pin(&self, q: &[f64], d: &mut [f64]) {
         for (k, &c) in self.cols.iter().enumerate() {
-            if self.lo[k] == self.hi[k] {
+            if self.off[k] {
+                d[c] = 0.0;
+            } else if self.lo[k] == self.hi[k] {
                 d[c] = q[c] - self.lo[k];
             }
         }
@@ -219,10 +235,14 @@ impl DesignStep {
             let c = self.cols[k];
             self.d0[k] = d[c];
             let pinned = self.lo[k] == self.hi[k];
-            // Pinned, or already at a bound: start frozen there.
-            self.frozen[k] =
-                pinned || q[c] <= self.lo[k] + BOX_SLACK_M || q[c] >= self.hi[k] - BOX_SLACK_M;
-            self.at[k] = if q[c] >= self.hi[k] - BOX_SLACK_M {
+            // Pinned, switched off, or already at a bound: start frozen there.
+            self.frozen[k] = pinned
+                || self.off[k]
+                || q[c] <= self.lo[k] + BOX_SLACK_M
+                || q[c] >= self.hi[k] - BOX_SLACK_M;
+            self.at[k] = if self.off[k] {
+                q[c]
+            } else if q[c] >= self.hi[k] - BOX_SLACK_M {
                 self.hi[k]
             } else {
                 self.lo[k]
@@ -282,7 +302,7 @@ impl DesignStep {
                     + self.masked.as_ref().map_or(0.0, |mr| mr.pull(k, n));
                 let c = self.cols[k];
                 let want = -(self.d0[k] + self.t[k] / self.w[k]);
-                let pinned = self.lo[k] == self.hi[k];
+                let pinned = self.lo[k] == self.hi[k] || self.off[k];
                 if self.frozen[k] {
                     let inward = (self.at[k] == self.lo[k] && want > 0.0)
                         || (self.at[k] == self.hi[k] && want < 0.0);

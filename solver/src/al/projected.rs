@@ -202,6 +202,13 @@ impl Projected {
         self.jd_current = false;
     }
 
+    /// Switches design column `k` (among the design columns) off or on.
+    pub fn set_design_off(&mut self, k: usize, off: bool) {
+        if let Some(d) = &mut self.design {
+            d.set_off(k, off);
+        }
+    }
+
     /// Lets the design columns of `model` move, with metric `w_kg` each (see
     /// `design`), keeping its `masked` equality rows (model row, ℓ) closed.
     /// Allocates.

@@ -59,6 +59,11 @@ pub enum ConstraintKind {
     /// A hand's hold on a body: the fingertip's centre fixed in the body
     /// (a spherical joint the slow loop adds and removes): 3 rows, m.
     Hold,
+    /// Two revolute joints geared at a ratio of whole numbers (Nelson &
+    /// Cohen Fig. 12): 1 row, angle (radians of the driven joint).
+    Gear,
+    /// A prismatic joint (rack) following a revolute (pinion): 1 row, m.
+    RackPinion,
     /// A point held on a parametric surface with its (u, v) coordinates
     /// (Nelson & Cohen App. E; `crate::parametric`): 3 rows, m.
     OnSurface,
@@ -74,10 +79,10 @@ impl ConstraintKind {
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
             | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin
-            | SurfacePlane | SurfaceInclusion | Hold | OnSurface | Rolling => {
+            | SurfacePlane | SurfaceInclusion | Hold | RackPinion | OnSurface | Rolling => {
                 return RowUnit::Length;
             }
-            Perpendicular | RevoluteLimit => return RowUnit::Angle,
+            Perpendicular | RevoluteLimit | Gear => return RowUnit::Angle,
             QuaternionNorm => return RowUnit::Dimensionless,
             Universal | Revolute | Fixed | RigidFinger => 3,
             Prismatic => 2,
@@ -126,6 +131,8 @@ impl ConstraintKind {
             SurfacePlane => "surface plane",
             SurfaceInclusion => "surface inclusion",
             Hold => "hold",
+            Gear => "gear",
+            RackPinion => "rack_pinion",
             OnSurface => "on_surface",
             Rolling => "rolling",
         }

@@ -16,6 +16,8 @@
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
+//! | `gear.rs` | gear pair: two revolutes at a ratio of whole numbers, Fig. 12 | 1 | angle |
+//! | `rack_pinion.rs` | rack and pinion: a prismatic following a revolute | 1 | m |
 //! | `crate::parametric` | `on_surface` (3 rows, m, with (u, v) columns) and `rolling` (2 rows, m) | 3 / 2 | m |
 //! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
@@ -26,12 +28,14 @@ pub(crate) mod block;
 pub(crate) mod bound;
 pub(crate) mod distance;
 pub(crate) mod finger;
+pub(crate) mod gear;
 pub(crate) mod limit;
 mod meta;
 pub(crate) mod perpendicular;
 pub(crate) mod point_plane;
 pub(crate) mod prismatic;
 pub(crate) mod quat_norm;
+pub(crate) mod rack_pinion;
 pub(crate) mod revolute;
 pub(crate) mod spherical;
 pub(crate) mod surface;
@@ -60,6 +64,8 @@ pub(crate) enum Geometry {
     Contact(witness::ContactRows),
     Bound(bound::DesignBound),
     Surface(surface::SurfaceRows),
+    Gear(gear::Gear),
+    RackPinion(rack_pinion::RackPinion),
     OnSurface(crate::parametric::contact::OnSurface),
     Rolling(crate::parametric::rolling::Rolling),
 }
@@ -82,6 +88,8 @@ impl Geometry {
             Self::Contact(c) => c.rows as usize,
             Self::Bound(b) => b.rows(),
             Self::Surface(s) => s.rows as usize,
+            Self::Gear(_) => gear::Gear::ROWS,
+            Self::RackPinion(_) => rack_pinion::RackPinion::ROWS,
             Self::OnSurface(_) => crate::parametric::contact::OnSurface::ROWS,
             Self::Rolling(_) => crate::parametric::rolling::Rolling::ROWS,
         }
@@ -117,6 +125,8 @@ impl Geometry {
             Self::Contact(c) => c.pair.groups(),
             Self::Bound(b) => b.groups(),
             Self::Surface(s) => s.pair.groups(),
+            Self::Gear(j) => j.pair.groups(),
+            Self::RackPinion(j) => j.pair.groups(),
             Self::OnSurface(s) => s.pair.groups(),
             Self::Rolling(r) => r.pair.groups(),
         }
@@ -141,6 +151,8 @@ impl Geometry {
             // Raw values only, like the norm row.
             Self::Bound(_) => [0, 0],
             Self::Surface(s) => s.pair.frame,
+            Self::Gear(j) => j.pair.frame,
+            Self::RackPinion(j) => j.pair.frame,
             Self::OnSurface(s) => s.pair.frame,
             Self::Rolling(r) => r.pair.frame,
         }
@@ -165,6 +177,8 @@ impl Geometry {
             Self::Surface(s) => s.pair.anchor,
             Self::OnSurface(s) => s.pair.anchor,
             Self::Rolling(r) => r.pair.anchor,
+            Self::Gear(j) => j.pair.anchor,
+            Self::RackPinion(j) => j.pair.anchor,
             Self::QuatNorm(_) | Self::Bound(_) => none,
         }
     }
@@ -187,6 +201,8 @@ impl Geometry {
             Self::Contact(j) => j.eval(x, c, sink),
             Self::Bound(j) => j.eval(x, c, sink),
             Self::Surface(j) => j.eval(x, c, sink),
+            Self::Gear(j) => j.eval(x, c, sink),
+            Self::RackPinion(j) => j.eval(x, c, sink),
             Self::OnSurface(j) => j.eval(x, c, sink),
             Self::Rolling(j) => j.eval(x, c, sink),
         }

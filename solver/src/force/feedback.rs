@@ -85,6 +85,8 @@ pub(crate) struct Feedback {
     /// Counts the factorisations: whatever caches products with the factor
     /// (the projected update's design columns) recomputes when it changes.
     pub generation: u64,
+    /// The named joints' motor torques (§5.2; `torque`).
+    torques: Option<super::torque::JointTorques>,
     /// Per flexible body of the model: its body's column offset (its
     /// deformation columns' b is the elastic force, `crate::flexible`).
     flex_offsets: Vec<usize>,
@@ -118,6 +120,7 @@ impl Feedback {
             ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
         };
         let solve = MultiplierSolve::new(&gram, cg)?;
+        let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
         let fingers = model
@@ -186,6 +189,7 @@ impl Feedback {
             known: vec![None; m_f],
             max_pull_n: 0.0,
             generation: 0,
+            torques,
             flex_offsets: model
                 .flexible
                 .iter()
@@ -438,12 +442,14 @@ impl Feedback {
         if !released {
             self.max_pull_n = self.contact_pull(s);
             self.pair_normal_forces(s);
+            self.joint_torques(q, ev);
             return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
         self.solve_multipliers(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
+        self.joint_torques(q, ev);
         self.wrenches(s, settings, q, ev, targets, out)?;
         if settings.update == UpdateRule::Projected {
             // The projected update steps with this factor and must keep the
@@ -455,6 +461,40 @@ impl Feedback {
             self.solve_multipliers(ev, settings)?;
         }
         Ok(())
+    }
+
+    /// The named joints' motor torques with the factor of the last solve
+    /// (`torque`; NaN with the conjugate-gradient solver, which has no
+    /// factor).
+    fn joint_torques(&mut self, q: &[f64], ev: &Evaluation) {
+        let Some(t) = &mut self.torques else { return };
+        if self.solve.cg.is_some() {
+            t.clear();
+            return;
+        }
+        t.compute(
+            &self.gram,
+            &mut self.solve,
+            &self.masses,
+            &self.scale,
+            &self.b,
+            q,
+            ev,
+        );
+    }
+
+    /// The named joints' motor torques (N·m, or N on a prismatic joint) at
+    /// the last force solve, [`Model::torque_joints`] order; NaN after a
+    /// failed tick.
+    pub fn joint_torques_out(&self) -> &[f64] {
+        self.torques.as_ref().map_or(&[], |t| &t.torque)
+    }
+
+    /// Marks the torques unknown (a failed tick).
+    pub fn clear_torques(&mut self) {
+        if let Some(t) = &mut self.torques {
+            t.clear();
+        }
     }
 
     /// Each friction pair's normal force in the last solve, N.

@@ -30,6 +30,10 @@
 //!    directions it cannot move (a 1-DOF linkage, a joint at its limit) the
 //!    error grows and F_c is the wall the user feels.
 //!
+//! Joint torques (`torque`, §5.2): for the joints a scene names, the
+//! torque a motor on each axis would need to make the motion in place of the
+//! fingers, from the same factor and right-hand side.
+//!
 //! Contact rows (`friction`): witness rows are inequality rows of the joint
 //! block (active while pushing or penetrating, released when they would
 //! pull); a fingertip's friction stick rows take part while the Coulomb cone
@@ -56,6 +60,7 @@ mod redundancy;
 mod reference;
 pub(crate) mod small;
 mod solve;
+mod torque;
 mod wrench;
 
 pub use output::FingerOutput;

@@ -7,6 +7,10 @@
 //! | [`stewart`] | 13 (+ base) | 6 × (U, P, S) | rigid on the platform | 6 |
 //! | [`sphere_toy`] | 132 | 120 U + 72 S | point on a top bead | see [`sphere_toy`] |
 //! | [`cluttered_builder`] | n + 1 (+ table) | none: contact only | rigid on the dragged box | 6 (n + 1) |
+//! | [`stewart_3rsu`] (Figs. 2/3) | 8 (+ floor) | weld, 3 × (R, U, S) | rigid on the platform | 6 |
+//! | [`quarter_torus`] (Figs. 6/7) | 4 | 4 R in a loop | point on a part | 7 (floating) |
+//! | [`four_bar_cardan`] (Fig. 11) | 4 (+ ground) | 3 R, S, 2 U | point on the crank | 1 |
+//! | [`piston`] (Fig. 12) | 11 (+ ground) | 7 R, 4 S, 4 P, 2 gears | point on the flywheel | 1 |
 //! | [`bennett`] | 3 (+ ground) | 4 R (3 rows redundant) | point on the link opposite the ground | 1 |
 //! | [`lattice`] | 132 bars (+ ground) | 196 R, planar (192 rows redundant) | point on a top corner bar | 4 |
 //! | [`chain`] | 64 (+ ground) | 63 U + 2 S, one long loop | point on the middle link | 126 |
@@ -16,12 +20,16 @@
 //! the initial configuration exact.
 
 mod bennett;
+mod cardan;
 mod chain;
 mod cluttered;
 mod four_bar;
 mod lattice;
+mod piston;
+mod quarter_torus;
 mod sphere_toy;
 mod stewart;
+mod stewart_3rsu;
 
 pub use bennett::{BENNETT_A_M, BENNETT_B_M, bennett, bennett_builder};
 pub use chain::{CHAIN_LINK_KG, CHAIN_LINK_M, chain, chain_builder, chain_sized};
@@ -34,6 +42,23 @@ pub use sphere_toy::{
     SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder, sphere_toy_shape, sphere_toy_sized,
 };
 pub use stewart::{STROKE_M as STEWART_STROKE_M, stewart, stewart_builder};
+
+pub use cardan::{
+    CARDAN_BETA, CARDAN_CRANK0, CARDAN_LINKS_M, CARDAN_RISE_M, cardan_coupler_point,
+    cardan_rocker_pivot, four_bar_cardan, four_bar_cardan_builder,
+};
+pub use piston::{
+    BORE_X_M, CAM_RATIO, CRANK_M, FLYWHEEL_M, PISTON_PHASES, ROD_M, piston, piston_builder,
+    piston_height_m,
+};
+pub use quarter_torus::{
+    TORUS_GAP_M, TORUS_RADIUS_M, quarter_torus, quarter_torus_builder, torus_part_centroid,
+    torus_part_rotation,
+};
+pub use stewart_3rsu::{
+    RSU_BASE_M, RSU_CRANK_M, RSU_PLATFORM_M, RSU_ROD_M, rsu_azimuth, rsu_height_m, stewart_3rsu,
+    stewart_3rsu_builder,
+};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 

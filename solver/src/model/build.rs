@@ -28,6 +28,7 @@ use crate::{BodyId, ConstraintId, FingerId};
 pub struct ModelBuilder {
     bodies: Vec<BodySpec>,
     joints: Vec<JointSpec>,
+    gears: Vec<super::gears::GearSpec>,
     fingers: Vec<FingerSpec>,
     objectives: Vec<crate::objective::ObjectiveSpec>,
     gravity: [f64; 3],
@@ -55,6 +56,18 @@ impl ModelBuilder {
     pub fn joint(&mut self, spec: JointSpec) -> ConstraintId {
         self.joints.push(spec);
         ConstraintId(self.joints.len() as u32 - 1)
+    }
+
+    /// Adds a gear coupling between two joints (`[[gear]]`); gears become
+    /// constraints after the joints, in insertion order.
+    pub fn gear(&mut self, spec: super::gears::GearSpec) -> &mut Self {
+        self.gears.push(spec);
+        self
+    }
+
+    /// The gears added so far, in order.
+    pub fn gear_specs(&self) -> &[super::gears::GearSpec] {
+        &self.gears
     }
 
     /// Adds a finger; its id is its insertion index.
@@ -172,6 +185,7 @@ impl ModelBuilder {
         let mut limits = Vec::new();
         let mut rolls = Vec::new();
         let mut joint_names = HashMap::new();
+        let mut torque_joints = Vec::new();
         for (k, spec) in self.joints.iter().enumerate() {
             let (info, geometry, limit, roll) = compile_joint(k, spec, &mut cx)?;
             rolls.extend(roll);
@@ -181,6 +195,31 @@ impl ModelBuilder {
                 });
             }
             limits.extend(limit.map(|(info, g)| (info, g, ConstraintId(k as u32))));
+            if spec.report_torque {
+                if !matches!(
+                    info.kind,
+                    ConstraintKind::Revolute | ConstraintKind::Prismatic
+                ) {
+                    return Err(BuildError::TorqueJointKind {
+                        owner: Owner::Joint(info.name),
+                        kind: spec.kind,
+                    });
+                }
+                torque_joints.push(ConstraintId(k as u32));
+            }
+            out.push(info, geometry);
+        }
+        let n_joints = self.joints.len();
+        for spec in &self.gears {
+            let (info, geometry) =
+                super::gears::compile_gear(spec, &out, n_joints, &cx, &origin_cols)?;
+            if out.infos[..n_joints].iter().any(|j| j.name == info.name)
+                || out.infos[n_joints..].iter().any(|g| g.name == info.name)
+            {
+                return Err(BuildError::DuplicateName {
+                    owner: Owner::Gear(info.name),
+                });
+            }
             out.push(info, geometry);
         }
         let mut fingers = Vec::with_capacity(self.fingers.len());
@@ -266,6 +305,7 @@ impl ModelBuilder {
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
+            torque_joints,
             flexible: fin.flex_bodies,
             flex_anchors: fin.anchors,
             surfaces: fin.surfaces,

@@ -18,6 +18,8 @@ pub enum Owner {
     Inequality(String),
     /// An `[[objective]]` (by its name, or its kind).
     Objective(String),
+    /// A `[[gear]]`.
+    Gear(String),
     /// Scene-level settings (gravity).
     Scene,
 }
@@ -30,6 +32,7 @@ impl fmt::Display for Owner {
             Self::Finger(n) => write!(f, "finger `{n}`"),
             Self::Inequality(n) => write!(f, "inequality `{n}`"),
             Self::Objective(n) => write!(f, "objective `{n}`"),
+            Self::Gear(n) => write!(f, "gear `{n}`"),
             Self::Scene => f.write_str("scene"),
         }
     }
@@ -328,6 +331,58 @@ pub enum BuildError {
         /// The joint.
         joint: String,
     },
+    /// `report_torque` on a joint without an axis coordinate.
+    #[error(
+        "{owner}: a {kind} joint has no axis to report a torque about; `report_torque` needs a revolute or prismatic joint"
+    )]
+    TorqueJointKind {
+        /// The joint.
+        owner: Owner,
+        /// Its kind.
+        kind: JointKind,
+    },
+    /// A gear names a joint of the wrong kind (or the same joint twice).
+    #[error("{owner}: joint `{joint}` is a {kind} joint; {want}")]
+    GearJoint {
+        /// The gear.
+        owner: Owner,
+        /// The joint.
+        joint: String,
+        /// Its kind.
+        kind: crate::ConstraintKind,
+        /// What the gear needs.
+        want: &'static str,
+    },
+    /// A gear's two joints move more than two bodies.
+    #[error(
+        "{owner}: its joints move the bodies {bodies}; a gear's row relates at most two moving bodies (mount both gears on fixed bodies, or one on the other's body)"
+    )]
+    GearBodies {
+        /// The gear.
+        owner: Owner,
+        /// The moving bodies, listed.
+        bodies: String,
+    },
+    /// A gear ratio that cannot be used.
+    #[error("{owner}: `ratio` {ratio} must be {why}")]
+    GearRatio {
+        /// The gear.
+        owner: Owner,
+        /// The ratio given.
+        ratio: f64,
+        /// What it must be.
+        why: &'static str,
+    },
+    /// A rack's prismatic joint with design variables in its displacement.
+    #[error(
+        "{owner}: the rack's joint `{joint}` has free anchors or a freed body position; a rack_pinion needs its rack's joint constant"
+    )]
+    GearRackDesign {
+        /// The gear.
+        owner: Owner,
+        /// The prismatic joint.
+        joint: String,
+    },
     /// A finger on a fixed body.
     #[error("{owner}: body `{body}` is fixed; a finger must hold a moving body")]
     FingerOnFixedBody {
@@ -433,6 +488,11 @@ impl BuildError {
             | ChainJointKind { owner, .. }
             | UnknownJoint { owner, .. }
             | NoLimits { owner, .. }
+            | TorqueJointKind { owner, .. }
+            | GearJoint { owner, .. }
+            | GearBodies { owner, .. }
+            | GearRatio { owner, .. }
+            | GearRackDesign { owner, .. }
             | FingerOnFixedBody { owner, .. }
             | Shape { owner, .. }
             | BadFingertip { owner, .. }

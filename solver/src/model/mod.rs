@@ -9,6 +9,7 @@ mod build;
 mod compiler;
 mod contact;
 mod error;
+mod gears;
 mod inequality;
 mod joints;
 mod layout;
@@ -19,6 +20,7 @@ pub use auxiliary::{AuxBlock, AuxOwner, Rest};
 pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};
+pub use gears::{GearKind, GearSpec, MAX_GEAR_TEETH};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
 pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{
@@ -100,6 +102,8 @@ pub struct Model {
     pub(crate) contact: ContactLayout,
     pub(crate) objectives: crate::objective::Objectives,
     pub(crate) semantic: SemanticLayout,
+    /// Joints whose motor torque is reported (`report_torque`), in joint order.
+    pub(crate) torque_joints: Vec<ConstraintId>,
     /// Flexible bodies (`crate::flexible`; empty: a rigid model).
     pub(crate) flexible: Vec<crate::flexible::body::FlexBody>,
     /// The deforming points `Param3::Flex` indexes.
@@ -133,6 +137,12 @@ impl Model {
             .iter()
             .position(|b| b.name == name)
             .map(|i| BodyId(i as u32))
+    }
+
+    /// The joints whose motor torque (or force) is reported, in joint order
+    /// (`report_torque`; revolute or prismatic joints).
+    pub fn torque_joints(&self) -> &[ConstraintId] {
+        &self.torque_joints
     }
 
     /// The fingers, in builder order (also the order of the targets slice).

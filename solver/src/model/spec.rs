@@ -312,6 +312,10 @@ pub struct JointSpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the design variables `free` lists (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// Report the torque (revolute, N·m) or force (prismatic, N) a motor on
+    /// this joint's axis would need to produce the mechanism's motion
+    /// (Nelson & Cohen §5.2; `force::torque`).
+    pub report_torque: bool,
     /// `on_surface` and `rolling`: body j's surface.
     pub surface: Option<ContactSurface>,
     /// `on_surface` (optional) and `rolling` (required): the ball's radius,
@@ -355,6 +359,7 @@ impl JointSpec {
             limits: None,
             free: Vec::new(),
             bounds: None,
+            report_torque: false,
             surface: None,
             radius_m: None,
         }
@@ -369,6 +374,12 @@ impl JointSpec {
     /// Sets the ball radius of an `on_surface` or `rolling` joint, metres.
     pub fn radius(mut self, radius_m: f64) -> Self {
         self.radius_m = Some(radius_m);
+        self
+    }
+
+    /// Reports this joint's motor torque (see [`JointSpec::report_torque`]).
+    pub fn report_torque(mut self) -> Self {
+        self.report_torque = true;
         self
     }
 

@@ -4,13 +4,16 @@
 
 use nalgebra::Vector3;
 
-use super::dexterity::{Axis, Column, Dexterity};
+use super::compile_chain::{ChainSpec, dexterity};
+use super::inverse_distance::InverseDistance;
 use super::joint_limit::Centred;
 use super::obstacle::{Avoid, Obstacle};
 use super::spec::{ObjectiveSpec, ObstacleSpec};
 use super::straight_line::StraightLine;
+use super::workspace::{Link, Workspace};
 use super::{Objective, Objectives, Term};
 use crate::constraint::Geometry;
+use crate::constraint::block::Param3;
 use crate::model::{BuildError, Owner};
 use crate::{BodyId, ConstraintKind, Model};
 
@@ -110,13 +113,25 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
                 chain,
                 point_m,
                 directions,
+                angular_directions,
+                closure,
                 ..
             } => {
                 finite("point", point_m)?;
                 for d in directions {
                     finite("directions", d)?;
                 }
-                Term::Dexterity(dexterity(model, chain, point_m, directions, &owner, &bad)?)
+                for d in angular_directions {
+                    finite("angular_directions", d)?;
+                }
+                let spec = ChainSpec {
+                    chain,
+                    closure,
+                    point_m,
+                    directions,
+                    angular: angular_directions,
+                };
+                Term::Dexterity(dexterity(model, &spec, &owner, &bad)?)
             }
             ObjectiveSpec::Obstacle {
                 points,
@@ -127,36 +142,26 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
                 if !(distance_m.is_finite() && *distance_m > 0.0) {
                     return Err(bad("distance", "a finite number > 0 (metres)"));
                 }
-                if points.is_empty() {
-                    return Err(bad("points", "at least one { body, point }"));
-                }
-                let obstacle = match obstacle {
-                    ObstacleSpec::World(p) => {
-                        finite("obstacle", p)?;
-                        Obstacle::World(Vector3::from(*p))
-                    }
-                    ObstacleSpec::Body { body: b, point_m } => {
-                        finite("obstacle_point", point_m)?;
-                        Obstacle::Body(body(b)?, Vector3::from(*point_m))
-                    }
-                };
-                let mut pts = Vec::with_capacity(points.len());
-                for (b, p) in points {
-                    finite("points", p)?;
-                    let id = body(b)?;
-                    if matches!(obstacle, Obstacle::Body(o, _) if o == id) {
-                        return Err(bad(
-                            "points",
-                            "on bodies other than the obstacle's (an obstacle cannot avoid itself)",
-                        ));
-                    }
-                    pts.push((id, Vector3::from(*p)));
-                }
+                let (points, obstacle) = avoided(model, points, obstacle, &owner, &bad)?;
                 Term::Obstacle(Avoid {
-                    points: pts,
+                    points,
                     obstacle,
                     distance_m: *distance_m,
                 })
+            }
+            ObjectiveSpec::InverseDistance {
+                points, obstacle, ..
+            } => {
+                let (points, obstacle) = avoided(model, points, obstacle, &owner, &bad)?;
+                Term::InverseDistance(InverseDistance {
+                    points,
+                    obstacle,
+                    scale_m: model.characteristic_length_m(),
+                })
+            }
+            ObjectiveSpec::WorkspaceVolume { chain, point_m, .. } => {
+                finite("point", point_m)?;
+                Term::Workspace(workspace(model, chain, point_m, &owner, &bad)?)
             }
             ObjectiveSpec::StraightLine {
                 body: b,
@@ -193,15 +198,71 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
     Ok(out)
 }
 
-/// The chain's columns, the tip and the reach at q0.
-fn dexterity(
+/// Body points kept away from an obstacle (body, point in its frame).
+type Avoiding = Vec<(BodyId, Vector3<f64>)>;
+
+/// The avoiding points and the obstacle of `obstacle` and
+/// `inverse_distance`.
+fn avoided(
+    model: &Model,
+    points: &[(String, [f64; 3])],
+    obstacle: &ObstacleSpec,
+    owner: &dyn Fn() -> Owner,
+    bad: Bad,
+) -> Result<(Avoiding, Obstacle), BuildError> {
+    let finite = |field: &'static str, v: &[f64]| {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(BuildError::NonFinite {
+                owner: owner(),
+                field,
+            })
+        }
+    };
+    let body = |n: &str| {
+        model.body_id(n).ok_or_else(|| BuildError::UnknownBody {
+            owner: owner(),
+            body: n.to_owned(),
+        })
+    };
+    if points.is_empty() {
+        return Err(bad("points", "at least one { body, point }"));
+    }
+    let obstacle = match obstacle {
+        ObstacleSpec::World(p) => {
+            finite("obstacle", p)?;
+            Obstacle::World(Vector3::from(*p))
+        }
+        ObstacleSpec::Body { body: b, point_m } => {
+            finite("obstacle_point", point_m)?;
+            Obstacle::Body(body(b)?, Vector3::from(*point_m))
+        }
+    };
+    let mut pts = Vec::with_capacity(points.len());
+    for (b, p) in points {
+        finite("points", p)?;
+        let id = body(b)?;
+        if matches!(obstacle, Obstacle::Body(o, _) if o == id) {
+            return Err(bad(
+                "points",
+                "on bodies other than the obstacle's (an obstacle cannot avoid itself)",
+            ));
+        }
+        pts.push((id, Vector3::from(*p)));
+    }
+    Ok((pts, obstacle))
+}
+
+/// A workspace chain's links: each body after the base, from its inbound
+/// joint's anchor to its outbound one's (the last: to `point_m`); V₀ at q0.
+fn workspace(
     model: &Model,
     chain: &[String],
     point_m: &[f64; 3],
-    directions: &[[f64; 3]],
     owner: &dyn Fn() -> Owner,
-    bad: &dyn Fn(&'static str, &'static str) -> BuildError,
-) -> Result<Dexterity, BuildError> {
+    bad: Bad,
+) -> Result<Workspace, BuildError> {
     if chain.len() < 2 {
         return Err(bad("chain", "at least two bodies, base first"));
     }
@@ -214,58 +275,29 @@ fn dexterity(
             })
         })
         .collect::<Result<Vec<BodyId>, _>>()?;
-    let mut columns = Vec::new();
-    let mut points = Vec::new(); // joint points at q0, for the reach
-    let frame = |b: usize| model.body_frame(model.q0(), BodyId(b as u32));
-    for (k, pair) in ids.windows(2).enumerate() {
-        let (a, b) = (pair[0], pair[1]);
-        let joint = model.constraints().iter().enumerate().find(|(_, c)| {
-            c.finger.is_none()
-                && c.limits.is_none()
-                && (c.bodies == [Some(a), Some(b)] || c.bodies == [Some(b), Some(a)])
-        });
-        let Some((ci, info)) = joint else {
+    // The anchor on body `b` of the joint between `a` and `b`.
+    let anchor_on = |k: usize, b: BodyId| -> Result<Param3, BuildError> {
+        let (a, c) = (ids[k], ids[k + 1]);
+        let found = model
+            .constraints()
+            .iter()
+            .zip(&model.geometry)
+            .find(|(i, _)| {
+                i.finger.is_none()
+                    && i.limits.is_none()
+                    && (i.bodies == [Some(a), Some(c)] || i.bodies == [Some(c), Some(a)])
+            });
+        let Some((info, g)) = found else {
             return Err(BuildError::ChainNotJoined {
                 owner: owner(),
                 a: chain[k].clone(),
                 b: chain[k + 1].clone(),
             });
         };
-        let origin = |p: &crate::constraint::block::Pair| Some((p.frame[0], p.anchor[0]));
-        let world = |i: usize| Axis::World(Vector3::ith(i, 1.0));
-        let (p, cols): (_, Vec<Column>) = match &model.geometry[ci] {
-            Geometry::Revolute(j) => (
-                j.pair,
-                vec![Column {
-                    axis: Axis::Body(j.pair.frame[0], j.axes.h_i),
-                    origin: origin(&j.pair),
-                }],
-            ),
-            Geometry::Prismatic(j) => (
-                j.pair,
-                vec![Column {
-                    axis: Axis::Body(j.pair.frame[0], j.axes.h_i),
-                    origin: None,
-                }],
-            ),
-            Geometry::Spherical(j) => (
-                j.pair,
-                (0..3)
-                    .map(|i| Column {
-                        axis: world(i),
-                        origin: origin(&j.pair),
-                    })
-                    .collect(),
-            ),
-            Geometry::Universal(j) => (
-                j.pair,
-                (0..2)
-                    .map(|e| Column {
-                        axis: Axis::Body(j.pair.frame[e], j.axes[e]),
-                        origin: origin(&j.pair),
-                    })
-                    .collect(),
-            ),
+        let pair = match g {
+            Geometry::Revolute(j) => j.pair,
+            Geometry::Spherical(j) => j.pair,
+            Geometry::Universal(j) => j.pair,
             _ => {
                 return Err(BuildError::ChainJointKind {
                     owner: owner(),
@@ -274,64 +306,50 @@ fn dexterity(
                 });
             }
         };
-        columns.extend(cols);
-        let f = frame(p.frame[0]).unwrap_or(crate::rotation::BodyFrame::IDENTITY);
-        let k0 = match p.anchor[0] {
-            crate::constraint::block::Param3::Const(v) => v,
-            crate::constraint::block::Param3::Free(c) => {
-                Vector3::new(model.q0()[c], model.q0()[c + 1], model.q0()[c + 2])
-            }
-            crate::constraint::block::Param3::Flex(i) => model.flex_anchors[i as usize].k,
+        let end = usize::from(pair.frame[1] == b.index());
+        if matches!(pair.anchor[end], Param3::Flex(_)) {
+            return Err(bad(
+                "chain",
+                "rigid bodies (a flexible body's links have no fixed length)",
+            ));
+        }
+        Ok(pair.anchor[end])
+    };
+    let mut links = Vec::new();
+    for k in 1..ids.len() {
+        let inbound = anchor_on(k - 1, ids[k])?;
+        let outbound = if k + 1 < ids.len() {
+            anchor_on(k, ids[k])?
+        } else {
+            Param3::Const(Vector3::from(*point_m))
         };
-        points.push(f.point(&k0));
+        links.push(Link { inbound, outbound });
     }
-    let last = *ids.last().expect("two or more");
-    if model.bodies()[last.index()].fixed {
-        // The point rides on the last body: on a fixed one it never moves,
-        // J̃ is zero and F sits at its floor for good.
+    if !links
+        .iter()
+        .any(|l| matches!(l.inbound, Param3::Free(_)) || matches!(l.outbound, Param3::Free(_)))
+    {
         return Err(bad(
             "chain",
-            "base first, tip last: its last body is fixed, so its point never moves (is the chain reversed?)",
+            "a chain with a free anchor (its link lengths move only through free anchors)",
         ));
     }
-    let tip = Vector3::from(*point_m);
-    if let Some(f) = frame(last.index()) {
-        points.push(f.point(&tip));
-    }
-    let reach = points
-        .windows(2)
-        .map(|w| (w[1] - w[0]).norm())
-        .sum::<f64>()
-        .max(1e-3);
-    let mut dirs = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let rows = if directions.is_empty() {
-        3
-    } else {
-        if directions.len() > 3 {
-            return Err(bad("directions", "one to three world directions"));
-        }
-        for (d, given) in dirs.iter_mut().zip(directions) {
-            let v = Vector3::from(*given);
-            if v.norm() < 1e-12 {
-                return Err(bad("directions", "non-zero vectors"));
-            }
-            *d = v.normalize();
-        }
-        let n = directions.len();
-        let gram = nalgebra::DMatrix::from_fn(n, n, |a, b| dirs[a].dot(&dirs[b]));
-        if gram.determinant() < 1e-6 {
-            return Err(bad("directions", "independent (not parallel) directions"));
-        }
-        n
+    let l = model.characteristic_length_m();
+    let mut w = Workspace {
+        links,
+        scale_m2: l * l,
+        v0_m3: 1.0,
     };
-    Ok(Dexterity {
-        columns,
-        tip: (last, tip),
-        directions: dirs,
-        rows,
-        reach_m: reach,
-    })
+    let v0 = w.volume(model.q0());
+    if !(v0.is_finite() && v0 > 0.0) {
+        return Err(bad("chain", "links of non-zero length at the start"));
+    }
+    w.v0_m3 = v0;
+    Ok(w)
 }
+
+/// An error constructor: (field, what was expected).
+pub(super) type Bad<'a> = &'a dyn Fn(&'static str, &'static str) -> BuildError;
 
 /// The named joints' limits (every limited joint when `joints` is empty).
 fn joint_limits(

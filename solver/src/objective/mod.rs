@@ -7,8 +7,11 @@
 //! | `obstacle.rs` | `obstacle`, Eq. 15 | D² ‖½ (D/d − 1)²‖₄ | nearest distance, m |
 //! | `straight_line.rs` | `straight_line`, Fig. 10 | ½ \|P(x − a)\|² | distance from the line, m |
 //! | `joint_limit.rs` | `joint_limit_distance`, App. D | L² ½ Σ ((s − m)/h)² | RMS \|s − m\|/h |
+//! | `inverse_distance.rs` | `inverse_distance`, Eq. 15 as written | L³ / d_min | nearest distance, m |
+//! | `workspace.rs` | `workspace_volume`, App. D | −(L²/3) ln(V / V₀) | reachable volume V, m³ |
 //!
-//! `grad.rs` holds the shared algebra (frames at q; point and direction
+//! `sym6.rs` holds the dexterity's 6 × 6 symmetric algebra. `grad.rs`
+//! holds the shared algebra (frames at q; point and direction
 //! gradients per body, mapped once into q's columns); `spec.rs` the
 //! builder's vocabulary, `compile.rs` its compilation against a built model.
 //!
@@ -31,19 +34,22 @@
 //! values and gradients with zero allocation.
 
 mod compile;
+mod compile_chain;
 mod dexterity;
+mod dexterity_loop;
 mod grad;
+mod inverse_distance;
 mod joint_limit;
 mod obstacle;
 mod spec;
 mod straight_line;
+mod sym6;
+mod workspace;
 
 pub(crate) use compile::{compile, display_name};
 pub use dexterity::DET_FLOOR;
 pub use obstacle::MIN_DISTANCE_FRACTION;
 pub use spec::{ObjectiveKind, ObjectiveSpec, ObstacleSpec};
-
-use nalgebra::Vector3;
 
 use crate::{EvalError, Model};
 use grad::BodyGrad;
@@ -55,6 +61,8 @@ pub(crate) enum Term {
     Obstacle(obstacle::Avoid),
     StraightLine(straight_line::StraightLine),
     JointLimits(joint_limit::Centred),
+    InverseDistance(inverse_distance::InverseDistance),
+    Workspace(workspace::Workspace),
 }
 
 /// One design objective of a model.
@@ -123,7 +131,7 @@ impl Model {
 pub struct ObjectiveEval {
     model_id: u64,
     grad: BodyGrad,
-    tangents: Vec<Vector3<f64>>,
+    dex: dexterity::DexScratch,
 }
 
 impl ObjectiveEval {
@@ -142,7 +150,7 @@ impl ObjectiveEval {
         Self {
             model_id: model.id,
             grad: BodyGrad::new(model),
-            tangents: vec![Vector3::zeros(); columns],
+            dex: dexterity::DexScratch::new(columns),
         }
     }
 
@@ -161,10 +169,12 @@ impl ObjectiveEval {
         self.prepare(model, q)?;
         for (o, t) in out.iter_mut().zip(&model.objectives.terms) {
             *o = match &t.term {
-                Term::Dexterity(d) => d.value(&self.grad, q, &mut self.tangents),
+                Term::Dexterity(d) => d.value(&self.grad, q, &mut self.dex),
                 Term::Obstacle(a) => a.value(&self.grad),
                 Term::StraightLine(s) => s.value(&self.grad),
                 Term::JointLimits(j) => j.value(q, &self.grad),
+                Term::InverseDistance(d) => d.value(&self.grad),
+                Term::Workspace(v) => v.value(q),
             };
         }
         Ok(())
@@ -178,10 +188,12 @@ impl ObjectiveEval {
         self.prepare(model, q)?;
         for (o, t) in out.iter_mut().zip(&model.objectives.terms) {
             *o = match &t.term {
-                Term::Dexterity(d) => d.report(&self.grad, q, &mut self.tangents),
+                Term::Dexterity(d) => d.report(&self.grad, q, &mut self.dex),
                 Term::Obstacle(a) => a.report(&self.grad),
                 Term::StraightLine(s) => s.report(&self.grad),
                 Term::JointLimits(j) => j.report(q, &self.grad),
+                Term::InverseDistance(d) => d.report(&self.grad),
+                Term::Workspace(v) => v.volume(q),
             };
         }
         Ok(())
@@ -209,10 +221,12 @@ impl ObjectiveEval {
         for t in &model.objectives.terms {
             let w = t.weight;
             total += w * match &t.term {
-                Term::Dexterity(d) => d.gradient(&mut self.grad, q, &mut self.tangents, w, grad),
+                Term::Dexterity(d) => d.gradient(&mut self.grad, q, &mut self.dex, w, grad),
                 Term::Obstacle(a) => a.gradient(&mut self.grad, w),
                 Term::StraightLine(s) => s.gradient(&mut self.grad, w),
                 Term::JointLimits(j) => j.gradient(q, &mut self.grad, w, grad),
+                Term::InverseDistance(d) => d.gradient(&mut self.grad, w),
+                Term::Workspace(v) => v.gradient(q, w, grad),
             };
         }
         self.grad.flush(model, grad);

@@ -21,6 +21,10 @@ pub enum ObjectiveKind {
     StraightLine,
     /// Limited joints kept near the middle of their limits.
     JointLimitDistance,
+    /// Body points kept away from an obstacle point by Eq. 15 as written.
+    InverseDistance,
+    /// A chain's reachable volume, App. D.
+    WorkspaceVolume,
 }
 
 impl ObjectiveKind {
@@ -32,6 +36,8 @@ impl ObjectiveKind {
         Self::Obstacle,
         Self::StraightLine,
         Self::JointLimitDistance,
+        Self::InverseDistance,
+        Self::WorkspaceVolume,
     ];
 
     /// The scene-file spelling.
@@ -43,6 +49,8 @@ impl ObjectiveKind {
             Self::Obstacle => "obstacle",
             Self::StraightLine => "straight_line",
             Self::JointLimitDistance => "joint_limit_distance",
+            Self::InverseDistance => "inverse_distance",
+            Self::WorkspaceVolume => "workspace_volume",
         }
     }
 }
@@ -113,6 +121,13 @@ pub enum ObjectiveSpec {
         point_m: [f64; 3],
         /// Task directions (world, 1–3, independent); empty: x, y, z.
         directions: Vec<[f64; 3]>,
+        /// Angular task directions (world, 0–3, independent): Eq. 13's
+        /// angular rows; empty: none.
+        angular_directions: Vec<[f64; 3]>,
+        /// Bodies closing the chain into a loop, from after its last body
+        /// back to its base (the last one is the chain's first); empty: an
+        /// open chain.
+        closure: Vec<String>,
     },
     /// Keep body points at least `distance_m` from an obstacle.
     Obstacle {
@@ -151,6 +166,28 @@ pub enum ObjectiveSpec {
         /// Joint names (each with `limits`); empty: every joint with limits.
         joints: Vec<String>,
     },
+    /// Eq. 15 as written: minimise 1 / (the nearest point's distance).
+    InverseDistance {
+        /// Optional name.
+        name: Option<String>,
+        /// Weight, ≥ 0.
+        weight: f64,
+        /// (body, point in its frame), at least one.
+        points: Vec<(String, [f64; 3])>,
+        /// The obstacle.
+        obstacle: ObstacleSpec,
+    },
+    /// Maximise the volume a chain's point can reach (App. D).
+    WorkspaceVolume {
+        /// Optional name.
+        name: Option<String>,
+        /// Weight, ≥ 0.
+        weight: f64,
+        /// Bodies joined in order, base first (at least 2).
+        chain: Vec<String>,
+        /// The point on the last body, body frame, metres.
+        point_m: [f64; 3],
+    },
 }
 
 impl ObjectiveSpec {
@@ -163,6 +200,8 @@ impl ObjectiveSpec {
             Self::Obstacle { .. } => ObjectiveKind::Obstacle,
             Self::StraightLine { .. } => ObjectiveKind::StraightLine,
             Self::JointLimitDistance { .. } => ObjectiveKind::JointLimitDistance,
+            Self::InverseDistance { .. } => ObjectiveKind::InverseDistance,
+            Self::WorkspaceVolume { .. } => ObjectiveKind::WorkspaceVolume,
         }
     }
 
@@ -174,7 +213,9 @@ impl ObjectiveSpec {
             | Self::Dexterity { weight, .. }
             | Self::Obstacle { weight, .. }
             | Self::StraightLine { weight, .. }
-            | Self::JointLimitDistance { weight, .. } => weight,
+            | Self::JointLimitDistance { weight, .. }
+            | Self::InverseDistance { weight, .. }
+            | Self::WorkspaceVolume { weight, .. } => weight,
         }
     }
 
@@ -185,7 +226,9 @@ impl ObjectiveSpec {
             Self::Dexterity { name, .. }
             | Self::Obstacle { name, .. }
             | Self::StraightLine { name, .. }
-            | Self::JointLimitDistance { name, .. } => name.as_deref(),
+            | Self::JointLimitDistance { name, .. }
+            | Self::InverseDistance { name, .. }
+            | Self::WorkspaceVolume { name, .. } => name.as_deref(),
         }
     }
 }

@@ -76,6 +76,8 @@ pub struct TickState {
     prev_error: Vec<Vector3<f64>>,
     last_targets: Vec<FingerTarget>,
     last_dt_s: f64,
+    /// Per design column: switched off.
+    design_off: Vec<bool>,
 }
 
 impl TickState {
@@ -142,6 +144,7 @@ impl Program {
         copy(&mut out.prev_error, self.feedback.prev_errors_snapshot());
         copy(&mut out.last_targets, &self.last_targets);
         out.last_dt_s = self.last_dt_s;
+        copy(&mut out.design_off, self.design_off_flags());
     }
 
     /// Replays the tick that went from `before` to `after` (states saved
@@ -185,6 +188,7 @@ impl Program {
             return Err(ProgramError::NonFinite { index });
         }
         self.load_motion(before, &before.q_prev);
+        self.load_design_flags(&before.design_off);
         self.set_static_shift(&before.static_shift);
         self.feedback.forced.fill(false);
         self.q.copy_from_slice(&before.q);

@@ -58,6 +58,7 @@
 mod auxiliary;
 mod contact;
 mod converged;
+mod design_flags;
 mod objective;
 mod report;
 mod semantic;
@@ -132,6 +133,8 @@ pub struct Program {
     objective: Option<objective::ObjectivePull>,
     /// Snap ramps and grouped carrying (models with semantic rows).
     semantic: Option<semantic::SemanticState>,
+    /// Per design column: switched off (`design_flags`).
+    design_off: Vec<bool>,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -253,6 +256,7 @@ impl Program {
             semantic: semantic::SemanticState::new(&model),
             friction_slot,
             friction_pair,
+            design_off: vec![false; model.layout().design_coords()],
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
             g: vec![0.0; n],
@@ -312,6 +316,14 @@ impl Program {
     /// the first tick and after any tick whose status is not `Ok`).
     pub fn finger_outputs(&self) -> &[FingerOutput] {
         &self.outputs
+    }
+
+    /// The torque (N·m; N on a prismatic joint) a motor on each of the
+    /// model's [`torque_joints`](Model::torque_joints) would need to make
+    /// the last tick's motion in place of the fingers (Nelson & Cohen §5.2;
+    /// `force::torque`); NaN after a failed tick.
+    pub fn joint_torques(&self) -> &[f64] {
+        self.feedback.joint_torques_out()
     }
 
     /// The last tick's report.

@@ -175,6 +175,12 @@ impl Program {
                 }
             }
         }
+        // Switched-off design variables stay put.
+        for (s, &off) in o.shift[design].iter_mut().zip(&self.design_off) {
+            if off {
+                *s = 0.0;
+            }
+        }
         // Flexible deformations (rest 0) are static: their shift is a
         // shape, not a step, and is rate-limited on its own (`static_rest`).
         let n_static = o.static_shift.len();

@@ -58,7 +58,12 @@ impl Program {
         {
             return Err(ProgramError::NonFinite { index });
         }
+        let nb = self.model.layout().body_coords();
         for (i, d) in dq.iter().enumerate() {
+            // A re-projection never moves a switched-off design variable.
+            if i >= nb && self.design_off_flags().get(i - nb) == Some(&true) {
+                continue;
+            }
             self.q[i] += d;
             self.q_ref[i] += d;
             self.feedback.motion.q_prev[i] += d;
@@ -112,6 +117,7 @@ impl Program {
                     self.q[d.offset + c] = old.q[od[j].offset + c];
                     self.feedback.motion.q_prev[d.offset + c] = mo.q_prev[od[j].offset + c];
                 }
+                let _ = self.set_design_active(i, old.design_active(j));
             }
         }
         // Auxiliary blocks (flexible deformations, surface parameters), by

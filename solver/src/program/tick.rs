@@ -191,7 +191,10 @@ impl Program {
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
-                UpdateRule::Gradient => self.gradient_step(targets).map(|()| Step::Taken(0.0)),
+                UpdateRule::Gradient => self.gradient_step(targets).map(|()| {
+                    self.hold_design_off();
+                    Step::Taken(0.0)
+                }),
                 UpdateRule::Projected => self.projected_step(targets, self.settings.step, allowed),
             };
             match done {
@@ -342,6 +345,7 @@ impl Program {
         // The stored Jacobian and factor may come from the failed state.
         let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
+        self.feedback.clear_torques();
         TickReport {
             iterations,
             status,

@@ -164,6 +164,9 @@ pub struct CompiledScene {
     pub semantic: Option<crate::semantic::SemanticSpec>,
     /// The contact fingers' scheduled holds.
     pub holds: Vec<HoldDecl>,
+    /// Design variables switched on and off during the run, by time
+    /// (`[[design_flag]]`, plus any `--design-on` / `--design-off`).
+    pub design_flags: Vec<super::DesignFlagDecl>,
 }
 
 fn settings(s: &SolverSection) -> SceneSettings {
@@ -305,30 +308,29 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             directions: o.directions.as_ref().map_or(Vec::new(), |d| {
                 d.get_ref().iter().map(|v| v.get()).collect()
             }),
+            angular_directions: o.angular_directions.as_ref().map_or(Vec::new(), |d| {
+                d.get_ref().iter().map(|v| v.get()).collect()
+            }),
+            closure: names(&o.closure),
         },
         ObjectiveKindSpec::Obstacle => ObjectiveSpec::Obstacle {
             name,
             weight,
-            points: o.points.as_ref().map_or(Vec::new(), |p| {
-                p.get_ref()
-                    .iter()
-                    .map(|r| {
-                        let r = r.get_ref();
-                        (
-                            r.body.get_ref().clone(),
-                            r.point.map_or([0.0; 3], |p| p.get()),
-                        )
-                    })
-                    .collect()
-            }),
-            obstacle: match (&o.obstacle, &o.obstacle_body) {
-                (Some(p), _) => ObstacleSpec::World(p.get_ref().get()),
-                (None, b) => ObstacleSpec::Body {
-                    body: b.as_ref().map_or(String::new(), |b| b.get_ref().clone()),
-                    point_m: point(&o.obstacle_point),
-                },
-            },
+            points: avoiding(o),
+            obstacle: obstacle(o),
             distance_m: o.distance.as_ref().map_or(0.0, |d| *d.get_ref()),
+        },
+        ObjectiveKindSpec::InverseDistance => ObjectiveSpec::InverseDistance {
+            name,
+            weight,
+            points: avoiding(o),
+            obstacle: obstacle(o),
+        },
+        ObjectiveKindSpec::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
+            name,
+            weight,
+            chain: names(&o.chain),
+            point_m: point(&o.point),
         },
         ObjectiveKindSpec::StraightLine => ObjectiveSpec::StraightLine {
             name,
@@ -345,6 +347,37 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             name,
             weight,
             joints: names(&o.joints),
+        },
+    }
+}
+
+/// An `obstacle` or `inverse_distance` objective's `points`.
+fn avoiding(o: &ObjectiveSection) -> Vec<(String, [f64; 3])> {
+    o.points.as_ref().map_or(Vec::new(), |p| {
+        p.get_ref()
+            .iter()
+            .map(|r| {
+                let r = r.get_ref();
+                (
+                    r.body.get_ref().clone(),
+                    r.point.map_or([0.0; 3], |p| p.get()),
+                )
+            })
+            .collect()
+    })
+}
+
+/// An `obstacle` or `inverse_distance` objective's obstacle (validated:
+/// exactly one of `obstacle`, `obstacle_body`).
+fn obstacle(o: &ObjectiveSection) -> ObstacleSpec {
+    match (&o.obstacle, &o.obstacle_body) {
+        (Some(p), _) => ObstacleSpec::World(p.get_ref().get()),
+        (None, b) => ObstacleSpec::Body {
+            body: b.as_ref().map_or(String::new(), |b| b.get_ref().clone()),
+            point_m: o
+                .obstacle_point
+                .as_ref()
+                .map_or([0.0; 3], |p| p.get_ref().get()),
         },
     }
 }
@@ -384,6 +417,7 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
     spec.free = j.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = j.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.report_torque = j.report_torque.as_ref().is_some_and(|x| *x.get_ref());
     spec.surface = j.surface.as_ref().map(|x| contact_surface(x.get_ref()));
     spec.radius_m = j.radius.as_ref().map(|x| *x.get_ref());
     spec
@@ -415,6 +449,9 @@ impl LoadedScene {
         }
         for j in &s.joints {
             builder.joint(joint_spec(j));
+        }
+        for g in &s.gears {
+            builder.gear(super::gear::gear_spec(g));
         }
         for f in &s.fingers {
             let point = f.point.as_ref().map_or([0.0; 3], |p| p.get_ref().get());
@@ -461,6 +498,7 @@ impl LoadedScene {
             .map_or(contact.penetration_tolerance_m, |x| *x.get_ref());
         let semantic = self.compile_semantic(&model, penetration)?;
         let holds = self.compile_holds(&model);
+        let design_flags = self.compile_design_flags(&model)?;
 
         let devices = s
             .devices
@@ -508,6 +546,7 @@ impl LoadedScene {
                 .sum(),
             semantic,
             holds,
+            design_flags,
         })
     }
 
@@ -672,6 +711,20 @@ impl LoadedScene {
                 let k = named.get(dup).or(named.last()).copied();
                 k.map_or(whole, |k| objective_field(&s.objectives[k], e))
             }
+            Owner::Gear(name) => {
+                let dup = matches!(e, BuildError::DuplicateName { .. });
+                let named: Vec<_> = s
+                    .gears
+                    .iter()
+                    .filter(|g| g.name.get_ref() == name)
+                    .collect();
+                match (named.first(), dup) {
+                    (Some(g), false) => super::gear::gear_field(g, e),
+                    // Used twice among gears: the second; else it repeats a joint's.
+                    (Some(g), true) => named.get(1).unwrap_or(g).name.span(),
+                    (None, _) => whole,
+                }
+            }
             Owner::Inequality(_) => whole,
         };
         let mut msg = e.to_string();
@@ -746,6 +799,7 @@ fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
     match e {
         BuildError::UnknownBody { body, .. } => or_head(
             in_list(&o.chain, body)
+                .or_else(|| in_list(&o.closure, body))
                 .or_else(|| {
                     o.points.as_ref().and_then(|p| {
                         p.get_ref()
@@ -757,7 +811,9 @@ fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
                 .or_else(|| o.body.as_ref().map(Spanned::span))
                 .or_else(|| o.obstacle_body.as_ref().map(Spanned::span)),
         ),
-        BuildError::ChainNotJoined { b, .. } => or_head(in_list(&o.chain, b)),
+        BuildError::ChainNotJoined { b, .. } => {
+            or_head(in_list(&o.chain, b).or_else(|| in_list(&o.closure, b)))
+        }
         BuildError::ChainJointKind { .. } => or_head(o.chain.as_ref().map(Spanned::span)),
         BuildError::UnknownJoint { joint, .. } | BuildError::NoLimits { joint, .. } => {
             or_head(in_list(&o.joints, joint))
@@ -830,6 +886,7 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         | BuildError::BoundsShape { .. }
         | BuildError::BoundsReversed { .. }
         | BuildError::OutsideBounds { .. } => or_head(j.bounds.as_ref().map(Spanned::span)),
+        BuildError::TorqueJointKind { .. } => or_head(j.report_torque.as_ref().map(Spanned::span)),
         BuildError::UnsupportedFree { param, .. } | BuildError::DuplicateFree { param, .. } => {
             let want = match param {
                 DesignParam::Length => FreeSpec::Length,

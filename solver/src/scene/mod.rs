@@ -14,8 +14,10 @@
 
 mod compile;
 mod compile_semantic;
+mod design_flags;
 mod error;
 mod flags;
+mod gear;
 pub mod limits;
 pub mod magnitudes;
 mod no_effect;
@@ -27,6 +29,7 @@ mod write;
 
 pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
 pub use compile_semantic::HoldDecl;
+pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_switches};
 pub use error::SceneError;
 pub use flags::Flagged;
 pub use write::mechanism_tables;

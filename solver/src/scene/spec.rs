@@ -10,6 +10,8 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
 
+pub use super::gear::{GearKindSpec, GearSection};
+
 /// A 3-vector in the file: `[x, y, z]`.
 pub type Vec3 = Arr<f64, 3>;
 /// A quaternion in the file: `[w, x, y, z]` (normalised on load).
@@ -77,6 +79,9 @@ pub struct SceneFile {
     /// `[[joint]]` tables, in file order.
     #[serde(default, rename = "joint")]
     pub joints: Vec<JointSection>,
+    /// `[[gear]]` tables, in file order.
+    #[serde(default, rename = "gear")]
+    pub gears: Vec<GearSection>,
     /// `[[device]]` tables, in file order.
     #[serde(default, rename = "device")]
     pub devices: Vec<DeviceSection>,
@@ -86,6 +91,9 @@ pub struct SceneFile {
     /// `[[objective]]` tables, in file order.
     #[serde(default, rename = "objective")]
     pub objectives: Vec<ObjectiveSection>,
+    /// `[[design_flag]]` tables: design variables switched on and off.
+    #[serde(default, rename = "design_flag")]
+    pub design_flags: Vec<super::design_flags::DesignFlagSection>,
     /// `[labels]`: each key is ≤ every label in its list (a partial order).
     #[serde(default)]
     pub labels: BTreeMap<Spanned<String>, Spanned<Vec<Spanned<String>>>>,
@@ -372,6 +380,9 @@ pub struct JointSection {
     /// Bounds on the design variables.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// Report the torque a motor on this joint's axis would need (§5.2).
+    #[serde(default)]
+    pub report_torque: Option<Spanned<bool>>,
     /// `on_surface` and `rolling`: body j's surface.
     #[serde(default)]
     pub surface: Option<Spanned<SurfaceSection>>,
@@ -557,6 +568,10 @@ pub enum ObjectiveKindSpec {
     StraightLine,
     /// Joints kept away from their limits.
     JointLimitDistance,
+    /// Eq. 15 as written: 1 / the nearest point's distance.
+    InverseDistance,
+    /// A chain's reachable volume.
+    WorkspaceVolume,
 }
 
 /// `{ body = "…", point = [x, y, z] }` in an objective's `points`.
@@ -595,6 +610,12 @@ pub struct ObjectiveSection {
     /// dexterity: task directions, world frame.
     #[serde(default)]
     pub directions: Option<Spanned<Vec<Vec3>>>,
+    /// dexterity: angular task directions (Eq. 13's angular rows), world frame.
+    #[serde(default)]
+    pub angular_directions: Option<Spanned<Vec<Vec3>>>,
+    /// dexterity: bodies closing the chain into a loop, back to its base.
+    #[serde(default)]
+    pub closure: Option<Spanned<Vec<Spanned<String>>>>,
     /// obstacle: the body points kept away.
     #[serde(default)]
     pub points: Option<Spanned<Vec<Spanned<PointRef>>>>,
@@ -642,6 +663,8 @@ impl ObjectiveSection {
             chain,
             point,
             directions,
+            angular_directions,
+            closure,
             points,
             obstacle,
             obstacle_body,

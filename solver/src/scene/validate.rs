@@ -126,7 +126,15 @@ impl Checker<'_> {
             K::LeastAstonishment => ("least_astonishment", &["weight", "design_weight"], &[]),
             K::Dexterity => (
                 "dexterity",
-                &["name", "weight", "chain", "point", "directions"],
+                &[
+                    "name",
+                    "weight",
+                    "chain",
+                    "point",
+                    "directions",
+                    "angular_directions",
+                    "closure",
+                ],
                 &["chain"],
             ),
             K::Obstacle => (
@@ -148,6 +156,23 @@ impl Checker<'_> {
                 &["body", "line_point", "direction"],
             ),
             K::JointLimitDistance => ("joint_limit_distance", &["name", "weight", "joints"], &[]),
+            K::InverseDistance => (
+                "inverse_distance",
+                &[
+                    "name",
+                    "weight",
+                    "points",
+                    "obstacle",
+                    "obstacle_body",
+                    "obstacle_point",
+                ],
+                &["points"],
+            ),
+            K::WorkspaceVolume => (
+                "workspace_volume",
+                &["name", "weight", "chain", "point"],
+                &["chain"],
+            ),
         };
         let keys = o.keys();
         for (key, span) in &keys {
@@ -170,7 +195,7 @@ impl Checker<'_> {
                 return Err(self.err(o.kind.span(), format!("a {name} objective needs `{need}`")));
             }
         }
-        if kind == K::Obstacle {
+        if matches!(kind, K::Obstacle | K::InverseDistance) {
             match (&o.obstacle, &o.obstacle_body) {
                 (Some(_), Some(b)) => {
                     return Err(self.err(
@@ -181,7 +206,7 @@ impl Checker<'_> {
                 (None, None) => {
                     return Err(self.err(
                         o.kind.span(),
-                        "an obstacle objective needs `obstacle = [x, y, z]` (a world point) or `obstacle_body` (a body's point)",
+                        format!("an {name} objective needs `obstacle = [x, y, z]` (a world point) or `obstacle_body` (a body's point)"),
                     ));
                 }
                 (Some(_), None) => {

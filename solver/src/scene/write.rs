@@ -6,7 +6,7 @@
 //! written-then-parsed scene reproduces every `f64` bit for bit.
 
 use crate::ModelBuilder;
-use crate::model::{BodySpec, FingerSpec, JointSpec, Shape};
+use crate::model::{BodySpec, FingerSpec, GearSpec, JointSpec, Shape};
 use std::fmt::Write as _;
 
 fn num(x: f64) -> String {
@@ -101,6 +101,9 @@ fn joint(out: &mut String, j: &JointSpec) {
             .collect();
         let _ = writeln!(out, "free = [{}]", names.join(", "));
     }
+    if j.report_torque {
+        let _ = writeln!(out, "report_torque = true");
+    }
     if let Some(s) = &j.surface {
         use crate::parametric::SurfaceKind as K;
         let (kind, radius) = match s.kind {
@@ -126,6 +129,18 @@ fn joint(out: &mut String, j: &JointSpec) {
     out.push('\n');
 }
 
+fn gear(out: &mut String, g: &GearSpec) {
+    let _ = writeln!(
+        out,
+        "[[gear]]\nname = \"{}\"\nkind = \"{}\"\njoints = [\"{}\", \"{}\"]\nratio = {}\n",
+        g.name,
+        g.kind.as_str(),
+        g.joints[0],
+        g.joints[1],
+        num(g.ratio)
+    );
+}
+
 fn finger(out: &mut String, f: &FingerSpec, device: &str) {
     if let Some(t) = f.tip {
         let _ = writeln!(
@@ -148,8 +163,9 @@ fn finger(out: &mut String, f: &FingerSpec, device: &str) {
     );
 }
 
-/// The `[[body]]`, `[[joint]]` and `[[finger]]` tables of `builder`, in scene
-/// syntax; `device_of` names the `[[device]]` that drives each finger.
+/// The `[[body]]`, `[[joint]]`, `[[gear]]` and `[[finger]]` tables of
+/// `builder`, in scene syntax; `device_of` names the `[[device]]` that
+/// drives each finger.
 pub fn mechanism_tables(builder: &ModelBuilder, device_of: &dyn Fn(&str) -> String) -> String {
     let mut out = String::new();
     for b in builder.body_specs() {
@@ -157,6 +173,9 @@ pub fn mechanism_tables(builder: &ModelBuilder, device_of: &dyn Fn(&str) -> Stri
     }
     for j in builder.joint_specs() {
         joint(&mut out, j);
+    }
+    for g in builder.gear_specs() {
+        gear(&mut out, g);
     }
     for f in builder.finger_specs() {
         finger(&mut out, f, &device_of(&f.name));
@@ -178,6 +197,13 @@ mod tests {
             ("four-bar", mechanisms::four_bar_builder()),
             ("stewart", mechanisms::stewart_builder()),
             ("sphere-toy", mechanisms::sphere_toy_builder()),
+            ("piston", mechanisms::piston_builder()),
+            ("stewart-3rsu", mechanisms::stewart_3rsu_builder()),
+            ("four-bar-cardan", mechanisms::four_bar_cardan_builder()),
+            (
+                "quarter-torus",
+                mechanisms::quarter_torus_builder(mechanisms::TORUS_GAP_M),
+            ),
         ] {
             let g = builder.gravity_m_s2();
             let mut text = format!("[scene]\nname = \"{name}\"\ngravity = {}\n\n", arr(&g));

@@ -162,6 +162,8 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
         point_m: [0.0; 3],
         directions: Vec::new(),
+        angular_directions: Vec::new(),
+        closure: Vec::new(),
     });
     b.objective(ObjectiveSpec::StraightLine {
         name: None,
@@ -170,6 +172,38 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         point_m: [0.0; 3],
         line_point_m: [0.06, 0.03, 0.06],
         direction: [1.0, 0.0, 0.0],
+    });
+    // Eq. 13's angular rows, a closed chain, Eq. 15 as written and App. D's
+    // workspace volume: the objectives of issue 22.
+    b.objective(ObjectiveSpec::Dexterity {
+        name: Some("angular".into()),
+        weight: 0.01,
+        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+        point_m: [0.0; 3],
+        directions: Vec::new(),
+        angular_directions: vec![[0.0, 0.0, 1.0]],
+        closure: Vec::new(),
+    });
+    b.objective(ObjectiveSpec::Dexterity {
+        name: Some("loop".into()),
+        weight: 0.01,
+        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+        point_m: [0.0; 3],
+        directions: vec![[0.0, 1.0, 0.0]],
+        angular_directions: Vec::new(),
+        closure: ["rocker", "ground"].map(String::from).to_vec(),
+    });
+    b.objective(ObjectiveSpec::InverseDistance {
+        name: None,
+        weight: 0.001,
+        points: vec![("coupler".into(), [0.0; 3])],
+        obstacle: haptloop_solver::ObstacleSpec::World([0.1, 0.1, 0.1]),
+    });
+    b.objective(ObjectiveSpec::WorkspaceVolume {
+        name: None,
+        weight: 0.01,
+        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+        point_m: [0.0; 3],
     });
     let model = b.build().unwrap();
     assert_eq!(model.layout().design_coords(), 3);
@@ -189,5 +223,61 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         assert_eq!(statuses, 500, "{update:?}");
         assert_eq!(stats.total(), 0, "{update:?}: {stats:?}");
         assert!(p.objective_reports().iter().all(|v| v.is_finite()));
+    }
+}
+
+/// Nelson & Cohen §3's flags: the strut's free length switched off stays
+/// exactly where it is while the finger pulls 3 cm outward (the bob stays on
+/// its circle), and switched back on it follows the finger; under both
+/// update rules. A hand-over and a saved tick state carry the flag.
+#[test]
+fn a_design_variable_switched_off_holds_and_switched_on_moves_again() {
+    for update in [UpdateRule::Projected, UpdateRule::Gradient] {
+        let model = strut(None);
+        let col = model.layout().design_vars()[0].offset;
+        let mut p = program(model.clone(), update);
+        p.set_design_active(0, false).unwrap();
+        assert!(!p.design_active(0));
+        let mut t = p.model().initial_targets();
+        for k in 0..300 {
+            t[0].position_m.x = 0.1 + 0.03 * (k as f64 / 100.0).min(1.0);
+            let r = p.tick(&t, DT);
+            assert_eq!(r.status, TickOutcome::Ok, "{update:?}, tick {k}");
+            assert_eq!(p.q()[col], 0.1, "{update:?}, tick {k}: the length moved");
+            // Eq. 3 holds a strut the finger pulls on to its penalty's
+            // balance (tens of µm); the projected step to round-off.
+            let tol = if update == UpdateRule::Gradient {
+                1e-4
+            } else {
+                1e-9
+            };
+            assert!(
+                r.max_violation_m < tol,
+                "{update:?}: {:e}",
+                r.max_violation_m
+            );
+        }
+        // A replacement program (a hand-over) and a replayed tick keep it off.
+        let mut fresh = program(model.clone(), update);
+        fresh.adopt_state(&p);
+        assert!(!fresh.design_active(0));
+        let before = p.tick_state();
+        p.tick(&t, DT);
+        let after = p.tick_state();
+        let mut reference = program(model, UpdateRule::Projected);
+        let c = reference
+            .converged_tick(&before, &after, &t, DT.as_secs_f64(), 1e-12, 50)
+            .unwrap();
+        assert_eq!(c.status, TickOutcome::Ok);
+        assert_eq!(reference.q()[col], 0.1, "{update:?}: the replay moved it");
+        p.set_design_active(0, true).unwrap();
+        for _ in 0..600 {
+            p.tick(&t, DT);
+        }
+        let length = p.q()[col];
+        assert!(
+            (length - 0.13).abs() < 2e-3,
+            "{update:?}: switched on, length {length}"
+        );
     }
 }

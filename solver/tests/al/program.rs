@@ -75,6 +75,35 @@ fn tick_allocates_nothing_sphere_toy() {
     assert_tick_allocates_nothing(sphere_toy());
 }
 
+/// The piston (gears, masked rows) with motor torques reported on its main
+/// bearing and a bore (§5.2's extra solves every tick).
+#[test]
+fn tick_allocates_nothing_piston_with_joint_torques() {
+    let src = haptloop_solver::mechanisms::piston_builder();
+    let mut b = haptloop_solver::ModelBuilder::new();
+    b.gravity(src.gravity_m_s2());
+    for s in src.body_specs() {
+        b.body(s.clone());
+    }
+    for j in src.joint_specs() {
+        let named = matches!(j.name.as_deref(), Some("main" | "bore0"));
+        b.joint(if named {
+            j.clone().report_torque()
+        } else {
+            j.clone()
+        });
+    }
+    for g in src.gear_specs() {
+        b.gear(g.clone());
+    }
+    for f in src.finger_specs() {
+        b.finger(f.clone());
+    }
+    let model = b.build().unwrap();
+    assert_eq!(model.torque_joints().len(), 2);
+    assert_tick_allocates_nothing(model);
+}
+
 fn no_nan(p: &Program) -> bool {
     p.q().iter().chain(p.lambda()).all(|v| v.is_finite())
         && p.finger_outputs().iter().all(|o| o.is_finite())

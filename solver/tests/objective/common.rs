@@ -65,8 +65,63 @@ pub fn dexterity() -> Model {
             .to_vec(),
         point_m: [0.125, 0.0, 0.0],
         directions: Vec::new(),
+        angular_directions: Vec::new(),
+        closure: Vec::new(),
     });
     b.build().expect("dexterity model")
+}
+
+/// The 3R arm with Eq. 13 as written: the three linear rows and the three
+/// angular rows (6 rows, 3 columns: G = J̃ᵀ J̃).
+pub fn dexterity_angular() -> Model {
+    let mut b = arm(0.8);
+    b.objective(ObjectiveSpec::Dexterity {
+        name: None,
+        weight: 0.9,
+        chain: ["base", "turret", "upper", "fore"]
+            .map(String::from)
+            .to_vec(),
+        point_m: [0.125, 0.0, 0.0],
+        directions: Vec::new(),
+        angular_directions: vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        closure: Vec::new(),
+    });
+    b.build().expect("angular dexterity model")
+}
+
+/// The built-in spatial R-S-U-R four-bar as a closed chain (crank, coupler;
+/// closed by the rocker), dexterity at the coupler's middle along one
+/// direction (the loop has one degree of freedom). With `spin`, the
+/// coupler–rocker joint is spherical instead: the coupler may also spin
+/// about BC (two degrees of freedom), and an angular row joins.
+pub fn dexterity_closed(spin: bool) -> Model {
+    let src = haptloop_solver::mechanisms::four_bar_builder();
+    let mut b = ModelBuilder::new();
+    for s in src.body_specs() {
+        b.body(s.clone());
+    }
+    for j in src.joint_specs() {
+        let mut j = j.clone();
+        if spin && j.kind == K::Universal {
+            j.kind = K::Spherical;
+            j.axes = None;
+        }
+        b.joint(j);
+    }
+    b.objective(ObjectiveSpec::Dexterity {
+        name: Some("loop".into()),
+        weight: 1.1,
+        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+        point_m: [0.0, 0.01, 0.0],
+        directions: vec![[0.3, 1.0, 0.2]],
+        angular_directions: if spin {
+            vec![[0.2, 0.1, 1.0]]
+        } else {
+            Vec::new()
+        },
+        closure: ["rocker", "ground"].map(String::from).to_vec(),
+    });
+    b.build().expect("closed chain")
 }
 
 /// A chain of every joint kind with a column form (spherical, universal,
@@ -105,6 +160,8 @@ pub fn dexterity_mixed() -> Model {
         chain: ["ground", "a", "b", "c", "d"].map(String::from).to_vec(),
         point_m: [0.05, 0.02, -0.01],
         directions: vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.2]],
+        angular_directions: Vec::new(),
+        closure: Vec::new(),
     });
     b.build().expect("mixed chain")
 }
@@ -137,6 +194,60 @@ pub fn obstacle(on_body: bool) -> Model {
         distance_m: 0.4,
     });
     b.build().expect("obstacle model")
+}
+
+/// Eq. 15 as written for the points of [`obstacle`] (world obstacle).
+pub fn inverse_distance() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground").free_position());
+    b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
+    b.body(BodySpec::new("b").at([0.0, 0.2, 0.0]));
+    b.joint(JointSpec::new(K::Spherical, "ground", "a").anchors([0.0; 3], [-0.1, 0.0, 0.0]));
+    b.objective(ObjectiveSpec::InverseDistance {
+        name: None,
+        weight: 0.8,
+        points: vec![
+            ("a".into(), [0.05, 0.0, 0.0]),
+            ("b".into(), [0.0, -0.05, 0.02]),
+            ("ground".into(), [0.02, 0.02, 0.0]),
+        ],
+        obstacle: ObstacleSpec::World([0.05, 0.05, 0.1]),
+    });
+    b.build().expect("inverse distance model")
+}
+
+/// A three-link spherical chain with free anchors (every link's length a
+/// design variable somewhere), workspace volume at the last body's point.
+pub fn workspace() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground"));
+    b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
+    b.body(BodySpec::new("b").at([0.25, 0.05, 0.0]));
+    b.body(BodySpec::new("c").at([0.4, 0.05, 0.05]));
+    b.joint(
+        JointSpec::new(K::Spherical, "ground", "a")
+            .anchors([0.0; 3], [-0.1, 0.0, 0.0])
+            .free(&[P::AnchorJ]),
+    );
+    b.joint(
+        JointSpec::new(K::Universal, "a", "b")
+            .anchors([0.08, 0.0, 0.0], [-0.07, -0.05, 0.0])
+            .axes([0.0, 0.0, 1.0], [0.2, 1.0, 0.1])
+            .free(&[P::AnchorI]),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "c", "b")
+            .anchors([-0.1, 0.0, -0.05], [0.05, 0.0, 0.0])
+            .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0])
+            .free(&[P::AnchorI, P::AnchorJ]),
+    );
+    b.objective(ObjectiveSpec::WorkspaceVolume {
+        name: Some("reach".into()),
+        weight: 1.5,
+        chain: ["ground", "a", "b", "c"].map(String::from).to_vec(),
+        point_m: [0.06, 0.01, 0.0],
+    });
+    b.build().expect("workspace model")
 }
 
 /// A body point on a world line.

@@ -18,6 +18,8 @@ fn dexterity(chain: &[&str]) -> ObjectiveSpec {
         chain: chain.iter().map(|s| s.to_string()).collect(),
         point_m: [0.0; 3],
         directions: Vec::new(),
+        angular_directions: Vec::new(),
+        closure: Vec::new(),
     }
 }
 
@@ -178,4 +180,69 @@ fn a_name_is_used_once_and_builtin_weights_once() {
         ),
         "{e:?}"
     );
+}
+
+/// A closed chain's `closure` leads back to the base, names joined bodies,
+/// and the loop must move the point in as many directions as there are task
+/// rows (the four-bar's loop: one).
+#[test]
+fn a_closed_chain_closes_on_its_base_and_asks_no_more_rows_than_it_moves() {
+    let four_bar = |closure: &[&str], directions: Vec<[f64; 3]>| {
+        let src = haptloop_solver::mechanisms::four_bar_builder();
+        let mut b = ModelBuilder::new();
+        for s in src.body_specs() {
+            b.body(s.clone());
+        }
+        for j in src.joint_specs() {
+            b.joint(j.clone());
+        }
+        b.objective(ObjectiveSpec::Dexterity {
+            name: Some("loop".into()),
+            weight: 1.0,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions,
+            angular_directions: Vec::new(),
+            closure: closure.iter().map(|s| s.to_string()).collect(),
+        });
+        b.build()
+    };
+    let one = vec![[1.0, 0.0, 0.0]];
+    assert!(four_bar(&["rocker", "ground"], one.clone()).is_ok());
+    let e = four_bar(&["rocker"], one.clone()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            E::BadObjective {
+                field: "closure",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = four_bar(&["crank", "ground"], one.clone()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            E::BadObjective {
+                field: "closure",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = four_bar(&["ground"], one).unwrap_err();
+    assert!(matches!(e, E::ChainNotJoined { .. }), "{e:?}");
+    let e = four_bar(&["rocker", "ground"], Vec::new()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            E::BadObjective {
+                field: "directions",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("degrees of freedom"), "{e}");
 }

@@ -78,8 +78,33 @@ fn dexterity_of_a_mixed_chain_with_free_anchors_and_two_directions() {
 }
 
 #[test]
+fn dexterity_with_eq_13s_angular_rows() {
+    run(common::dexterity_angular());
+}
+
+#[test]
+fn dexterity_of_a_closed_chain() {
+    run(common::dexterity_closed(false));
+}
+
+#[test]
+fn dexterity_of_a_two_dof_loop_with_an_angular_row() {
+    run(common::dexterity_closed(true));
+}
+
+#[test]
 fn obstacle_at_a_world_point() {
     run(common::obstacle(false));
+}
+
+#[test]
+fn inverse_distance_eq_15_as_written() {
+    run(common::inverse_distance());
+}
+
+#[test]
+fn workspace_volume_through_free_anchors() {
+    run(common::workspace());
 }
 
 #[test]

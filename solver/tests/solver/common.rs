@@ -190,6 +190,52 @@ pub fn free_positions() -> Model {
     build(&b)
 }
 
+/// Gear pairs and racks in every arrangement of their joints' bodies: both
+/// gears on the fixed ground, a gear riding on its mate (joint a–b), a rack
+/// on the ground and a pinion on a sliding carriage (prismatic ground–b,
+/// pinion b–a), with a free anchor on a revolute (its angle ignores it).
+pub fn gears() -> Model {
+    use haptloop_solver::GearSpec;
+    let mut b = bodies();
+    b.joint(
+        JointSpec::new(K::Revolute, "ground", "a")
+            .named("ra")
+            .anchors(KJ, KI)
+            .axes([0.0, 1.0, 0.0], [0.0, 1.0, 0.0])
+            .free(&[P::AnchorJ]),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "ground", "b")
+            .named("rb")
+            .anchors(KI, KJ)
+            .axes([0.2, 0.3, 1.0], [1.0, -0.2, 0.1]),
+    );
+    b.joint(
+        JointSpec::new(K::Revolute, "b", "a")
+            .named("rba")
+            .anchors(KJ, KI)
+            .axes([0.0, 0.3, 1.0], [1.0, 0.1, 0.0]),
+    );
+    b.joint(
+        JointSpec::new(K::Prismatic, "ground", "b")
+            .named("pb")
+            .anchors(KI, KJ)
+            .axes([1.0, 0.0, 0.2], [0.0, 1.0, 0.0]),
+    );
+    b.joint(
+        JointSpec::new(K::Prismatic, "a", "b")
+            .named("pab")
+            .anchors(KI, KJ)
+            .axes([0.1, 1.0, 0.0], [1.0, 0.0, 0.3]),
+    );
+    b.gear(GearSpec::gear("g-ground", "ra", "rb", -0.5));
+    b.gear(GearSpec::gear("g-riding", "rb", "rba", 3.0));
+    b.gear(GearSpec::rack_pinion("k-ground", "ra", "pb", 0.02));
+    b.gear(GearSpec::rack_pinion("k-carriage", "rba", "pb", -0.05));
+    b.gear(GearSpec::rack_pinion("k-moving", "rb", "pab", 0.04));
+    build(&b)
+}
+
 pub fn fingers() -> Model {
     let mut b = bodies();
     b.finger(FingerSpec::point("index", "a", [0.05, 0.1, -0.02]));

@@ -54,6 +54,7 @@ fd_test!(distance, [C::Distance, C::DistanceLimit]);
 fd_test!(point_on_plane, [C::PointOnPlane]);
 fd_test!(fingers, [C::PointFinger, C::RigidFinger]);
 fd_test!(point_plane_inequalities, [C::PointPlaneInequality]);
+fd_test!(gears, [C::Gear, C::RackPinion]);
 fd_test!(
     free_positions,
     [
