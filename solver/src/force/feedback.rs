@@ -244,6 +244,12 @@ impl Feedback {
         self.slips
     }
 
+    /// Counts a slip decided outside the force solve (inertial motion
+    /// judges the cone on the step's own forces).
+    pub fn count_slip(&mut self) {
+        self.slips += 1;
+    }
+
     /// Refactors the joint block at the tick's chord Jacobian with the
     /// inequality rows `rows` forced active on top of the usual set (a step
     /// predicted they would be violated): the projected update's own
@@ -334,8 +340,10 @@ impl Feedback {
             }
         }
         // Coulomb: a sticking pair whose friction load exceeds μ times the
-        // user's grip slips this tick.
-        for k in 0..self.friction.len() {
+        // user's grip slips this tick. (Inertial motion judges the cone on
+        // the step's own forces instead: `program::inertial`.)
+        let judged = if settings.dynamics { 0 } else { self.friction.len() };
+        for k in 0..judged {
             let p = self.friction[k];
             if !(self.stick[p.rows[0]] && self.scale[p.rows[0]] != 0.0) {
                 continue;

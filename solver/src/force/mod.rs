@@ -49,7 +49,7 @@ mod cg;
 pub(crate) mod feedback;
 pub mod friction;
 mod gram;
-mod inertia;
+pub(crate) mod inertia;
 mod motion;
 mod output;
 mod redundancy;

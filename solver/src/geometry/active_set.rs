@@ -19,9 +19,10 @@
 //! witnesses it was given. A pair is tracked pre-emptively when its surfaces
 //! are closer than `contact_distance` plus twice the distance the two bodies
 //! moved (relative, translation plus rotation at their radii) during the last
-//! cycle: a pair closing in at speed v over a cycle of T is tracked at least
-//! 2 v T before it touches, so a witness row exists before the fast loop
-//! needs it.
+//! cycle, or will move over the next one at their current velocity if that
+//! is more (`set_expected_motion`): a pair closing in at speed v over a
+//! cycle of T is tracked at least 2 v T before it touches, so a witness row
+//! exists before the fast loop needs it.
 //!
 //! **Tunnelling.** A pair that the swept broad phase (last and current AABBs)
 //! reports, that is not tracked and is separated now but whose shapes swept
@@ -146,6 +147,9 @@ pub struct ActiveSet {
     broad: BroadPhase,
     tracked: BTreeMap<[u32; 2], Tracked>,
     last_poses: Vec<Pose3>,
+    /// Per body: how far it may move over the next cycle at its current
+    /// velocity, metres (empty: unknown; [`set_expected_motion`](Self::set_expected_motion)).
+    expected: Vec<f64>,
 }
 
 impl ActiveSet {
@@ -168,7 +172,20 @@ impl ActiveSet {
             broad: BroadPhase::default(),
             tracked: BTreeMap::new(),
             last_poses: Vec::new(),
+            expected: Vec::new(),
         }
+    }
+
+    /// How far each body (one entry per model body) will move over the
+    /// next cycle at its current velocity, metres: its speed (linear plus
+    /// radius × angular) times the cycle. The next [`update`](Self::update)
+    /// takes the larger of this and the body's motion over the last cycle
+    /// as its motion, so a body that just started moving fast (thrown,
+    /// bounced, released with a velocity) has its pairs tracked as far
+    /// ahead as it will fly.
+    pub fn set_expected_motion(&mut self, expected_m: &[f64]) {
+        self.expected.clear();
+        self.expected.extend_from_slice(expected_m);
     }
 
     /// Replaces the pairs that never collide (a model derived with new
@@ -187,6 +204,14 @@ impl ActiveSet {
                 .is_err()
         });
         self.excluded = excluded;
+    }
+
+    /// Each body's bounding radius, metres (0 without a shape).
+    pub fn radii(&self) -> Vec<f64> {
+        self.bodies
+            .iter()
+            .map(|b| b.as_ref().map_or(0.0, |b| b.collider.radius_m))
+            .collect()
     }
 
     /// The settings.
@@ -267,6 +292,8 @@ impl ActiveSet {
                 let angle = rotation_angle(&(p.rot * l.rot.transpose()));
                 (p.r - l.r).norm() + radius * angle
             })
+            .zip(self.expected.iter().copied().chain(std::iter::repeat(0.0)))
+            .map(|(moved, expected)| moved.max(expected))
             .collect();
         let max_motion = motion.iter().copied().fold(0.0, f64::max);
         // Swept broad phase: the current AABBs loosened enough to reach last

@@ -57,6 +57,16 @@ pub struct Body {
     /// Coulomb μ of its contacts with other bodies (see
     /// [`BodySpec::friction`](crate::BodySpec::friction)).
     pub friction: f64,
+    /// Restitution of its contacts, in [0, 1] (see
+    /// [`BodySpec::restitution`](crate::BodySpec::restitution)).
+    pub restitution: f64,
+    /// Velocity damping, 1/s (see
+    /// [`BodySpec::damping_per_s`](crate::BodySpec::damping_per_s)).
+    pub damping_per_s: f64,
+    /// Initial velocity, m/s, world frame.
+    pub velocity_m_s: Vector3<f64>,
+    /// Initial angular velocity, rad/s, world frame.
+    pub angular_velocity_rad_s: Vector3<f64>,
 }
 
 /// One finger: a point (or rigid) grasp of a moving body.
@@ -93,6 +103,9 @@ pub struct Model {
     pub(crate) contact: ContactLayout,
     pub(crate) objectives: crate::objective::Objectives,
     pub(crate) semantic: SemanticLayout,
+    /// Joints whose two bodies collide with each other
+    /// ([`JointSpec::collide`](crate::JointSpec::collide)).
+    pub(crate) colliding_joints: Vec<ConstraintId>,
 }
 
 fn next_model_id() -> u64 {
@@ -202,6 +215,12 @@ impl Model {
     /// Gravity, m/s², world frame (zero if the scene gives none).
     pub fn gravity_m_s2(&self) -> Vector3<f64> {
         self.gravity
+    }
+
+    /// True when joint `joint` lets its two bodies' shapes collide
+    /// ([`JointSpec::collide`](crate::JointSpec::collide)).
+    pub fn joint_collides(&self, joint: ConstraintId) -> bool {
+        self.colliding_joints.contains(&joint)
     }
 
     /// The largest lever arm in the model (anchor or finger point distance from

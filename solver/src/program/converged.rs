@@ -72,6 +72,8 @@ pub struct TickState {
     prev_error: Vec<Vector3<f64>>,
     last_targets: Vec<FingerTarget>,
     last_dt_s: f64,
+    /// The bodies' own velocities (inertial motion's prediction).
+    vel: crate::dynamics::velocity::Velocities,
 }
 
 impl TickState {
@@ -135,6 +137,7 @@ impl Program {
         copy(&mut out.prev_error, self.feedback.prev_errors_snapshot());
         copy(&mut out.last_targets, &self.last_targets);
         out.last_dt_s = self.last_dt_s;
+        out.vel.copy_from(&self.inertial.vel);
     }
 
     /// Replays the tick that went from `before` to `after` (states saved
@@ -177,6 +180,9 @@ impl Program {
             return Err(ProgramError::NonFinite { index });
         }
         self.load_motion(before, &before.q_prev);
+        if before.vel.v.len() == bodies {
+            self.inertial.vel.copy_from(&before.vel);
+        }
         self.feedback.forced.fill(false);
         self.q.copy_from_slice(&before.q);
         self.lambda.copy_from_slice(&before.lambda);

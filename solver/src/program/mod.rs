@@ -57,6 +57,7 @@
 
 mod contact;
 mod converged;
+mod inertial;
 mod objective;
 mod report;
 mod semantic;
@@ -64,7 +65,6 @@ mod stages;
 mod state;
 mod tick;
 
-pub use contact::DYNAMIC_DAMPING_PER_S;
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use semantic::SNAP_RISE_S;
@@ -129,6 +129,8 @@ pub struct Program {
     objective: Option<objective::ObjectivePull>,
     /// Snap ramps and grouped carrying (models with semantic rows).
     semantic: Option<semantic::SemanticState>,
+    /// Body velocities, friction states, restitution, energy (`dynamics`).
+    inertial: inertial::Inertial,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -227,7 +229,18 @@ impl Program {
                 })
             })
             .collect();
+        let finger_rows = (0..m)
+            .filter(|&i| matches!(scaling.role[i], Role::Finger | Role::Coupling))
+            .collect();
+        let inertial = inertial::Inertial::new(
+            &model,
+            &feedback.masses,
+            finger_rows,
+            friction_pair.len(),
+            projected.reach(),
+        );
         let mut p = Program {
+            inertial,
             friction_bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
@@ -260,6 +273,7 @@ impl Program {
             settings,
             model,
         };
+        p.reset_velocities();
         if p.refresh() != TickOutcome::Ok {
             return Err(ProgramError::Factorization(
                 "the multiplier solve failed at the initial configuration".into(),

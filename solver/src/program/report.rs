@@ -100,6 +100,9 @@ pub struct TickReport {
     pub activations: u32,
     /// Friction pairs sticking after the force solve.
     pub sticking: u32,
+    /// Energy of the moving bodies at the tick's start and the fingers' work
+    /// up to then (inertial motion; not `valid` otherwise or on failure).
+    pub energy: crate::dynamics::EnergySample,
     /// How it ended.
     pub status: TickOutcome,
 }
