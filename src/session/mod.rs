@@ -21,6 +21,7 @@ mod rig;
 mod semantic;
 mod slow;
 mod stats;
+pub mod energy;
 pub mod timing;
 mod track;
 
@@ -220,6 +221,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         q: Vec::with_capacity(n),
         solved: true,
         finger_force_n: Vec::with_capacity(n_fingers),
+        speeds: Vec::with_capacity(model.bodies().len()),
         ..Snapshot::default()
     });
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);

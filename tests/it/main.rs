@@ -9,6 +9,7 @@ mod bench;
 mod contact;
 mod design;
 mod docs;
+mod physics;
 mod reference;
 mod scene_format;
 mod scenes;

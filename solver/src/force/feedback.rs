@@ -74,6 +74,10 @@ pub(crate) struct Feedback {
     /// Counts the factorisations: whatever caches products with the factor
     /// (the projected update's design columns) recomputes when it changes.
     pub generation: u64,
+    /// Per moving body: a force (N, at its centre of mass) and torque (N·m)
+    /// known in advance, world frame, added to Eq. 7's Q_e: the kinetic
+    /// friction of slipping contacts (inertial motion), which no row holds.
+    pub applied: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -160,6 +164,7 @@ impl Feedback {
             known: vec![None; m_f],
             max_pull_n: 0.0,
             generation: 0,
+            applied: vec![(Vector3::zeros(), Vector3::zeros()); masses.len()],
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -322,6 +327,16 @@ impl Feedback {
                 &mo.alpha[k],
                 &mut self.b[o..o + 7],
             );
+            let (force, torque) = self.applied[k];
+            if force != Vector3::zeros() || torque != Vector3::zeros() {
+                let te = f.omega.transpose() * torque;
+                for c in 0..3 {
+                    self.b[o + c] += force[c];
+                }
+                for c in 0..4 {
+                    self.b[o + 3 + c] += te[c];
+                }
+            }
         }
         self.couplings(s, settings, q, targets, dt_s)?;
         self.activate(s, ev.values(), lambda);

@@ -164,20 +164,20 @@ impl Program {
     }
 
     /// Sets each shaped body's contact speed allowance for this tick
-    /// (`dynamics::allowance_m`).
+    /// (`dynamics::allowance_m`). Only bodies with momentum (inertial
+    /// motion) get more than `contact_step_m`: without it a body moves only
+    /// as far as a finger drags it, and the fixed limit stays.
     ///
     /// # Real-time
-    /// No allocation after the first tick.
+    /// No allocation.
     pub(super) fn set_allowances(&mut self, dt_s: f64) {
         let base = self.contact_step_m;
-        if !base.is_finite() {
+        if !(base.is_finite() && self.settings.dynamics) {
+            let all = std::iter::repeat(base);
+            self.projected.set_allowances(all);
             return;
         }
-        let g = if self.settings.dynamics {
-            self.model.gravity_m_s2().norm()
-        } else {
-            0.0
-        };
+        let g = self.model.gravity_m_s2().norm();
         let vel = &self.inertial.vel;
         let allow = self.inertial.reach.iter().map(|&(k, r)| {
             let speed = vel.v[k].norm() + r * vel.w[k].norm();
@@ -206,6 +206,9 @@ impl Program {
             st.vel
                 .predict(&self.feedback.masses, &st.frames, &st.damping, &g, dt_s);
         }
+        self.feedback
+            .applied
+            .fill((Vector3::zeros(), Vector3::zeros()));
         for k in 0..self.feedback.friction.len() {
             let p = self.feedback.friction[k];
             let slip = self.inertial.slip[k];
@@ -215,11 +218,16 @@ impl Program {
             let Some(point) = contact_point(self, k, &self.q) else {
                 continue;
             };
-            let impulse = coulomb::kinetic(&slip, p.mu) * dt_s;
+            let force = coulomb::kinetic(&slip, p.mu);
             let (masses, st) = (&self.feedback.masses, &mut self.inertial);
-            for (kk, j) in self.friction_bodies[k].into_iter().zip([impulse, -impulse]) {
+            for (kk, f) in self.friction_bodies[k].into_iter().zip([force, -force]) {
                 if let Some(i) = kk {
-                    st.vel.push(i, &masses[i], &st.frames[i], &point, &j);
+                    st.vel.push(i, &masses[i], &st.frames[i], &point, &(f * dt_s));
+                    // The same force in Eq. 7's balance: a finger pushing a
+                    // sliding body feels its friction.
+                    let a = &mut self.feedback.applied[i];
+                    a.0 += f;
+                    a.1 += (point - st.frames[i].r).cross(&f);
                 }
             }
         }
