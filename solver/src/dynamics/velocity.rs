@@ -23,11 +23,6 @@ pub(crate) struct Velocities {
     pub w: Vec<Vector3<f64>>,
     /// Angular momentum about the centre of mass, kg·m²/s, world.
     pub l: Vec<Vector3<f64>>,
-    /// The step before's v and ω (the energy at t_n averages the two half
-    /// steps around it).
-    pub v_prev: Vec<Vector3<f64>>,
-    /// rad/s, world.
-    pub w_prev: Vec<Vector3<f64>>,
     /// This tick's predicted velocity (before the constraints act), m/s.
     pub v_pred: Vec<Vector3<f64>>,
     /// This tick's predicted angular velocity, rad/s.
@@ -36,8 +31,6 @@ pub(crate) struct Velocities {
     pub l_pred: Vec<Vector3<f64>>,
     /// `v`, `w` are a step's (false: an instant's, after a reset).
     pub started: bool,
-    /// `v_prev`, `w_prev` are a step's too.
-    pub prev_started: bool,
     /// A tick has run since the program was built (a reset is then to rest,
     /// not to the scene's initial velocities).
     pub ticked: bool,
@@ -51,13 +44,10 @@ impl Velocities {
             v: z.clone(),
             w: z.clone(),
             l: z.clone(),
-            v_prev: z.clone(),
-            w_prev: z.clone(),
             v_pred: z.clone(),
             w_pred: z.clone(),
             l_pred: z,
             started: false,
-            prev_started: false,
             ticked: false,
         }
     }
@@ -70,8 +60,6 @@ impl Velocities {
         self.v[k] = v;
         self.w[k] = w;
         self.l[k] = m.world_inertia(f) * w;
-        self.v_prev[k] = v;
-        self.w_prev[k] = w;
     }
 
     /// Forgets the motion: every body at rest at an instant.
@@ -79,12 +67,10 @@ impl Velocities {
     /// # Real-time
     /// No allocation; O(bodies).
     pub fn rest(&mut self) {
-        for x in [&mut self.v, &mut self.w, &mut self.l, &mut self.v_prev] {
+        for x in [&mut self.v, &mut self.w, &mut self.l] {
             x.fill(Vector3::zeros());
         }
-        self.w_prev.fill(Vector3::zeros());
         self.started = false;
-        self.prev_started = false;
     }
 
     /// The predicted velocities of this tick, before any contact force:
@@ -148,8 +134,6 @@ impl Velocities {
     pub fn finish(&mut self, masses: &[BodyMass], q_ref: &[f64], q: &[f64], dt_s: f64) {
         for (k, m) in masses.iter().enumerate() {
             let o = m.offset;
-            self.v_prev[k] = self.v[k];
-            self.w_prev[k] = self.w[k];
             self.v[k] = Vector3::new(
                 q[o] - q_ref[o],
                 q[o + 1] - q_ref[o + 1],
@@ -161,7 +145,6 @@ impl Velocities {
                 self.l[k] = m.world_inertia(&f) * self.w[k];
             }
         }
-        self.prev_started = self.started;
         self.started = true;
         self.ticked = true;
     }
@@ -174,26 +157,11 @@ impl Velocities {
         self.l[k] += m.world_inertia(f) * dw;
     }
 
-    /// The velocity at t_n (the tick's start) of body `k`: the mean of the
-    /// two steps around it, or the instant's after a reset.
-    pub fn at_start(&self, k: usize) -> (Vector3<f64>, Vector3<f64>) {
-        if self.prev_started {
-            (
-                (self.v_prev[k] + self.v[k]) * 0.5,
-                (self.w_prev[k] + self.w[k]) * 0.5,
-            )
-        } else {
-            (self.v_prev[k], self.w_prev[k])
-        }
-    }
-
     /// Copies body `from` of `old` into body `to`.
     pub fn copy_body(&mut self, to: usize, old: &Velocities, from: usize) {
         self.v[to] = old.v[from];
         self.w[to] = old.w[from];
         self.l[to] = old.l[from];
-        self.v_prev[to] = old.v_prev[from];
-        self.w_prev[to] = old.w_prev[from];
     }
 
     /// Becomes a copy of `src`: no allocation when the two have the same
@@ -210,8 +178,6 @@ impl Velocities {
         copy(&mut self.v, &src.v);
         copy(&mut self.w, &src.w);
         copy(&mut self.l, &src.l);
-        copy(&mut self.v_prev, &src.v_prev);
-        copy(&mut self.w_prev, &src.w_prev);
         copy(&mut self.v_pred, &src.v_pred);
         copy(&mut self.w_pred, &src.w_pred);
         copy(&mut self.l_pred, &src.l_pred);
@@ -221,7 +187,6 @@ impl Velocities {
     /// Copies the flags of `old`.
     pub fn copy_flags(&mut self, old: &Velocities) {
         self.started = old.started;
-        self.prev_started = old.prev_started;
         self.ticked = old.ticked;
     }
 }

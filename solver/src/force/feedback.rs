@@ -102,6 +102,7 @@ impl Feedback {
     ) -> Result<Self, faer::sparse::FaerError> {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
+        let n_bodies = masses.len();
         let gram = Gram::new(model, jac, &masses, excluded);
         let cg = match settings.force_solver {
             ForceSolver::Cholesky => None,
@@ -164,7 +165,7 @@ impl Feedback {
             known: vec![None; m_f],
             max_pull_n: 0.0,
             generation: 0,
-            applied: vec![(Vector3::zeros(), Vector3::zeros()); masses.len()],
+            applied: vec![(Vector3::zeros(), Vector3::zeros()); n_bodies],
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],

@@ -28,6 +28,9 @@ pub(super) struct Inertial {
     damping: Vec<f64>,
     /// Per friction pair (`feedback.friction` order): its kinetic state.
     pub slip: Vec<Slip>,
+    /// Per friction pair: slipping too slowly for an explicit kinetic force
+    /// in the last decision (`arm_slow_slips`).
+    slow: Vec<bool>,
     restitution: Restitution,
     /// Rows of the fingers (their work is the energy the hand puts in).
     finger_rows: Vec<usize>,
@@ -82,6 +85,7 @@ impl Inertial {
             frames: vec![BodyFrame::IDENTITY; masses.len()],
             damping,
             slip: vec![Slip::default(); friction_pairs],
+            slow: vec![false; friction_pairs],
             restitution: Restitution::new(model.n_coords(), row_e, masses, &model.gravity_m_s2()),
             finger_rows,
             work_j: 0.0,
@@ -245,13 +249,20 @@ impl Program {
     /// No allocation; O(friction pairs × their rows).
     pub(super) fn decide_friction(&mut self, dt_s: f64) -> bool {
         let mut changed = false;
+        self.inertial.slow.fill(false);
         let inv_dt2 = 1.0 / (dt_s * dt_s);
         for k in 0..self.feedback.friction.len() {
             let p = self.feedback.friction[k];
-            let normal_n: f64 = (p.normal_rows[0]..p.normal_rows[1])
-                .map(|i| self.lambda[i].max(0.0))
+            // The contact's net normal force: the resultant of its rows
+            // (a redundant support's rows may split it into pushes and
+            // pulls; their pushes alone would overstate it).
+            let y = self.projected.multipliers();
+            let normal_n = ((p.normal_rows[0]..p.normal_rows[1])
+                .filter(|&i| self.feedback.row_scale()[i] != 0.0)
+                .map(|i| -y[i])
                 .sum::<f64>()
-                * inv_dt2;
+                * inv_dt2)
+                .max(0.0);
             let armed = self.ev.witnesses()[p.slots[0]].is_on();
             if !armed || normal_n <= 0.0 {
                 self.feedback.stick[p.rows[0]] = false;
@@ -315,19 +326,45 @@ impl Program {
                         dir: -s.normalize(),
                         normal_n,
                     };
-                    let inv_mass: f64 = (self.friction_bodies[k].iter().flatten())
-                        .map(|&i| 1.0 / self.feedback.masses[i].mass)
-                        .sum();
-                    if coulomb::slow(s.norm(), p.mu, normal_n, dt_s, inv_mass)
-                        && let Some(end) = contact_point(self, k, &self.q)
-                    {
-                        // The next tick tries to stick first, from here.
-                        self.anchor_at(k, &end, &fa, &fb);
-                    }
+                    self.inertial.slow[k] = {
+                        let inv_mass: f64 = (self.friction_bodies[k].iter().flatten())
+                            .map(|&i| 1.0 / self.feedback.masses[i].mass)
+                            .sum();
+                        coulomb::slow(s.norm(), p.mu, normal_n, dt_s, inv_mass)
+                    };
                 }
             }
         }
         changed
+    }
+
+    /// After the tick's last solve: each pair still slipping too slowly for
+    /// an explicit kinetic force (`coulomb::slow`) tries to stick first on
+    /// the next tick, anchored where it is now. (Not within the tick: a
+    /// re-solve starts from the tick's start, where that anchor would
+    /// fight the other contacts.)
+    ///
+    /// # Real-time
+    /// No allocation; O(friction pairs).
+    pub(super) fn arm_slow_slips(&mut self) {
+        if !self.settings.dynamics {
+            return;
+        }
+        for k in 0..self.feedback.friction.len() {
+            let p = self.feedback.friction[k];
+            if !std::mem::take(&mut self.inertial.slow[k]) || self.feedback.stick[p.rows[0]] {
+                continue;
+            }
+            let pair = &self.model.contact().pairs[self.friction_pair[k]];
+            let (Some(fa), Some(fb), Some(end)) = (
+                self.model.body_frame(&self.q, pair.bodies[0]),
+                self.model.body_frame(&self.q, pair.bodies[1]),
+                contact_point(self, k, &self.q),
+            ) else {
+                continue;
+            };
+            self.anchor_at(k, &end, &fa, &fb);
+        }
     }
 
     /// Inequality rows (contacts, joint limits) that pulled in the step just
@@ -405,23 +442,24 @@ impl Program {
             dt_s,
             &mut st.vel,
         ));
-        let g = self.model.gravity_m_s2();
-        st.energy = EnergySample {
-            valid: true,
-            energy_j: energy::mechanical(masses, &st.vel, &self.q_ref, &g),
-            finger_work_j: st.work_j,
-        };
         // The step's displacement, in `g` (scratch of the same length).
         for ((d, a), b) in self.g.iter_mut().zip(&self.q).zip(&self.q_ref) {
             *d = a - b;
         }
-        st.work_j += energy::finger_work(
+        let work = energy::finger_work(
             self.ev.jacobian(),
             &st.finger_rows,
             self.projected.multipliers(),
             &self.g,
             dt_s,
         );
+        let g = self.model.gravity_m_s2();
+        st.energy = EnergySample {
+            valid: true,
+            energy_j: energy::mechanical(masses, &st.vel, &self.q_ref, &self.q, &g),
+            finger_work_j: st.work_j + 0.5 * work,
+        };
+        st.work_j += work;
     }
 
     /// Takes the velocity flags and the energy account over from `old` (a

@@ -362,9 +362,11 @@ impl Program {
             if !self.settings.dynamics {
                 return Ok(done);
             }
-            let released = self.release_pulling();
-            let changed = self.decide_friction(dt_s) || released;
+            // A step that held a contact shut by pulling is solved again
+            // before friction is judged on it.
+            let changed = self.release_pulling() || self.decide_friction(dt_s);
             if !changed || resolves == crate::dynamics::MAX_RESOLVES {
+                self.arm_slow_slips();
                 return Ok(done);
             }
             resolves += 1;
