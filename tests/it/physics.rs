@@ -278,11 +278,11 @@ fn the_pendulum_comes_to_rest_against_the_wall() {
 #[test]
 fn the_arm_pushes_the_box_across_the_table() {
     let dir = tempfile::tempdir().unwrap();
-    let (o, _) = run(&resolve("arm-push").unwrap(), 3.5, 1000, dir.path());
+    let (o, _) = run(&resolve("arm-push").unwrap(), 4.5, 1000, dir.path());
     let b = poses(&o, "box");
     let moved = b[b.len() - 1].1.x - b[0].1.x;
     let rows = trace(dir.path(), "index");
-    let pushing = mean(&rows, 1.5, 3.0, |r| -r.3.x);
+    let pushing = mean(&rows, 2.5, 4.0, |r| -r.3.x);
     let limit = 0.5 * 0.1 * G;
     println!("arm-push: box moved {moved:.4} m, felt {pushing:.4} N while pushing (μ m g = {limit:.4})");
     assert!((moved - 0.05).abs() < 5e-3, "the box moved {moved} m");
