@@ -13,6 +13,7 @@
 
 mod contact;
 mod design;
+pub mod energy;
 mod fast;
 mod plan;
 mod recorder;
@@ -21,7 +22,6 @@ mod rig;
 mod semantic;
 mod slow;
 mod stats;
-pub mod energy;
 pub mod timing;
 mod track;
 

@@ -48,6 +48,9 @@ pub(crate) struct Slip {
     pub dir: Vector3<f64>,
     /// The pair's normal force in the last step, N.
     pub normal_n: f64,
+    /// Two bodies' torsional friction radius, m (0 at a fingertip): the
+    /// patch resists twisting with up to μ N times this.
+    pub twist_m: f64,
 }
 
 /// What a friction pair does next.
@@ -62,13 +65,58 @@ pub(crate) enum Verdict {
 }
 
 /// A sticking pair whose step needed the tangential force `f_a` (N, on end
-/// A, world) with normal force `normal_n` and coefficient `mu`.
-pub(crate) fn sticking(f_a: &Vector3<f64>, mu: f64, normal_n: f64) -> Verdict {
-    if f_a.norm() > mu * normal_n.max(0.0) * (1.0 + CONE_SLACK) {
+/// A, world) and the twisting moment `twist_nm` about the normal, with
+/// normal force `normal_n`, coefficient `mu` and torsional radius
+/// `twist_m`: it keeps sticking while (|F|/μN)² + (|τ|/(μ N r))² ≤ 1, the
+/// cone and a patch's torsional limit together (an ellipsoid).
+pub(crate) fn sticking(
+    f_a: &Vector3<f64>,
+    twist_nm: f64,
+    mu: f64,
+    normal_n: f64,
+    twist_m: f64,
+) -> Verdict {
+    let limit = mu * normal_n.max(0.0);
+    let twist = if twist_m > 0.0 {
+        twist_nm / (limit * twist_m)
+    } else {
+        0.0
+    };
+    let load = (f_a.norm() / limit).hypot(twist);
+    if !(load <= 1.0 + CONE_SLACK) {
         Verdict::Slip
     } else {
         Verdict::Keep
     }
+}
+
+/// The moment of kinetic friction about the normal of a sliding patch
+/// (N·m, opposing the relative spin `spin_rad_s` about the normal), with
+/// the pair's slip speed `slip_m_s`: μ N r scaled by the spin's share of
+/// the patch's sliding, r ω / (r ω + |s|) (a patch that only spins feels
+/// the whole torsional limit, one that slides fast hardly any), and never
+/// more than stops the spin within the tick (`inv_inertia`: the pair's
+/// inverse moment about the normal, 1/(kg·m²)).
+pub(crate) fn twisting(
+    slip: &Slip,
+    mu: f64,
+    spin_rad_s: f64,
+    slip_m_s: f64,
+    dt_s: f64,
+    inv_inertia: f64,
+) -> f64 {
+    let r = slip.twist_m;
+    if r <= 0.0 || spin_rad_s == 0.0 {
+        return 0.0;
+    }
+    let share = (r * spin_rad_s.abs()) / (r * spin_rad_s.abs() + slip_m_s.abs());
+    let moment = mu * slip.normal_n.max(0.0) * r * share;
+    let stop = if inv_inertia > 0.0 {
+        spin_rad_s.abs() / (inv_inertia * dt_s)
+    } else {
+        f64::INFINITY
+    };
+    -spin_rad_s.signum() * moment.min(stop)
 }
 
 /// A slipping pair whose step ended with relative tangential velocity `s`
@@ -111,16 +159,26 @@ mod tests {
     #[test]
     fn the_cone_decides_and_a_reversed_slip_sticks() {
         let f = Vector3::new(0.3, 0.4, 0.0);
-        assert_eq!(sticking(&f, 0.5, 1.0), Verdict::Keep);
-        assert_eq!(sticking(&f, 0.5, 0.99), Verdict::Slip);
+        assert_eq!(sticking(&f, 0.0, 0.5, 1.0, 0.0), Verdict::Keep);
+        assert_eq!(sticking(&f, 0.0, 0.5, 0.99, 0.0), Verdict::Slip);
+        // Twist: within the cone alone, out of it with the moment.
+        assert_eq!(sticking(&f, 0.001, 0.5, 1.0, 0.02), Verdict::Slip);
+        assert_eq!(sticking(&(f * 0.5), 0.004, 0.5, 1.0, 0.02), Verdict::Keep);
         let dir = Vector3::new(-1.0, 0.0, 0.0);
         assert_eq!(slipping(&Vector3::new(0.01, 0.0, 0.0), &dir), Verdict::Keep);
-        assert_eq!(slipping(&Vector3::new(-0.01, 0.0, 0.0), &dir), Verdict::Stick);
+        assert_eq!(
+            slipping(&Vector3::new(-0.01, 0.0, 0.0), &dir),
+            Verdict::Stick
+        );
         assert_eq!(slipping(&Vector3::zeros(), &dir), Verdict::Stick);
         let s = Slip {
             dir,
             normal_n: 2.0,
+            twist_m: 0.02,
         };
         assert_eq!(kinetic(&s, 0.25), Vector3::new(-0.5, 0.0, 0.0));
+        // A pure spin feels μ N r, capped by what stops it.
+        assert!((twisting(&s, 0.25, 3.0, 0.0, 1e-3, 1.0) + 0.01).abs() < 1e-12);
+        assert!((twisting(&s, 0.25, -3.0, 0.0, 1e-3, 1e6) - 3e-3).abs() < 1e-12);
     }
 }

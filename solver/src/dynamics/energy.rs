@@ -52,7 +52,11 @@ pub(crate) fn mechanical(
         let o = m.offset;
         e += 0.5 * m.mass * vel.v[k].norm_squared() + 0.5 * vel.w[k].dot(&vel.l[k]);
         if m.weighs {
-            let mid = Vector3::new(q_ref[o] + q[o], q_ref[o + 1] + q[o + 1], q_ref[o + 2] + q[o + 2]) * 0.5;
+            let mid = Vector3::new(
+                q_ref[o] + q[o],
+                q_ref[o + 1] + q[o + 1],
+                q_ref[o + 2] + q[o + 2],
+            ) * 0.5;
             e -= m.mass * g.dot(&mid);
         }
     }

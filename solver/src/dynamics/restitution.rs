@@ -117,9 +117,7 @@ impl Restitution {
         dt_s: f64,
         vel: &mut Velocities,
     ) -> u32 {
-        if !self.any
-            || !(0..self.row_e.len()).any(|i| self.row_e[i] > 0.0 && lambda[i] > 0.0)
-        {
+        if !self.any || !(0..self.row_e.len()).any(|i| self.row_e[i] > 0.0 && lambda[i] > 0.0) {
             return 0;
         }
         self.impacts.clear();

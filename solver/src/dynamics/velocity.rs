@@ -105,9 +105,25 @@ impl Velocities {
     ///
     /// # Real-time
     /// No allocation.
-    pub fn push(&mut self, k: usize, m: &BodyMass, f: &BodyFrame, p: &Vector3<f64>, j: &Vector3<f64>) {
+    pub fn push(
+        &mut self,
+        k: usize,
+        m: &BodyMass,
+        f: &BodyFrame,
+        p: &Vector3<f64>,
+        j: &Vector3<f64>,
+    ) {
         self.v_pred[k] += j / m.mass;
         self.l_pred[k] += (p - f.r).cross(j);
+        self.w_pred[k] = inverse_world_inertia(m, f) * self.l_pred[k];
+    }
+
+    /// Adds an angular impulse `dl` (N·m·s, world) to body `k`'s prediction.
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn turn(&mut self, k: usize, m: &BodyMass, f: &BodyFrame, dl: &Vector3<f64>) {
+        self.l_pred[k] += dl;
         self.w_pred[k] = inverse_world_inertia(m, f) * self.l_pred[k];
     }
 
@@ -151,7 +167,14 @@ impl Velocities {
 
     /// Adds Δv (m/s) and Δω (rad/s) to body `k`'s velocity after a step
     /// whose start frame was `f` (restitution).
-    pub fn kick(&mut self, k: usize, m: &BodyMass, f: &BodyFrame, dv: Vector3<f64>, dw: Vector3<f64>) {
+    pub fn kick(
+        &mut self,
+        k: usize,
+        m: &BodyMass,
+        f: &BodyFrame,
+        dv: Vector3<f64>,
+        dw: Vector3<f64>,
+    ) {
         self.v[k] += dv;
         self.w[k] += dw;
         self.l[k] += m.world_inertia(f) * dw;

@@ -358,7 +358,11 @@ impl Feedback {
         // Coulomb: a sticking pair whose friction load exceeds μ times the
         // user's grip slips this tick. (Inertial motion judges the cone on
         // the step's own forces instead: `program::inertial`.)
-        let judged = if settings.dynamics { 0 } else { self.friction.len() };
+        let judged = if settings.dynamics {
+            0
+        } else {
+            self.friction.len()
+        };
         for k in 0..judged {
             let p = self.friction[k];
             if !(self.stick[p.rows[0]] && self.scale[p.rows[0]] != 0.0) {

@@ -42,7 +42,7 @@ use super::pair::PairView;
 use super::polyhedron::Feature;
 use super::primitives::{expand, primitives, select, value_at};
 use super::shape::Collider;
-use crate::constraint::witness::friction::stick_rows;
+use crate::constraint::witness::friction::{stick_rows, twist_row};
 use crate::constraint::witness::{PlaneWitness, Witness, WitnessType, edge_face, face_face};
 
 /// Knobs of the active set, metres.
@@ -103,7 +103,8 @@ impl ContactBody {
 struct Tracked {
     cache: PairCache,
     witnesses: Vec<Witness>,
-    friction: Option<[PlaneWitness; 2]>,
+    /// Stick rows: two tangent rows and, between two bodies, the twist row.
+    friction: Option<[PlaneWitness; 3]>,
     distance_m: f64,
 }
 
@@ -114,7 +115,8 @@ pub struct PairSpec {
     pub bodies: [u32; 2],
     /// Witness row slots.
     pub slots: u32,
-    /// Two friction stick rows (a fingertip with μ > 0).
+    /// Friction stick rows (μ > 0): two at a fingertip, three (with the
+    /// twist row) between two bodies.
     pub friction: bool,
 }
 
@@ -258,8 +260,9 @@ impl ActiveSet {
 
     /// Writes every tracked pair's primitives (then `Off`) and friction rows
     /// into `table`, pair by pair in [`pairs`](Self::pairs) order: `slots`
-    /// rows each, then 2 friction rows where the pair has them. Returns the
-    /// number of entries written.
+    /// rows each, then the friction rows where the pair has them (2 at a
+    /// fingertip, 3 between two bodies). Returns the number of entries
+    /// written.
     pub fn fill(&self, table: &mut Vec<Witness>) -> usize {
         table.clear();
         for spec in self.pairs() {
@@ -268,9 +271,13 @@ impl ActiveSet {
                 table.push(t.witnesses.get(k).copied().unwrap_or_default());
             }
             if spec.friction {
+                let fingertip = self.bodies[spec.bodies[0] as usize]
+                    .as_ref()
+                    .is_some_and(|b| b.fingertip);
+                let n = if fingertip { 2 } else { 3 };
                 match t.friction {
-                    Some(rows) => table.extend(rows.map(Witness::Plane)),
-                    None => table.extend([Witness::Off; 2]),
+                    Some(rows) => table.extend(rows[..n].iter().map(|&w| Witness::Plane(w))),
+                    None => table.extend(std::iter::repeat_n(Witness::Off, n)),
                 }
             }
         }
@@ -590,14 +597,15 @@ fn friction_rows(
     q: &PairQuery,
     fingertip: bool,
     primitives: &[Witness],
-) -> [PlaneWitness; 2] {
+) -> [PlaneWitness; 3] {
     let n_b = view.pb.local_dir(&-q.normal);
     if fingertip {
-        return stick_rows(
+        let rows = stick_rows(
             view.pa.local_point(&q.core_point_a),
             view.pb.local_point(&q.core_point_b),
             n_b,
         );
+        return [rows[0], rows[1], rows[1]];
     }
     let held = held_points(primitives, &view.pa, &view.pb);
     let centre = if held.is_empty() {
@@ -605,11 +613,21 @@ fn friction_rows(
     } else {
         held.iter().sum::<Vector3<f64>>() / held.len() as f64
     };
-    stick_rows(
+    let rows = stick_rows(
         view.pa.local_point(&centre),
         view.pb.local_point(&centre),
         n_b,
-    )
+    );
+    // The twist row's arm: half the smaller body's radius along the first
+    // tangent (any non-zero arm holds the twist; this one keeps it inside
+    // the patch's scale).
+    let arm = 0.5 * view.a.radius_m.min(view.b.radius_m).max(1e-3);
+    let at = centre + view.pb.rot * rows[0].normal * arm;
+    [
+        rows[0],
+        rows[1],
+        twist_row(&rows, view.pa.local_point(&at), view.pb.local_point(&at)),
+    ]
 }
 
 /// The angle of a rotation matrix, radians.

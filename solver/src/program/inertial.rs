@@ -8,12 +8,12 @@
 use nalgebra::Vector3;
 
 use super::Program;
+use crate::al::scaling::Role;
 use crate::constraint::witness::Witness;
 use crate::dynamics::coulomb::{self, Slip, Verdict};
 use crate::dynamics::energy::{self, EnergySample};
 use crate::dynamics::restitution::Restitution;
 use crate::dynamics::velocity::{Velocities, frame};
-use crate::al::scaling::Role;
 use crate::force::inertia::BodyMass;
 use crate::rotation::BodyFrame;
 use crate::{BodyId, Model};
@@ -223,15 +223,22 @@ impl Program {
                 continue;
             };
             let force = coulomb::kinetic(&slip, p.mu);
+            let moment = self.twist_moment(k, &slip, dt_s);
             let (masses, st) = (&self.feedback.masses, &mut self.inertial);
-            for (kk, f) in self.friction_bodies[k].into_iter().zip([force, -force]) {
+            for ((kk, f), t) in self.friction_bodies[k]
+                .into_iter()
+                .zip([force, -force])
+                .zip([moment, -moment])
+            {
                 if let Some(i) = kk {
-                    st.vel.push(i, &masses[i], &st.frames[i], &point, &(f * dt_s));
+                    st.vel
+                        .push(i, &masses[i], &st.frames[i], &point, &(f * dt_s));
+                    st.vel.turn(i, &masses[i], &st.frames[i], &(t * dt_s));
                     // The same force in Eq. 7's balance: a finger pushing a
                     // sliding body feels its friction.
                     let a = &mut self.feedback.applied[i];
                     a.0 += f;
-                    a.1 += (point - st.frames[i].r).cross(&f);
+                    a.1 += (point - st.frames[i].r).cross(&f) + t;
                 }
             }
         }
@@ -265,11 +272,13 @@ impl Program {
                 .max(0.0);
             let armed = self.ev.witnesses()[p.slots[0]].is_on();
             if !armed || normal_n <= 0.0 {
-                self.feedback.stick[p.rows[0]] = false;
-                self.feedback.stick[p.rows[1]] = false;
+                for r in p.all_rows() {
+                    self.feedback.stick[r] = false;
+                }
                 self.inertial.slip[k] = Slip::default();
                 continue;
             }
+            let twist_m = twist_radius(self, k);
             let pair = &self.model.contact().pairs[self.friction_pair[k]];
             let (Some(fb), Some(fa), Some(fa0), Some(fb0)) = (
                 self.model.body_frame(&self.q, pair.bodies[1]),
@@ -282,13 +291,24 @@ impl Program {
             let table = self.ev.witnesses();
             if self.feedback.stick[p.rows[0]] {
                 let mut f_a = Vector3::zeros();
-                for (c, &row) in p.rows.iter().enumerate() {
-                    if let Witness::Plane(w) = table[p.slots[c]] {
-                        f_a -= fb.rot * w.normal * (self.lambda[row] * inv_dt2);
+                let mut twist_nm = 0.0;
+                for (row, slot) in p.all_rows().zip(p.all_slots()) {
+                    if let Witness::Plane(w) = table[slot] {
+                        let f = -(fb.rot * w.normal) * (self.lambda[row] * inv_dt2);
+                        f_a += f;
+                        if Some(row) == p.twist.map(|t| t.0)
+                            && let Witness::Plane(c) = table[p.slots[0]]
+                        {
+                            let arm = fa.point(&w.point) - fa.point(&c.point);
+                            let n = crate::force::friction::normal(&self.model, &self.q, table, &p)
+                                .unwrap_or_else(Vector3::zeros);
+                            twist_nm = n.dot(&arm.cross(&f)).abs();
+                        }
                     }
                 }
-                if coulomb::sticking(&f_a, p.mu, normal_n) == Verdict::Slip {
-                    for r in p.rows {
+                let verdict = coulomb::sticking(&f_a, twist_nm, p.mu, normal_n, twist_m);
+                if verdict == Verdict::Slip {
+                    for r in p.all_rows() {
                         self.feedback.stick[r] = false;
                     }
                     // A pair that was sliding slowly (and tried to stick
@@ -296,8 +316,9 @@ impl Program {
                     // force: this attempt's includes the impulse of a stop.
                     let was = self.inertial.slip[k].normal_n;
                     self.inertial.slip[k] = Slip {
-                        dir: f_a.normalize(),
+                        dir: f_a.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
                         normal_n: if was > 0.0 { was } else { normal_n },
+                        twist_m,
                     };
                     self.feedback.count_slip();
                     changed = true;
@@ -323,8 +344,9 @@ impl Program {
                 }
                 _ => {
                     self.inertial.slip[k] = Slip {
-                        dir: -s.normalize(),
+                        dir: -s.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
                         normal_n,
+                        twist_m,
                     };
                     self.inertial.slow[k] = {
                         let inv_mass: f64 = (self.friction_bodies[k].iter().flatten())
@@ -391,6 +413,36 @@ impl Program {
         any
     }
 
+    /// The kinetic moment of friction about the normal on end A of sliding
+    /// pair `k` (`coulomb::twisting`), N·m, world (zero at a fingertip).
+    fn twist_moment(&self, k: usize, slip: &Slip, dt_s: f64) -> Vector3<f64> {
+        let p = self.feedback.friction[k];
+        if slip.twist_m <= 0.0 {
+            return Vector3::zeros();
+        }
+        let Some(n) = crate::force::friction::normal(&self.model, &self.q, self.ev.witnesses(), &p)
+        else {
+            return Vector3::zeros();
+        };
+        let vel = &self.inertial.vel;
+        let (mut spin, mut inv) = (0.0, 0.0);
+        for (kk, sign) in self.friction_bodies[k].into_iter().zip([1.0, -1.0]) {
+            if let Some(i) = kk {
+                let m = &self.feedback.masses[i];
+                spin += sign * n.dot(&vel.w_pred[i]);
+                let f = &self.inertial.frames[i];
+                inv += n.dot(&(crate::dynamics::velocity::inverse_world_inertia(m, f) * n));
+            }
+        }
+        let slip_m_s = {
+            let v = |kk: Option<usize>| kk.map_or(Vector3::zeros(), |i| vel.v_pred[i]);
+            let [a, b] = self.friction_bodies[k];
+            let s = v(a) - v(b);
+            (s - n * n.dot(&s)).norm()
+        };
+        n * coulomb::twisting(slip, p.mu, spin, slip_m_s, dt_s, inv)
+    }
+
     /// Friction pair `k` sticks, its two points held where they were at the
     /// tick's start (`fa0`, `fb0`: its bodies' frames then): a fingertip's
     /// centre over the point of the body under it, two bodies together at
@@ -406,14 +458,31 @@ impl Program {
         } else {
             fa0.rot.tr_mul(&(point - fa0.r))
         };
-        let on_b: Vector3<f64> = fb0.rot.tr_mul(&(fa0.point(&on_a) - fb0.r));
+        let at = fa0.point(&on_a);
+        let on_b: Vector3<f64> = fb0.rot.tr_mul(&(at - fb0.r));
+        // The twist row keeps its arm, along the first tangent from here.
+        let arm = match (p.twist, table[p.slots[0]]) {
+            (Some((_, slot)), Witness::Plane(c)) => match table[slot] {
+                Witness::Plane(t) => (t.point - c.point).norm(),
+                _ => 0.0,
+            },
+            _ => 0.0,
+        };
+        let t1 = fb0.rot * w.normal;
         for s in p.slots {
             if let Witness::Plane(w) = &mut table[s] {
                 w.point = on_a;
                 w.plane_point = on_b;
             }
         }
-        for r in p.rows {
+        if let Some((_, slot)) = p.twist
+            && let Witness::Plane(w) = &mut table[slot]
+        {
+            let there = at + t1 * arm;
+            w.point = fa0.rot.tr_mul(&(there - fa0.r));
+            w.plane_point = fb0.rot.tr_mul(&(there - fb0.r));
+        }
+        for r in p.all_rows() {
             self.feedback.stick[r] = true;
         }
     }
@@ -511,6 +580,40 @@ fn contact_point(p: &Program, k: usize, q: &[f64]) -> Option<Vector3<f64>> {
         Some(sum / weight)
     } else {
         anchor
+    }
+}
+
+/// The torsional friction radius of friction pair `k`, m: two thirds of
+/// the mean distance of its contact rows' held points from their centre,
+/// weighted by the rows' multipliers (a uniformly pressed disc of radius R
+/// resists twisting with μ N ⅔ R); 0 at a fingertip.
+fn twist_radius(p: &Program, k: usize) -> f64 {
+    let f = p.feedback.friction[k];
+    if f.twist.is_none() {
+        return 0.0;
+    }
+    let pair = &p.model.contact().pairs[p.friction_pair[k]];
+    let (Some(fa), Some(fb), Some(c)) = (
+        p.model.body_frame(&p.q, pair.bodies[0]),
+        p.model.body_frame(&p.q, pair.bodies[1]),
+        contact_point(p, k, &p.q),
+    ) else {
+        return 0.0;
+    };
+    let frames = [fa, fb];
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for (r, i) in (f.normal_rows[0]..f.normal_rows[1]).enumerate() {
+        let nu = p.lambda[i];
+        if let (true, Witness::Plane(w)) = (nu > 0.0, p.ev.witnesses()[pair.first_slot + r]) {
+            let e = usize::from(w.point_end.min(1));
+            sum += (frames[e].point(&w.point) - c).norm() * nu;
+            weight += nu;
+        }
+    }
+    if weight > 0.0 {
+        2.0 / 3.0 * sum / weight
+    } else {
+        0.0
     }
 }
 

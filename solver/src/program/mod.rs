@@ -214,9 +214,8 @@ impl Program {
         for (k, pair) in model.contact().pairs.iter().enumerate() {
             if let Some(f) = pair.friction {
                 let n = model.constraints()[pair.normal.index()].rows.len();
-                friction_slot[pair.first_slot + n] = true;
-                friction_slot[pair.first_slot + n + 1] = true;
-                let _ = f;
+                let rows = model.constraints()[f.index()].rows.len();
+                friction_slot[pair.first_slot + n..pair.first_slot + n + rows].fill(true);
                 friction_pair.push(k);
             }
         }

@@ -177,10 +177,14 @@ impl Program {
             };
             let (n, o) = (self.feedback.friction[k], old.feedback.friction[j]);
             self.inertial.slip[k] = old.inertial.slip[j];
-            for c in 0..2 {
-                self.feedback.stick[n.rows[c]] = old.feedback.stick[o.rows[c]];
-                let w = old.ev.witnesses()[o.slots[c]];
-                self.ev.witnesses_mut()[n.slots[c]] = w;
+            let pairs = n
+                .all_rows()
+                .zip(o.all_rows())
+                .zip(n.all_slots().zip(o.all_slots()));
+            for ((rn, ro), (sn, so)) in pairs {
+                self.feedback.stick[rn] = old.feedback.stick[ro];
+                let w = old.ev.witnesses()[so];
+                self.ev.witnesses_mut()[sn] = w;
             }
         }
     }

@@ -220,7 +220,8 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.restitution = b.restitution.as_ref().map_or(0.0, |e| *e.get_ref());
     spec.damping_per_s = b.damping.as_ref().map_or(0.0, |c| *c.get_ref());
     spec.velocity_m_s = b.velocity.as_ref().map_or([0.0; 3], |v| v.get_ref().get());
-    spec.angular_velocity_rad_s = (b.angular_velocity.as_ref()).map_or([0.0; 3], |w| w.get_ref().get());
+    spec.angular_velocity_rad_s =
+        (b.angular_velocity.as_ref()).map_or([0.0; 3], |w| w.get_ref().get());
     spec.free = b.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = b.bounds.as_ref().map(|x| bounds(*x.get_ref()));
     spec

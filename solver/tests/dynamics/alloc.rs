@@ -1,5 +1,6 @@
 //! Inertial ticks allocate nothing: contact with friction (sticking,
-//! breaking loose, sliding), restitution and the energy account, on every
+//! breaking loose, sliding; the block is pushed off its centre line, so its
+//! patch's twist row holds and its twisting friction acts), restitution and the energy account, on every
 //! program the slow loop hands over (counted from their first tick).
 
 use haptloop_rt::alloc::{count, is_installed};
@@ -33,13 +34,22 @@ fn inertial_ticks_allocate_nothing() {
             .shape(Shape::Sphere { radius_m: 0.01 })
             .restitution(0.8),
     );
-    b.finger(FingerSpec::contact("index", [-0.04, 0.0, 0.03], 0.008, 0.0));
+    b.finger(FingerSpec::contact(
+        "index",
+        [-0.04, 0.015, 0.03],
+        0.008,
+        0.0,
+    ));
     let mut l = lockstep(b.build().unwrap(), 1000);
     let mut allocations = 0;
     let mut ticked = 0;
     for k in 0..1500 {
         let t = (k + 1) as f64 * 1e-3;
-        let target = [FingerTarget::at(Vector3::new(-0.04 + 0.02 * t, 0.0, 0.03))];
+        let target = [FingerTarget::at(Vector3::new(
+            -0.04 + 0.02 * t,
+            0.015,
+            0.03,
+        ))];
         // The slow loop's cycles allocate (off the real-time thread): the
         // ticks that end in one go through the lockstep, every other tick
         // is counted.
@@ -54,7 +64,13 @@ fn inertial_ticks_allocate_nothing() {
         ticked += 1;
     }
     let (resolves, bounces) = l.program.transitions();
-    println!("alloc: {ticked} ticks counted, {resolves} re-solves, {bounces} bounces, {} slips", l.program.slips());
-    assert!(resolves > 0 && bounces > 0 && l.program.slips() > 0, "the path was not covered");
+    println!(
+        "alloc: {ticked} ticks counted, {resolves} re-solves, {bounces} bounces, {} slips",
+        l.program.slips()
+    );
+    assert!(
+        resolves > 0 && bounces > 0 && l.program.slips() > 0,
+        "the path was not covered"
+    );
     assert_eq!(allocations, 0);
 }

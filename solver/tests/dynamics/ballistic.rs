@@ -36,7 +36,10 @@ fn free_fall_follows_half_g_t_squared() {
             }
         }
         let fallen = -p.q()[2];
-        println!("free fall {rate} Hz: {fallen:.9} m in 1 s (½ g t² = {:.9}), worst {worst:.2e} from 0.1 s", 0.5 * G);
+        println!(
+            "free fall {rate} Hz: {fallen:.9} m in 1 s (½ g t² = {:.9}), worst {worst:.2e} from 0.1 s",
+            0.5 * G
+        );
         assert!(worst < 5e-3, "{rate} Hz: off by {worst:.2e} of ½ g t²");
         assert!(rel(fallen, 0.5 * G) < 5e-3);
     }
@@ -63,14 +66,23 @@ fn a_projectile_lands_at_its_range() {
         }
         let x = landed.expect("it lands");
         println!("projectile {rate} Hz: range {x:.6} m (2 vx vz / g = {range:.6} m)");
-        assert!(rel(x, range) < 1e-2, "{rate} Hz: range {x} m, analytic {range} m");
+        assert!(
+            rel(x, range) < 1e-2,
+            "{rate} Hz: range {x} m, analytic {range} m"
+        );
     }
 }
 
 /// |L| of a body spinning at `w0` (world) with principal moments `j` and
 /// orientation `e0`, over `seconds`: (largest relative change, final
 /// angle between L and L₀).
-fn spin(rate: u32, j: [f64; 3], e0: UnitQuaternion<f64>, w0: Vector3<f64>, seconds: f64) -> (f64, f64) {
+fn spin(
+    rate: u32,
+    j: [f64; 3],
+    e0: UnitQuaternion<f64>,
+    w0: Vector3<f64>,
+    seconds: f64,
+) -> (f64, f64) {
     let mut b = ModelBuilder::new();
     let q = e0.quaternion();
     b.body(
@@ -98,7 +110,11 @@ fn spin(rate: u32, j: [f64; 3], e0: UnitQuaternion<f64>, w0: Vector3<f64>, secon
         // of the program's own momentum: from q alone).
         let (_, w) = p.body_velocity(id).unwrap();
         let after = p.q().to_vec();
-        let mid: Vec<f64> = before.iter().zip(&after).map(|(a, b)| 0.5 * (a + b)).collect();
+        let mid: Vec<f64> = before
+            .iter()
+            .zip(&after)
+            .map(|(a, b)| 0.5 * (a + b))
+            .collect();
         let r = model.body_rotation(&mid, id).unwrap();
         l = r * Matrix3::from_diagonal(&Vector3::from(j)) * r.transpose() * w;
         worst = worst.max(rel(l.norm(), l0.norm()));
@@ -151,7 +167,10 @@ fn a_frictionless_block_glides_at_constant_speed() {
             worst = worst.max(rel(v, 0.2));
         }
         let sink = xs.iter().map(|p| (p.z - 0.03).abs()).fold(0.0, f64::max);
-        println!("glide {rate} Hz: speed within {worst:.2e}, height within {sink:.2e} m, {} backups", l.backups);
+        println!(
+            "glide {rate} Hz: speed within {worst:.2e}, height within {sink:.2e} m, {} backups",
+            l.backups
+        );
         assert!(worst < 5e-3, "{rate} Hz: speed off by {worst:.2e}");
         assert!(sink < 1e-4, "{rate} Hz: height changed {sink} m");
     }

@@ -43,7 +43,10 @@ fn a_ball_with_restitution_rebounds_to_e_squared_h() {
         // The first contact, then the highest point after it.
         let hit = z.iter().position(|&g| g < 1e-4).expect("it lands");
         let apex = z[hit..].iter().copied().fold(f64::MIN, f64::max);
-        println!("bounce {rate} Hz: rebounds to {apex:.5} m (e² h = {:.5} m)", e * e * h);
+        println!(
+            "bounce {rate} Hz: rebounds to {apex:.5} m (e² h = {:.5} m)",
+            e * e * h
+        );
         assert!(rel(apex, e * e * h) < 0.05, "{rate} Hz: rebound {apex} m");
     }
 }
@@ -64,7 +67,14 @@ fn a_ball_at_10_m_s_does_not_cross_a_4_mm_plate() {
         let (z, backups) = drop(rate, 0.3, 0.0, -10.0, 0.2);
         let lowest = z.iter().copied().fold(f64::MAX, f64::min);
         println!("10 m/s {rate} Hz: lowest gap {lowest:.3e} m, {backups} backups");
-        assert!(lowest > -1e-4, "{rate} Hz: went {lowest} m into or through the plate");
-        assert!(z[z.len() - 1].abs() < 1e-4, "{rate} Hz: ended at {} m", z[z.len() - 1]);
+        assert!(
+            lowest > -1e-4,
+            "{rate} Hz: went {lowest} m into or through the plate"
+        );
+        assert!(
+            z[z.len() - 1].abs() < 1e-4,
+            "{rate} Hz: ended at {} m",
+            z[z.len() - 1]
+        );
     }
 }

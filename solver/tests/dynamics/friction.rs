@@ -64,7 +64,10 @@ fn a_block_slides_down_a_steeper_incline_at_g_sin_minus_mu_cos() {
         let t = s.len() as f64 / f64::from(rate);
         let measured = 2.0 * s[s.len() - 1] / (t * t);
         println!("incline slip {rate} Hz: {measured:.5} m/s² (g (sin θ − μ cos θ) = {a:.5})");
-        assert!(rel(measured, a) < 0.02, "{rate} Hz: {measured} m/s², analytic {a}");
+        assert!(
+            rel(measured, a) < 0.02,
+            "{rate} Hz: {measured} m/s², analytic {a}"
+        );
     }
 }
 
@@ -125,7 +128,10 @@ fn a_pushed_block_starts_to_slide_at_mu_m_g_and_slides_at_it() {
         );
         assert!(rel(before, limit) < 0.05, "{rate} Hz: onset at {before} N");
         assert!(still < 0.05e-3);
-        assert!(rel(sliding, limit) < 0.03, "{rate} Hz: sliding push {sliding} N");
+        assert!(
+            rel(sliding, limit) < 0.03,
+            "{rate} Hz: sliding push {sliding} N"
+        );
         assert!(rel(speed, 0.01) < 0.05, "{rate} Hz: slides at {speed} m/s");
     }
 }

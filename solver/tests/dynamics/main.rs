@@ -18,3 +18,4 @@ mod bounce;
 mod common;
 mod friction;
 mod pendulum;
+mod twist;

@@ -84,8 +84,14 @@ fn a_pendulum_keeps_its_period_and_its_energy() {
             "pendulum {rate} Hz: period {measured:.6} s (analytic {analytic:.6}), energy within {worst:.2e}, \
              amplitude after 20 s {amplitude:.5} rad"
         );
-        assert!(rel(measured, analytic) < 0.01, "{rate} Hz: period {measured} s");
+        assert!(
+            rel(measured, analytic) < 0.01,
+            "{rate} Hz: period {measured} s"
+        );
         assert!(worst < 0.02, "{rate} Hz: energy off by {worst:.2e}");
-        assert!(rel(amplitude, theta0) < 0.01, "{rate} Hz: amplitude {amplitude} rad");
+        assert!(
+            rel(amplitude, theta0) < 0.01,
+            "{rate} Hz: amplitude {amplitude} rad"
+        );
     }
 }
