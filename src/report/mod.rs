@@ -3,6 +3,7 @@
 
 pub mod energy;
 pub mod figure;
+pub mod limits;
 pub mod plots;
 pub mod probe;
 pub mod scene_plot;
@@ -10,3 +11,5 @@ pub mod semantic;
 pub mod session;
 pub mod summary;
 pub mod sweep;
+pub mod units;
+pub mod warnings;

@@ -358,6 +358,13 @@ fn normalised(q: Quat) -> Quat {
 }
 
 impl LoadedScene {
+    /// The `[[joint]]` tables as the model builder takes them, in file order
+    /// (axes as written, not normalised), e.g. to write the mechanism in
+    /// another program's format.
+    pub fn joint_specs(&self) -> Vec<JointSpec> {
+        self.spec.joints.iter().map(joint_spec).collect()
+    }
+
     /// Builds the model and wires devices to fingers. Every error names the
     /// file, line and column of the offending value.
     pub fn compile(&self) -> Result<CompiledScene, SceneError> {
