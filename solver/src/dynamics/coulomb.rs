@@ -83,7 +83,7 @@ pub(crate) fn sticking(
         0.0
     };
     let load = (f_a.norm() / limit).hypot(twist);
-    if !(load <= 1.0 + CONE_SLACK) {
+    if load.is_nan() || load > 1.0 + CONE_SLACK {
         Verdict::Slip
     } else {
         Verdict::Keep

@@ -8,7 +8,6 @@
 #[global_allocator]
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
-#[allow(dead_code)]
 #[path = "../contact/common.rs"]
 mod contact_common;
 
