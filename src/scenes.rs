@@ -79,6 +79,18 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/cluttered.toml"),
     },
     Builtin {
+        name: "door",
+        text: include_str!("../scenes/door.toml"),
+    },
+    Builtin {
+        name: "pendulum-wall",
+        text: include_str!("../scenes/pendulum-wall.toml"),
+    },
+    Builtin {
+        name: "arm-push",
+        text: include_str!("../scenes/arm-push.toml"),
+    },
+    Builtin {
         name: "four-bar-design",
         text: include_str!("../scenes/four-bar-design.toml"),
     },

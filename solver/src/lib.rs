@@ -90,6 +90,7 @@ pub mod al;
 mod cholesky;
 pub mod constraint;
 pub mod contact;
+pub mod dynamics;
 mod evaluate;
 pub mod flexible;
 pub mod force;

@@ -1,6 +1,7 @@
 //! Reports: the probe's and the session's text reports, `summary.json`, the
 //! SVG plots, and the sweep's table and files.
 
+pub mod energy;
 pub mod figure;
 pub mod limits;
 pub mod plots;

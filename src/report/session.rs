@@ -161,6 +161,9 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     for e in &s.safety.device_events {
         let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
     }
+    if let Some(e) = &s.energy {
+        let _ = writeln!(out, "{}", e.line());
+    }
     for w in &s.warnings {
         let _ = writeln!(out, "WARNING: {w}");
     }

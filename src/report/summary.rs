@@ -489,6 +489,10 @@ pub struct Summary {
     /// semantic areas or holds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub semantic: Option<super::semantic::Semantic>,
+    /// The moving bodies' energy (scenes with inertial motion; absent
+    /// otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy: Option<super::energy::Energy>,
     /// Trace samples dropped (queue full).
     pub trace_dropped: u64,
     /// What the OS granted the fast thread (real-time mode).
@@ -700,6 +704,7 @@ impl Summary {
                 }
             }),
             semantic: o.semantic.as_ref().map(Into::into),
+            energy: super::energy::Energy::of(o),
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,

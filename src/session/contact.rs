@@ -204,6 +204,14 @@ impl ContactLoop {
         self.manager.program_for_current().ok()
     }
 
+    /// The bodies' speeds at the next snapshot (per model body, m/s and
+    /// rad/s): the next cycle tracks pairs as far ahead as twice what they
+    /// will move in a slow period, as it does for what they moved in the
+    /// last one.
+    pub fn set_speeds(&mut self, speeds: &[[f64; 2]]) {
+        (self.manager).set_speeds(speeds, super::SLOW_PERIOD.as_secs_f64());
+    }
+
     /// One slow-loop cycle on a snapshot. Returns true if it sent a program
     /// (the caller then skips its own re-projection this cycle).
     pub fn step(

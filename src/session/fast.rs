@@ -54,6 +54,9 @@ pub struct Snapshot {
     /// every few ticks, and a violation that comes and goes with its period
     /// must not slip between its looks.
     pub peak_violation_m: f64,
+    /// Per model body: speed (m/s) and angular speed (rad/s) over the tick
+    /// (the contact cycle tracks pairs as far ahead as they will move).
+    pub speeds: Vec<[f64; 2]>,
 }
 
 /// One finger at one tick, for `trace.csv` and the plots.
@@ -343,6 +346,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                     .map(|o| <[f64; 3]>::from(o.force_n)),
             );
             s.peak_violation_m = peak;
+            program.body_speeds(&mut s.speeds);
         });
         self.timer.lap(Stage::Bookkeeping);
         self.stats.stages.record(&self.timer);

@@ -14,6 +14,7 @@
 mod contact;
 mod design;
 mod device_limits;
+pub mod energy;
 mod fast;
 mod plan;
 mod recorder;
@@ -225,6 +226,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         q: Vec::with_capacity(n),
         solved: true,
         finger_force_n: Vec::with_capacity(n_fingers),
+        speeds: Vec::with_capacity(model.bodies().len()),
         ..Snapshot::default()
     });
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);

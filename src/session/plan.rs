@@ -163,9 +163,11 @@ impl Plan {
         if let Some(b) = s.coupling_damping {
             solver.coupling_damping_n_s_per_m = b;
         }
-        if let Some(d) = s.dynamics {
-            solver.dynamics = d;
-        }
+        // Inertial motion: the scene's `dynamics`, else on for shaped
+        // moving bodies under gravity (docs/scene-format.md).
+        solver.dynamics = s.dynamics.unwrap_or_else(|| {
+            haptloop_solver::dynamics::inertial_by_default(&scene.compiled.model)
+        });
         let mut contact = ContactSettings::default();
         if let Some(d) = s.contact_distance {
             contact.contact_distance_m = d;

@@ -157,6 +157,7 @@ impl SlowLoop {
         if let Some(c) = &mut self.contact {
             let q = snap.q.clone();
             let t_s = snap.time.as_secs_f64();
+            c.set_speeds(&snap.speeds);
             if c.step(&q, snap.tick, t_s, snap.solved, &mut self.programs) {
                 return;
             }

@@ -96,6 +96,8 @@ pub struct RunStats {
     pub failure_kinds: [u64; FailureKind::ALL.len()],
     /// Time per stage of the tick, monotonic clock.
     pub stages: StageTimes,
+    /// The bodies' energy (inertial motion).
+    pub energy: super::energy::EnergyStats,
 }
 
 /// Why a tick counted as failed.
@@ -222,6 +224,7 @@ impl RunStats {
             contact: ContactStats::default(),
             failure_kinds: [0; FailureKind::ALL.len()],
             stages: StageTimes::new(),
+            energy: Default::default(),
         }
     }
 
@@ -230,6 +233,7 @@ impl RunStats {
     pub fn record_tick(&mut self, r: &TickReport, solved: bool) {
         self.ticks += 1;
         self.iterations += u64::from(r.iterations);
+        self.energy.record(&r.energy, solved);
         if solved {
             self.violation_max_m = self.violation_max_m.max(r.max_violation_m);
             self.violation_max_rad = self.violation_max_rad.max(r.max_violation_rad);

@@ -16,6 +16,7 @@ mod figures;
 mod limits;
 mod load_bounds;
 mod messages;
+mod physics;
 mod preflight;
 mod reference;
 mod replay;

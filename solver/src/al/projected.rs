@@ -109,7 +109,11 @@ pub(crate) struct Projected {
     /// Per moving body with a shape: its first column and bounding radius,
     /// metres (the contact speed limit measures how far its points move).
     reach: Vec<(usize, f64)>,
-    /// How far the last taken step moved a shaped body's points, metres.
+    /// How far each of `reach` may move in this tick, metres (the contact
+    /// speed limit, per body: `dynamics::allowance_m`).
+    allow: Vec<f64>,
+    /// The largest fraction of its allowance the last taken step used up
+    /// on any shaped body.
     moved_m: f64,
     /// Whether the contact speed limit shortened the last step.
     speed_limited: bool,
@@ -165,7 +169,17 @@ impl Projected {
         }
         let m_f = fingers.iter().map(|f| f.1).sum();
         let (n, m) = (model.n_coords(), model.n_rows());
+        let reach: Vec<(usize, f64)> = model
+            .layout()
+            .moving_bodies()
+            .filter_map(|(id, o)| {
+                let shape = model.bodies()[id.index()].shape.as_ref()?;
+                Some((o, shape.collider().ok()?.radius_m))
+            })
+            .collect();
         Self {
+            allow: vec![f64::INFINITY; reach.len()],
+            reach,
             d: vec![0.0; n],
             jd: vec![0.0; m],
             jd_current: false,
@@ -177,14 +191,6 @@ impl Projected {
             k_inv: vec![1.0 / (gain * finger_weight * mean_mass_kg); m_f],
             fingers,
             f_first,
-            reach: model
-                .layout()
-                .moving_bodies()
-                .filter_map(|(id, o)| {
-                    let shape = model.bodies()[id.index()].shape.as_ref()?;
-                    Some((o, shape.collider().ok()?.radius_m))
-                })
-                .collect(),
             moved_m: 0.0,
             speed_limited: false,
             design: None,
@@ -217,8 +223,8 @@ impl Projected {
         self
     }
 
-    /// How far the last step moved any point of a shaped body, metres (0
-    /// without a contact speed limit).
+    /// The largest fraction of its tick's allowance the last step used up on
+    /// any shaped body (0 without a contact speed limit).
     pub fn last_moved_m(&self) -> f64 {
         self.moved_m
     }
@@ -226,6 +232,28 @@ impl Projected {
     /// Whether the contact speed limit shortened the last step.
     pub fn last_speed_limited(&self) -> bool {
         self.speed_limited
+    }
+
+    /// The moving bodies with a shape: first column and bounding radius, m.
+    pub fn reach(&self) -> &[(usize, f64)] {
+        &self.reach
+    }
+
+    /// Sets how far each of [`reach`](Self::reach) may move this tick, m
+    /// (in `reach` order; missing entries keep their value).
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn set_allowances(&mut self, allow: impl Iterator<Item = f64>) {
+        for (a, v) in self.allow.iter_mut().zip(allow) {
+            *a = v;
+        }
+    }
+
+    /// The last step's multipliers y (per row, scaled as the step applied
+    /// them: q = q₀ − M̃⁻¹ C_qᵀ y), finger rows included.
+    pub fn multipliers(&self) -> &[f64] {
+        &self.y
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -357,12 +385,13 @@ impl Projected {
         if size > max_size_m {
             return Ok(Step::Refused);
         }
-        // The contact speed limit (SolverSettings::contact_step_m): how far
-        // any point of a shaped body would move, |Δr| + R |Δθ| with
+        // The contact speed limit (SolverSettings::contact_step_m, per body
+        // `allow`; `contact_step_m` is the fraction of it left this tick):
+        // how far any point of a shaped body would move, |Δr| + R |Δθ| with
         // |Δθ| ≈ 2 |Δe| (unit e); shorten the step, keeping its direction.
         if contact_step_m.is_finite() {
             let mut moved: f64 = 0.0;
-            for &(o, radius) in &self.reach {
+            for (k, &(o, radius)) in self.reach.iter().enumerate() {
                 let dr = (0..3)
                     .map(|c| (self.d[o + c] + self.mg[o + c]).powi(2))
                     .sum::<f64>()
@@ -371,7 +400,7 @@ impl Projected {
                     .map(|c| (self.d[o + c] + self.mg[o + c]).powi(2))
                     .sum::<f64>()
                     .sqrt();
-                moved = moved.max(step * (dr + 2.0 * radius * de));
+                moved = moved.max(step * (dr + 2.0 * radius * de) / self.allow[k]);
             }
             self.speed_limited = moved > contact_step_m;
             if self.speed_limited {

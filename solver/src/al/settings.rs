@@ -177,16 +177,17 @@ pub struct SolverSettings {
     /// four-bar's finger. Raise it only for nearly (not exactly) redundant
     /// scenes.
     pub force_regularization: f64,
-    /// Inertial motion (scene key `[solver] dynamics`). Off (default): the
-    /// least-astonishment objective of Nelson & Cohen anchors each tick at
-    /// the previous configuration, so nothing moves unless a finger moves it
-    /// (a mechanism held still stays put under gravity; gravity is felt
-    /// through Eq. 7). On: the anchor is the inertial prediction
-    /// q + v dt (1 − c dt) + g dt² of every body (fingertips excepted), so
-    /// the projection with the mass metric is a constrained implicit step:
-    /// released objects fall, slide on, and rest on what supports them
-    /// (c = [`DYNAMIC_DAMPING_PER_S`](crate::program::DYNAMIC_DAMPING_PER_S)).
-    /// Needs the projected rule's mass metric to be physical.
+    /// Inertial motion (scene key `[solver] dynamics`). Off (the solver's
+    /// default; a session's default is `dynamics::inertial_by_default`):
+    /// the least-astonishment objective of Nelson & Cohen anchors each tick
+    /// at the previous configuration, so nothing moves unless a finger moves
+    /// it (a mechanism held still stays put under gravity; gravity is felt
+    /// through Eq. 7). On: every body carries its own velocity and the
+    /// anchor is its inertial prediction, so the projection with the mass
+    /// metric is a constrained Verlet (SHAKE) step: released objects fall,
+    /// slide with Coulomb friction, bounce with their restitution and rest
+    /// on what supports them ([`crate::dynamics`]). Needs the projected
+    /// rule's mass metric to be physical.
     pub dynamics: bool,
     /// Detection of redundant rows at `Program::new` (see
     /// [`RedundancyCheck`]). Default `Auto`: the Peaucellier linkage's 9

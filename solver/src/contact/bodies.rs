@@ -32,11 +32,19 @@ pub fn contact_bodies(model: &Model, body_friction: bool) -> Vec<Option<ContactB
 }
 
 /// Pairs of bodies joined by a joint: they never collide with each other
-/// (a hinge's two links overlap at the hinge by construction).
+/// (a hinge's two links overlap at the hinge by construction), unless every
+/// joint between them says `collide` (a door and its frame, a link that
+/// folds onto the next).
 pub fn jointed_pairs(model: &Model) -> Vec<[u32; 2]> {
     model
         .constraints()
         .iter()
+        .enumerate()
+        .filter(|(k, c)| {
+            let joint = c.limits.unwrap_or(crate::ConstraintId(*k as u32));
+            !model.joint_collides(joint)
+        })
+        .map(|(_, c)| c)
         .filter(|c| {
             c.finger.is_none()
                 && !matches!(

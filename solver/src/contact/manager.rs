@@ -72,6 +72,8 @@ pub struct ContactManager {
     cache: Vec<Program>,
     /// How the last programs were obtained.
     builds: BuildCounts,
+    /// Scratch: each body's expected motion over the next cycle, m.
+    expected: Vec<f64>,
 }
 
 /// How many contact programs were built new and how many taken from the
@@ -115,6 +117,7 @@ impl ContactManager {
             poses: Vec::new(),
             cache: Vec::new(),
             builds: BuildCounts::default(),
+            expected: Vec::new(),
         })
     }
 
@@ -237,6 +240,24 @@ impl ContactManager {
         }
         self.published.clone_from(&self.table);
         ContactUpdate::Table
+    }
+
+    /// The velocities of the bodies at the next snapshot: per model body,
+    /// its speed and angular speed (m/s, rad/s; fixed bodies 0), and the
+    /// time until the cycle after it, s. The next [`step`](Self::step)
+    /// tracks pairs as far ahead as they will move in that time
+    /// (`ActiveSet::set_expected_motion`). Allocates only when the body
+    /// count changes.
+    pub fn set_speeds(&mut self, speeds: &[[f64; 2]], horizon_s: f64) {
+        let radii = self.active.radii();
+        self.expected.clear();
+        self.expected.extend(
+            speeds
+                .iter()
+                .zip(radii.iter().copied().chain(std::iter::repeat(0.0)))
+                .map(|(&[v, w], r)| (v + r * w) * horizon_s),
+        );
+        self.active.set_expected_motion(&self.expected);
     }
 
     /// The poses of the last cycle, one per model body.

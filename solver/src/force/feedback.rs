@@ -90,6 +90,10 @@ pub(crate) struct Feedback {
     /// Per flexible body of the model: its body's column offset (its
     /// deformation columns' b is the elastic force, `crate::flexible`).
     flex_offsets: Vec<usize>,
+    /// Per moving body: a force (N, at its centre of mass) and torque (N·m)
+    /// known in advance, world frame, added to Eq. 7's Q_e: the kinetic
+    /// friction of slipping contacts (inertial motion), which no row holds.
+    pub applied: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -114,6 +118,7 @@ impl Feedback {
     ) -> Result<Self, faer::sparse::FaerError> {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
+        let n_bodies = masses.len();
         let gram = Gram::new(model, jac, &masses, excluded);
         let cg = match settings.force_solver {
             ForceSolver::Cholesky => None,
@@ -195,6 +200,7 @@ impl Feedback {
                 .iter()
                 .map(|f| model.layout().body_offset(f.body).unwrap_or(0))
                 .collect(),
+            applied: vec![(Vector3::zeros(), Vector3::zeros()); n_bodies],
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -294,6 +300,12 @@ impl Feedback {
         self.slips
     }
 
+    /// Counts a slip decided outside the force solve (inertial motion
+    /// judges the cone on the step's own forces).
+    pub fn count_slip(&mut self) {
+        self.slips += 1;
+    }
+
     /// Refactors the joint block at the tick's chord Jacobian with the
     /// inequality rows `rows` forced active on top of the usual set (a step
     /// predicted they would be violated): the projected update's own
@@ -366,6 +378,16 @@ impl Feedback {
                 &mo.alpha[k],
                 &mut self.b[o..o + 7],
             );
+            let (force, torque) = self.applied[k];
+            if force != Vector3::zeros() || torque != Vector3::zeros() {
+                let te = f.omega.transpose() * torque;
+                for c in 0..3 {
+                    self.b[o + c] += force[c];
+                }
+                for c in 0..4 {
+                    self.b[o + 3 + c] += te[c];
+                }
+            }
         }
         for (fb, &o) in model.flexible.iter().zip(&self.flex_offsets) {
             let f = frame(q, o).ok_or(FactorError)?;
@@ -396,8 +418,14 @@ impl Feedback {
             }
         }
         // Coulomb: a sticking pair whose friction load exceeds μ times the
-        // user's grip slips this tick.
-        for k in 0..self.friction.len() {
+        // user's grip slips this tick. (Inertial motion judges the cone on
+        // the step's own forces instead: `program::inertial`.)
+        let judged = if settings.dynamics {
+            0
+        } else {
+            self.friction.len()
+        };
+        for k in 0..judged {
             let p = self.friction[k];
             if !(self.stick[p.rows[0]] && self.scale[p.rows[0]] != 0.0) {
                 continue;

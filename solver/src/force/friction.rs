@@ -41,6 +41,20 @@ pub(crate) struct FrictionPair {
     pub mu: f64,
     /// The touched body (end 1).
     pub body: crate::BodyId,
+    /// Two bodies' twist row and its slot (`constraint/witness/friction.rs`).
+    pub twist: Option<(usize, usize)>,
+}
+
+impl FrictionPair {
+    /// Every stick row: the two tangent rows and the twist row if any.
+    pub fn all_rows(&self) -> impl Iterator<Item = usize> + use<> {
+        self.rows.into_iter().chain(self.twist.map(|t| t.0))
+    }
+
+    /// Their witness-table slots, in the same order.
+    pub fn all_slots(&self) -> impl Iterator<Item = usize> + use<> {
+        self.slots.into_iter().chain(self.twist.map(|t| t.1))
+    }
 }
 
 /// Every friction pair of `model`. Allocates.
@@ -64,6 +78,7 @@ pub(crate) fn pairs_of(model: &Model) -> Vec<FrictionPair> {
                 finger: p.finger.map(|f| f.index()),
                 mu: p.mu,
                 body: p.bodies[1],
+                twist: (rows.len() > 2).then_some((rows.start + 2, s0 + 2)),
             })
         })
         .collect()

@@ -53,7 +53,7 @@ mod cg;
 pub(crate) mod feedback;
 pub mod friction;
 mod gram;
-mod inertia;
+pub(crate) mod inertia;
 mod motion;
 mod output;
 mod redundancy;

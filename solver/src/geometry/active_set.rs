@@ -19,9 +19,10 @@
 //! witnesses it was given. A pair is tracked pre-emptively when its surfaces
 //! are closer than `contact_distance` plus twice the distance the two bodies
 //! moved (relative, translation plus rotation at their radii) during the last
-//! cycle: a pair closing in at speed v over a cycle of T is tracked at least
-//! 2 v T before it touches, so a witness row exists before the fast loop
-//! needs it.
+//! cycle, or will move over the next one at their current velocity if that
+//! is more (`set_expected_motion`): a pair closing in at speed v over a
+//! cycle of T is tracked at least 2 v T before it touches, so a witness row
+//! exists before the fast loop needs it.
 //!
 //! **Tunnelling.** A pair that the swept broad phase (last and current AABBs)
 //! reports, that is not tracked and is separated now but whose shapes swept
@@ -41,7 +42,7 @@ use super::pair::PairView;
 use super::polyhedron::Feature;
 use super::primitives::{expand, primitives, select, value_at};
 use super::shape::Collider;
-use crate::constraint::witness::friction::stick_rows;
+use crate::constraint::witness::friction::{stick_rows, twist_row};
 use crate::constraint::witness::{PlaneWitness, Witness, WitnessType, edge_face, face_face};
 
 /// Knobs of the active set, metres.
@@ -117,7 +118,8 @@ impl ContactBody {
 struct Tracked {
     cache: PairCache,
     witnesses: Vec<Witness>,
-    friction: Option<[PlaneWitness; 2]>,
+    /// Stick rows: two tangent rows and, between two bodies, the twist row.
+    friction: Option<[PlaneWitness; 3]>,
     distance_m: f64,
 }
 
@@ -128,7 +130,8 @@ pub struct PairSpec {
     pub bodies: [u32; 2],
     /// Witness row slots.
     pub slots: u32,
-    /// Two friction stick rows (a fingertip with μ > 0).
+    /// Friction stick rows (μ > 0): two at a fingertip, three (with the
+    /// twist row) between two bodies.
     pub friction: bool,
 }
 
@@ -164,6 +167,9 @@ pub struct ActiveSet {
     broad: BroadPhase,
     tracked: BTreeMap<[u32; 2], Tracked>,
     last_poses: Vec<Pose3>,
+    /// Per body: how far it may move over the next cycle at its current
+    /// velocity, metres (empty: unknown; [`set_expected_motion`](Self::set_expected_motion)).
+    expected: Vec<f64>,
 }
 
 impl ActiveSet {
@@ -186,7 +192,20 @@ impl ActiveSet {
             broad: BroadPhase::default(),
             tracked: BTreeMap::new(),
             last_poses: Vec::new(),
+            expected: Vec::new(),
         }
+    }
+
+    /// How far each body (one entry per model body) will move over the
+    /// next cycle at its current velocity, metres: its speed (linear plus
+    /// radius × angular) times the cycle. The next [`update`](Self::update)
+    /// takes the larger of this and the body's motion over the last cycle
+    /// as its motion, so a body that just started moving fast (thrown,
+    /// bounced, released with a velocity) has its pairs tracked as far
+    /// ahead as it will fly.
+    pub fn set_expected_motion(&mut self, expected_m: &[f64]) {
+        self.expected.clear();
+        self.expected.extend_from_slice(expected_m);
     }
 
     /// Replaces the pairs that never collide (a model derived with new
@@ -205,6 +224,14 @@ impl ActiveSet {
                 .is_err()
         });
         self.excluded = excluded;
+    }
+
+    /// Each body's bounding radius, metres (0 without a shape).
+    pub fn radii(&self) -> Vec<f64> {
+        self.bodies
+            .iter()
+            .map(|b| b.as_ref().map_or(0.0, |b| b.collider.radius_m))
+            .collect()
     }
 
     /// The settings.
@@ -251,8 +278,9 @@ impl ActiveSet {
 
     /// Writes every tracked pair's primitives (then `Off`) and friction rows
     /// into `table`, pair by pair in [`pairs`](Self::pairs) order: `slots`
-    /// rows each, then 2 friction rows where the pair has them. Returns the
-    /// number of entries written.
+    /// rows each, then the friction rows where the pair has them (2 at a
+    /// fingertip, 3 between two bodies). Returns the number of entries
+    /// written.
     pub fn fill(&self, table: &mut Vec<Witness>) -> usize {
         table.clear();
         for spec in self.pairs() {
@@ -261,9 +289,13 @@ impl ActiveSet {
                 table.push(t.witnesses.get(k).copied().unwrap_or_default());
             }
             if spec.friction {
+                let fingertip = self.bodies[spec.bodies[0] as usize]
+                    .as_ref()
+                    .is_some_and(|b| b.fingertip);
+                let n = if fingertip { 2 } else { 3 };
                 match t.friction {
-                    Some(rows) => table.extend(rows.map(Witness::Plane)),
-                    None => table.extend([Witness::Off; 2]),
+                    Some(rows) => table.extend(rows[..n].iter().map(|&w| Witness::Plane(w))),
+                    None => table.extend(std::iter::repeat_n(Witness::Off, n)),
                 }
             }
         }
@@ -285,6 +317,8 @@ impl ActiveSet {
                 let angle = rotation_angle(&(p.rot * l.rot.transpose()));
                 (p.r - l.r).norm() + radius * angle
             })
+            .zip(self.expected.iter().copied().chain(std::iter::repeat(0.0)))
+            .map(|(moved, expected)| moved.max(expected))
             .collect();
         let max_motion = motion.iter().copied().fold(0.0, f64::max);
         // Swept broad phase: the current AABBs loosened enough to reach last
@@ -620,14 +654,15 @@ fn friction_rows(
     q: &PairQuery,
     fingertip: bool,
     primitives: &[Witness],
-) -> [PlaneWitness; 2] {
+) -> [PlaneWitness; 3] {
     let n_b = view.pb.local_dir(&-q.normal);
     if fingertip {
-        return stick_rows(
+        let rows = stick_rows(
             view.pa.local_point(&q.core_point_a),
             view.pb.local_point(&q.core_point_b),
             n_b,
         );
+        return [rows[0], rows[1], rows[1]];
     }
     let held = held_points(primitives, &view.pa, &view.pb);
     let centre = if held.is_empty() {
@@ -635,11 +670,21 @@ fn friction_rows(
     } else {
         held.iter().sum::<Vector3<f64>>() / held.len() as f64
     };
-    stick_rows(
+    let rows = stick_rows(
         view.pa.local_point(&centre),
         view.pb.local_point(&centre),
         n_b,
-    )
+    );
+    // The twist row's arm: half the smaller body's radius along the first
+    // tangent (any non-zero arm holds the twist; this one keeps it inside
+    // the patch's scale).
+    let arm = 0.5 * view.a.radius_m.min(view.b.radius_m).max(1e-3);
+    let at = centre + view.pb.rot * rows[0].normal * arm;
+    [
+        rows[0],
+        rows[1],
+        twist_row(&rows, view.pa.local_point(&at), view.pb.local_point(&at)),
+    ]
 }
 
 /// The angle of a rotation matrix, radians.

@@ -310,6 +310,10 @@ impl ModelBuilder {
             flex_anchors: fin.anchors,
             surfaces: fin.surfaces,
             rolling,
+            colliding_joints: (self.joints.iter().enumerate())
+                .filter(|(_, j)| j.collide)
+                .map(|(k, _)| ConstraintId(k as u32))
+                .collect(),
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;
@@ -549,6 +553,7 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             value: s.friction,
         });
     }
+    motion(s, &owner)?;
     for (k, &param) in s.free.iter().enumerate() {
         if param != DesignParam::Position || !s.fixed {
             return Err(BuildError::UnsupportedBodyFree {
@@ -600,5 +605,60 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         fingertip: false,
         friction: s.friction,
         hull,
+        restitution: s.restitution,
+        damping_per_s: s.damping_per_s,
+        velocity_m_s: Vector3::from(s.velocity_m_s),
+        angular_velocity_rad_s: Vector3::from(s.angular_velocity_rad_s),
     })
+}
+
+/// Largest initial speed a body may be given, m/s (a bullet is 1 km/s).
+pub const MAX_SPEED_M_S: f64 = 1e3;
+
+/// Largest initial angular speed a body may be given, rad/s.
+pub const MAX_SPIN_RAD_S: f64 = 1e4;
+
+/// Largest velocity damping, 1/s (a body then stops within a microsecond).
+pub const MAX_DAMPING_PER_S: f64 = 1e6;
+
+/// The inertial-motion keys of a body: restitution, damping, initial
+/// velocities.
+fn motion(s: &BodySpec, owner: &dyn Fn() -> Owner) -> Result<(), BuildError> {
+    let bad = |field, value, why| {
+        Err(BuildError::BadMotion {
+            owner: owner(),
+            field,
+            value,
+            why,
+        })
+    };
+    if !(s.restitution.is_finite() && (0.0..=1.0).contains(&s.restitution)) {
+        return bad("restitution", s.restitution, "in [0, 1]");
+    }
+    if !(s.damping_per_s.is_finite() && (0.0..=MAX_DAMPING_PER_S).contains(&s.damping_per_s)) {
+        return bad("damping", s.damping_per_s, "finite, ≥ 0 and at most 1e6 /s");
+    }
+    for (field, v, max, why) in [
+        (
+            "velocity",
+            s.velocity_m_s,
+            MAX_SPEED_M_S,
+            "a speed of at most 1000 m/s",
+        ),
+        (
+            "angular_velocity",
+            s.angular_velocity_rad_s,
+            MAX_SPIN_RAD_S,
+            "an angular speed of at most 1e4 rad/s",
+        ),
+    ] {
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(norm.is_finite() && norm <= max) {
+            return bad(field, norm, why);
+        }
+        if s.fixed && norm > 0.0 {
+            return bad(field, norm, "zero on a fixed body");
+        }
+    }
+    Ok(())
 }

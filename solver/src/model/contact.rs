@@ -24,7 +24,8 @@ pub struct ContactPair {
     pub bodies: [BodyId; 2],
     /// The witness rows.
     pub normal: ConstraintId,
-    /// The two friction stick rows, for a fingertip with friction.
+    /// The friction stick rows: two at a fingertip, three (the third the
+    /// twist row) between two bodies.
     pub friction: Option<ConstraintId>,
     /// The fingertip's finger, if A is one.
     pub finger: Option<FingerId>,
@@ -136,16 +137,18 @@ impl Model {
             );
             layout.slots += p.slots as usize;
             let friction = if p.friction {
+                // Two stick rows at a fingertip; two bodies add the twist row.
+                let rows = if finger.is_some() { 2 } else { 3 };
                 let id = ConstraintId(out.infos.len() as u32);
                 out.push(
                     info(name("friction"), ConstraintKind::ContactFriction, a, b),
                     Geometry::Contact(ContactRows {
                         pair,
                         first_slot: layout.slots as u32,
-                        rows: 2,
+                        rows,
                     }),
                 );
-                layout.slots += 2;
+                layout.slots += rows as usize;
                 Some(id)
             } else {
                 None

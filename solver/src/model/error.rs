@@ -449,6 +449,18 @@ pub enum BuildError {
         /// The value given.
         value: f64,
     },
+    /// A body's restitution, damping or initial velocity is out of range.
+    #[error("{owner}: `{field}` = {value} is invalid: expected {why}")]
+    BadMotion {
+        /// The body.
+        owner: Owner,
+        /// `restitution`, `damping`, `velocity` or `angular_velocity`.
+        field: &'static str,
+        /// The value given (a vector's length).
+        value: f64,
+        /// The valid range.
+        why: &'static str,
+    },
 }
 
 impl BuildError {
@@ -497,6 +509,7 @@ impl BuildError {
             | Shape { owner, .. }
             | BadFingertip { owner, .. }
             | BadFriction { owner, .. }
+            | BadMotion { owner, .. }
             | AlreadyDerived { owner }
             | Flexible { owner, .. }
             | Surface { owner, .. } => owner,

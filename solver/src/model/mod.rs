@@ -66,6 +66,16 @@ pub struct Body {
     /// cut off): how, and the largest distance a given point lies from the
     /// kept hull.
     pub hull: Option<crate::geometry::HullSimplification>,
+    /// Restitution of its contacts, in [0, 1] (see
+    /// [`BodySpec::restitution`](crate::BodySpec::restitution)).
+    pub restitution: f64,
+    /// Velocity damping, 1/s (see
+    /// [`BodySpec::damping_per_s`](crate::BodySpec::damping_per_s)).
+    pub damping_per_s: f64,
+    /// Initial velocity, m/s, world frame.
+    pub velocity_m_s: Vector3<f64>,
+    /// Initial angular velocity, rad/s, world frame.
+    pub angular_velocity_rad_s: Vector3<f64>,
 }
 
 /// One finger: a point (or rigid) grasp of a moving body.
@@ -112,6 +122,9 @@ pub struct Model {
     pub(crate) surfaces: Vec<crate::parametric::SurfaceContact>,
     /// The rolling constraints (their indices; the anchor table's order).
     pub(crate) rolling: Vec<usize>,
+    /// Joints whose two bodies collide with each other
+    /// ([`JointSpec::collide`](crate::JointSpec::collide)).
+    pub(crate) colliding_joints: Vec<ConstraintId>,
 }
 
 fn next_model_id() -> u64 {
@@ -227,6 +240,12 @@ impl Model {
     /// Gravity, m/s², world frame (zero if the scene gives none).
     pub fn gravity_m_s2(&self) -> Vector3<f64> {
         self.gravity
+    }
+
+    /// True when joint `joint` lets its two bodies' shapes collide
+    /// ([`JointSpec::collide`](crate::JointSpec::collide)).
+    pub fn joint_collides(&self, joint: ConstraintId) -> bool {
+        self.colliding_joints.contains(&joint)
     }
 
     /// The largest lever arm in the model (anchor or finger point distance from

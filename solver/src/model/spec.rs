@@ -45,6 +45,21 @@ pub struct BodySpec {
     /// geometric mean of its two bodies'; 0: frictionless, the default).
     /// Acts with inertial motion only (`SolverSettings::dynamics`).
     pub friction: f64,
+    /// Restitution e of this body's contacts, in [0, 1]: a contact that
+    /// closes at speed v separates at e v (a pair takes the larger of its
+    /// two bodies'; 0, the default: perfectly inelastic). Inertial motion
+    /// only.
+    pub restitution: f64,
+    /// Linear velocity damping c, 1/s (≥ 0): the body's velocity and angular
+    /// momentum are divided by 1 + c dt every tick, the implicit form of
+    /// v̇ = −c v. Default 0: no damping. Inertial motion only.
+    pub damping_per_s: f64,
+    /// Initial velocity of the origin, m/s, world frame (inertial motion;
+    /// default at rest).
+    pub velocity_m_s: [f64; 3],
+    /// Initial angular velocity, rad/s, world frame (inertial motion;
+    /// default at rest).
+    pub angular_velocity_rad_s: [f64; 3],
     /// Design variables of a fixed body: [`DesignParam::Position`] makes its
     /// position three coordinates of q (metres, world frame) that objectives
     /// and fingers' pulls may move (Nelson & Cohen Fig. 15's "feet"); it
@@ -71,6 +86,10 @@ impl BodySpec {
             shape: None,
             density_kg_m3: None,
             friction: 0.0,
+            restitution: 0.0,
+            damping_per_s: 0.0,
+            velocity_m_s: [0.0; 3],
+            angular_velocity_rad_s: [0.0; 3],
             free: Vec::new(),
             bounds: None,
             flexible: None,
@@ -124,6 +143,26 @@ impl BodySpec {
     /// Sets the Coulomb μ of the body's contacts.
     pub fn friction(mut self, mu: f64) -> Self {
         self.friction = mu;
+        self
+    }
+
+    /// Sets the restitution of the body's contacts, in [0, 1].
+    pub fn restitution(mut self, e: f64) -> Self {
+        self.restitution = e;
+        self
+    }
+
+    /// Sets the velocity damping, 1/s.
+    pub fn damping(mut self, per_s: f64) -> Self {
+        self.damping_per_s = per_s;
+        self
+    }
+
+    /// Sets the initial velocity (m/s) and angular velocity (rad/s), world
+    /// frame.
+    pub fn moving(mut self, velocity_m_s: [f64; 3], angular_velocity_rad_s: [f64; 3]) -> Self {
+        self.velocity_m_s = velocity_m_s;
+        self.angular_velocity_rad_s = angular_velocity_rad_s;
         self
     }
 
@@ -312,6 +351,9 @@ pub struct JointSpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the design variables `free` lists (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// The two bodies' shapes collide with each other (default false: a
+    /// joint's two links overlap at the joint by construction).
+    pub collide: bool,
     /// Report the torque (revolute, N·m) or force (prismatic, N) a motor on
     /// this joint's axis would need to produce the mechanism's motion
     /// (Nelson & Cohen §5.2; `force::torque`).
@@ -359,6 +401,7 @@ impl JointSpec {
             limits: None,
             free: Vec::new(),
             bounds: None,
+            collide: false,
             report_torque: false,
             surface: None,
             radius_m: None,
@@ -380,6 +423,12 @@ impl JointSpec {
     /// Reports this joint's motor torque (see [`JointSpec::report_torque`]).
     pub fn report_torque(mut self) -> Self {
         self.report_torque = true;
+        self
+    }
+
+    /// Lets the two bodies' shapes collide with each other.
+    pub fn colliding(mut self) -> Self {
+        self.collide = true;
         self
     }
 

@@ -1,5 +1,5 @@
 //! The program's contact state between the slow loop's witness updates:
-//! the witness table it runs on, inertial prediction, friction stick anchors.
+//! the witness table it runs on and the fingertips' friction stick anchors.
 //!
 //! **Witness updates.** The slow loop publishes a witness table for the
 //! program's model ([`Program::apply_witnesses`]); the fast loop copies it in
@@ -8,25 +8,18 @@
 //! while its contact persists: a stuck contact must not jump to where the
 //! slow loop saw it a few milliseconds ago.
 //!
-//! **Inertial prediction** (`SolverSettings::dynamics`). The least-
-//! astonishment anchor of each tick becomes q̂ = q + v dt (1 − c dt) + g dt²
-//! per body (rotation: e advanced by ω dt (1 − c dt)), from the motion
-//! history's velocities; fingertips keep q̂ = q (their finger drives them).
-//! The projected step minimises ½ (q − q̂)ᵀ M (q − q̂) subject to the joints
-//! and active contacts: a constrained implicit Euler step, which is
-//! dissipative (it never adds energy) on top of the explicit damping c.
+//! **Inertial motion** (`SolverSettings::dynamics`) has its own module:
+//! the prediction, Coulomb friction on the step's forces, restitution and
+//! the energy account are in `program::inertial` over `crate::dynamics`.
+//! The anchoring below is the quasi-static mode's (a fingertip's friction
+//! judged against the user's grip).
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 use super::Program;
 use crate::constraint::witness::Witness;
 use crate::force::INEQUALITY_ACTIVE_BAND;
 use crate::force::friction::STICK_SPEED_M_S;
-
-/// Velocity damping of inertial motion, 1/s: a body left alone loses this
-/// fraction of its speed per second (on top of the implicit step's own
-/// dissipation), so objects pushed on a frictionless table come to rest.
-pub const DYNAMIC_DAMPING_PER_S: f64 = 1.0;
 
 impl Program {
     /// Copies a witness table from the slow loop into the running program and
@@ -71,6 +64,7 @@ impl Program {
         }
         own.copy_from_slice(table);
         self.feedback.stick.fill(false);
+        self.inertial.slip.fill(Default::default());
         let _ = self.refresh();
         true
     }
@@ -91,81 +85,6 @@ impl Program {
     /// was built.
     pub fn slips(&self) -> u64 {
         self.feedback.slips()
-    }
-
-    /// Sets the least-astonishment anchor q̂ of this tick (see the module docs).
-    pub(super) fn predict(&mut self, dt_s: f64) {
-        self.q_goal.copy_from_slice(&self.q);
-        if !self.settings.dynamics {
-            return;
-        }
-        let g = self.model.gravity_m_s2();
-        let keep = (1.0 - DYNAMIC_DAMPING_PER_S * dt_s).max(0.0);
-        let mo = &self.feedback.motion;
-        for (k, m) in self.feedback.masses.iter().enumerate() {
-            let o = m.offset;
-            // A fingertip keeps its momentum too (a proxy on its coupling
-            // spring); the hand carries its weight.
-            let g = if m.weighs {
-                g
-            } else {
-                nalgebra::Vector3::zeros()
-            };
-            let dr = mo.v[k] * (keep * dt_s) + g * (dt_s * dt_s);
-            for c in 0..3 {
-                self.q_goal[o + c] += dr[c];
-            }
-            let turn = UnitQuaternion::from_scaled_axis(mo.w[k] * (keep * dt_s));
-            let e = Quaternion::new(self.q[o + 3], self.q[o + 4], self.q[o + 5], self.q[o + 6]);
-            let e = turn.quaternion() * e;
-            self.q_goal[o + 3..o + 7].copy_from_slice(&[e.w, e.i, e.j, e.k]);
-        }
-        self.kinetic_friction(dt_s);
-    }
-
-    /// Kinetic friction of the slipping pairs (Coulomb: μ N against the
-    /// relative tangential velocity), applied to the inertial prediction as
-    /// an impulse on both bodies' centres of mass, N from the last force
-    /// solve. The impulse never exceeds what stops the relative slip (then
-    /// the pair sticks again), so it only ever removes energy.
-    ///
-    /// # Real-time
-    /// No allocation; O(friction pairs).
-    fn kinetic_friction(&mut self, dt_s: f64) {
-        for k in 0..self.feedback.friction.len() {
-            let p = self.feedback.friction[k];
-            let n_force = self.feedback.normal_force_n[k];
-            if self.feedback.stick[p.rows[0]] || n_force <= 0.0 || p.mu <= 0.0 {
-                continue;
-            }
-            let Some(normal) =
-                crate::force::friction::normal(&self.model, &self.q, self.ev.witnesses(), &p)
-            else {
-                continue;
-            };
-            let [ka, kb] = self.friction_bodies[k];
-            let mo = &self.feedback.motion;
-            let vel = |kk: Option<usize>| kk.map_or(Vector3::zeros(), |i| mo.v[i]);
-            let inv_m = |kk: Option<usize>| kk.map_or(0.0, |i| 1.0 / self.feedback.masses[i].mass);
-            let v = vel(ka) - vel(kb);
-            let v_t = v - normal * normal.dot(&v);
-            let speed = v_t.norm();
-            let w = inv_m(ka) + inv_m(kb);
-            if speed <= 0.0 || w <= 0.0 {
-                continue;
-            }
-            let impulse = (p.mu * n_force * dt_s).min(speed / w);
-            let dir = v_t / speed;
-            for (kk, sign) in [(ka, -1.0), (kb, 1.0)] {
-                if let Some(i) = kk {
-                    let o = self.feedback.masses[i].offset;
-                    let dv = dir * (sign * impulse / self.feedback.masses[i].mass);
-                    for c in 0..3 {
-                        self.q_goal[o + c] += dv[c] * dt_s;
-                    }
-                }
-            }
-        }
     }
 
     /// Friction anchors after a tick's steps, with C evaluated at the final q:

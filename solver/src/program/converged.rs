@@ -78,6 +78,8 @@ pub struct TickState {
     last_dt_s: f64,
     /// Per design column: switched off.
     design_off: Vec<bool>,
+    /// The bodies' own velocities (inertial motion's prediction).
+    vel: crate::dynamics::velocity::Velocities,
 }
 
 impl TickState {
@@ -145,6 +147,7 @@ impl Program {
         copy(&mut out.last_targets, &self.last_targets);
         out.last_dt_s = self.last_dt_s;
         copy(&mut out.design_off, self.design_off_flags());
+        out.vel.copy_from(&self.inertial.vel);
     }
 
     /// Replays the tick that went from `before` to `after` (states saved
@@ -190,6 +193,9 @@ impl Program {
         self.load_motion(before, &before.q_prev);
         self.load_design_flags(&before.design_off);
         self.set_static_shift(&before.static_shift);
+        if before.vel.v.len() == bodies {
+            self.inertial.vel.copy_from(&before.vel);
+        }
         self.feedback.forced.fill(false);
         self.q.copy_from_slice(&before.q);
         self.lambda.copy_from_slice(&before.lambda);

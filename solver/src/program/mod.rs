@@ -59,6 +59,7 @@ mod auxiliary;
 mod contact;
 mod converged;
 mod design_flags;
+mod inertial;
 mod objective;
 mod report;
 mod semantic;
@@ -66,7 +67,6 @@ mod stages;
 mod state;
 mod tick;
 
-pub use contact::DYNAMIC_DAMPING_PER_S;
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use semantic::SNAP_RISE_S;
@@ -135,6 +135,8 @@ pub struct Program {
     semantic: Option<semantic::SemanticState>,
     /// Per design column: switched off (`design_flags`).
     design_off: Vec<bool>,
+    /// Body velocities, friction states, restitution, energy (`dynamics`).
+    inertial: inertial::Inertial,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -226,9 +228,8 @@ impl Program {
         for (k, pair) in model.contact().pairs.iter().enumerate() {
             if let Some(f) = pair.friction {
                 let n = model.constraints()[pair.normal.index()].rows.len();
-                friction_slot[pair.first_slot + n] = true;
-                friction_slot[pair.first_slot + n + 1] = true;
-                let _ = f;
+                let rows = model.constraints()[f.index()].rows.len();
+                friction_slot[pair.first_slot + n..pair.first_slot + n + rows].fill(true);
                 friction_pair.push(k);
             }
         }
@@ -241,7 +242,18 @@ impl Program {
                 })
             })
             .collect();
+        let finger_rows = (0..m)
+            .filter(|&i| matches!(scaling.role[i], Role::Finger | Role::Coupling))
+            .collect();
+        let inertial = inertial::Inertial::new(
+            &model,
+            &feedback.masses,
+            finger_rows,
+            friction_pair.len(),
+            projected.reach(),
+        );
         let mut p = Program {
+            inertial,
             friction_bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
@@ -276,6 +288,7 @@ impl Program {
             settings,
             model,
         };
+        p.reset_velocities();
         if p.refresh() != TickOutcome::Ok {
             return Err(ProgramError::Factorization(
                 "the multiplier solve failed at the initial configuration".into(),

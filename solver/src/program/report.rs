@@ -104,6 +104,9 @@ pub struct TickReport {
     /// shaped body back this tick: a step was shortened, or the tick's
     /// steps stopped on its budget.
     pub speed_limited: bool,
+    /// Energy of the moving bodies at the tick's start and the fingers' work
+    /// up to then (inertial motion; not `valid` otherwise or on failure).
+    pub energy: crate::dynamics::EnergySample,
     /// How it ended.
     pub status: TickOutcome,
 }

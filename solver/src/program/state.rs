@@ -28,6 +28,7 @@ impl Program {
         self.q_ref.copy_from_slice(q);
         self.anchor_rolling();
         self.feedback.motion.reset(q);
+        self.reset_velocities();
         // A failed refresh (a q that cannot be evaluated) shows up as the
         // status of the next tick.
         let _ = self.refresh();
@@ -106,8 +107,10 @@ impl Program {
             if let Some(ok) = old.feedback.masses.iter().position(|m| m.offset == oo) {
                 self.feedback.motion.copy_body(k, mo, ok);
                 self.feedback.motion.q_prev[no..no + 7].copy_from_slice(&mo.q_prev[oo..oo + 7]);
+                self.inertial.vel.copy_body(k, &old.inertial.vel, ok);
             }
         }
+        self.adopt_inertial(old);
         // Design variables.
         let (nd, od) = (new_m.layout().design_vars(), old_m.layout().design_vars());
         for (i, d) in nd.iter().enumerate() {
@@ -199,10 +202,15 @@ impl Program {
                 continue;
             };
             let (n, o) = (self.feedback.friction[k], old.feedback.friction[j]);
-            for c in 0..2 {
-                self.feedback.stick[n.rows[c]] = old.feedback.stick[o.rows[c]];
-                let w = old.ev.witnesses()[o.slots[c]];
-                self.ev.witnesses_mut()[n.slots[c]] = w;
+            self.inertial.slip[k] = old.inertial.slip[j];
+            let pairs = n
+                .all_rows()
+                .zip(o.all_rows())
+                .zip(n.all_slots().zip(o.all_slots()));
+            for ((rn, ro), (sn, so)) in pairs {
+                self.feedback.stick[rn] = old.feedback.stick[ro];
+                let w = old.ev.witnesses()[so];
+                self.ev.witnesses_mut()[sn] = w;
             }
         }
     }

@@ -252,6 +252,11 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.shape = b.shape.as_ref().map(|s| shape(s.get_ref()));
     spec.density_kg_m3 = b.density.as_ref().map(|d| *d.get_ref());
     spec.friction = b.friction.as_ref().map_or(0.0, |m| *m.get_ref());
+    spec.restitution = b.restitution.as_ref().map_or(0.0, |e| *e.get_ref());
+    spec.damping_per_s = b.damping.as_ref().map_or(0.0, |c| *c.get_ref());
+    spec.velocity_m_s = b.velocity.as_ref().map_or([0.0; 3], |v| v.get_ref().get());
+    spec.angular_velocity_rad_s =
+        (b.angular_velocity.as_ref()).map_or([0.0; 3], |w| w.get_ref().get());
     spec.free = b.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = b.bounds.as_ref().map(|x| bounds(*x.get_ref()));
     spec.flexible = b.flexible.as_ref().map(|f| {
@@ -420,6 +425,7 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.report_torque = j.report_torque.as_ref().is_some_and(|x| *x.get_ref());
     spec.surface = j.surface.as_ref().map(|x| contact_surface(x.get_ref()));
     spec.radius_m = j.radius.as_ref().map(|x| *x.get_ref());
+    spec.collide = j.collide.as_ref().is_some_and(|c| *c.get_ref());
     spec
 }
 
@@ -763,6 +769,12 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
         BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
         BuildError::BadFriction { .. } => or_name(b.friction.as_ref().map(Spanned::span)),
         BuildError::Flexible { .. } => or_name(b.flexible.as_ref().map(Spanned::span)),
+        BuildError::BadMotion { field, .. } => or_name(match *field {
+            "restitution" => b.restitution.as_ref().map(Spanned::span),
+            "damping" => b.damping.as_ref().map(Spanned::span),
+            "velocity" => b.velocity.as_ref().map(Spanned::span),
+            _ => b.angular_velocity.as_ref().map(Spanned::span),
+        }),
         BuildError::UnsupportedBodyFree { .. } | BuildError::DuplicateFree { .. } => {
             let dup = matches!(e, BuildError::DuplicateFree { .. });
             or_name(

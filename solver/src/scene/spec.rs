@@ -203,6 +203,18 @@ pub struct BodySection {
     /// Coulomb μ of the body's contacts with other bodies.
     #[serde(default)]
     pub friction: Option<Spanned<f64>>,
+    /// Restitution of the body's contacts, in [0, 1].
+    #[serde(default)]
+    pub restitution: Option<Spanned<f64>>,
+    /// Velocity damping, 1/s.
+    #[serde(default)]
+    pub damping: Option<Spanned<f64>>,
+    /// Initial velocity, m/s, scene frame.
+    #[serde(default)]
+    pub velocity: Option<Spanned<Vec3>>,
+    /// Initial angular velocity, rad/s, scene frame.
+    #[serde(default)]
+    pub angular_velocity: Option<Spanned<Vec3>>,
     /// `[[body.offer]]` semantic areas.
     #[serde(default)]
     pub offer: Vec<AreaSection>,
@@ -380,6 +392,9 @@ pub struct JointSection {
     /// Bounds on the design variables.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// The two bodies' shapes collide with each other (default false).
+    #[serde(default)]
+    pub collide: Option<Spanned<bool>>,
     /// Report the torque a motor on this joint's axis would need (§5.2).
     #[serde(default)]
     pub report_torque: Option<Spanned<bool>>,

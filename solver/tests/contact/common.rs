@@ -127,6 +127,11 @@ impl Lockstep {
         self.ticks += 1;
         if self.ticks.is_multiple_of(self.every) {
             self.last_snapshot_q = self.program.q().to_vec();
+            // As the session does: the bodies' velocities over the next cycle.
+            let mut speeds = Vec::new();
+            self.program.body_speeds(&mut speeds);
+            let horizon = self.dt.as_secs_f64() * self.every as f64;
+            self.manager.set_speeds(&speeds, horizon);
             let (cycle, update) = self.manager.step(
                 self.program.q(),
                 r.status == haptloop_solver::TickOutcome::Ok,

@@ -12,6 +12,11 @@
 //! them (slip) and re-anchors P₀ under the fingertip. The rows are
 //! [`PlaneWitness`]es with `origin` [`WitnessType::Friction`]; the ball's
 //! centre is its body origin, so rolling the fingertip does not move P.
+//!
+//! Two bodies touching over a patch get a third row, the **twist** row
+//! ([`twist_row`]): the second row again, at a point an arm's length along
+//! the first tangent. The three hold the patch's relative twist about the
+//! normal as well (a point contact would let a stuck box pivot about it).
 
 use nalgebra::Vector3;
 
@@ -42,4 +47,20 @@ pub fn stick_rows(
         normal: t,
         margin: 0.0,
     })
+}
+
+/// The twist row of two bodies' stick rows `rows` (A's point and B's point
+/// at the contact's centre): the second row's tangent, at the point
+/// `arm_a` / `arm_b` (the same world point, `arm` along the first tangent
+/// from the centre, in A's and B's frames).
+pub fn twist_row(
+    rows: &[PlaneWitness; 2],
+    arm_a: Vector3<f64>,
+    arm_b: Vector3<f64>,
+) -> PlaneWitness {
+    PlaneWitness {
+        point: arm_a,
+        plane_point: arm_b,
+        ..rows[1]
+    }
 }
