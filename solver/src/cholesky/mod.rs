@@ -31,6 +31,7 @@
 //! run in time fixed by the pattern: Σ over supernode updates of their dense
 //! products, nnz(L) for each right-hand side.
 
+mod dissection;
 mod symbolic;
 
 use symbolic::Symbolic;
@@ -49,6 +50,51 @@ pub(crate) struct Regularization {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct NotPositive {
     pub index: usize,
+}
+
+/// The shape of a symbolic factor: what a numeric factorisation and a solve
+/// cost (diagnostics and benchmarks).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct FactorShape {
+    /// The fill-reducing order chosen.
+    pub ordering: Ordering,
+    /// Order of the matrix (tail included).
+    pub n: usize,
+    /// Rows and columns of the unfactored tail.
+    pub tail: usize,
+    /// Supernodes of the leading block.
+    pub supernodes: usize,
+    /// Widest supernode of the leading block.
+    pub widest: usize,
+    /// Stored values of L (blocks, upper halves of diagonal blocks included).
+    pub values: usize,
+    /// Multiply-adds of one numeric factorisation (updates and dense
+    /// factors, the tail's Schur update included).
+    pub factor_flops: usize,
+    /// Multiply-adds of one forward plus backward substitution.
+    pub solve_flops: usize,
+}
+
+impl FactorShape {
+    /// What [`Cholesky::analyze_with_tail`] minimises over the orderings:
+    /// one factorisation and [`SOLVES_PER_FACTOR`] solves, multiply-adds.
+    pub fn cost(&self) -> usize {
+        self.factor_flops + SOLVES_PER_FACTOR * self.solve_flops
+    }
+}
+
+/// Solves per numeric factorisation in a typical tick (three projected
+/// steps and the force solve), for choosing the ordering.
+pub(crate) const SOLVES_PER_FACTOR: usize = 4;
+
+/// A fill-reducing order of the leading block.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) enum Ordering {
+    /// Approximate minimum degree (faer).
+    #[default]
+    Amd,
+    /// Nested dissection (`dissection`), AMD on its small pieces.
+    Dissection,
 }
 
 /// The factor of one pattern, its numeric values and the solve workspace.
@@ -84,7 +130,7 @@ impl Cholesky {
             .flat_map(|c| (col_ptr[c]..col_ptr[c + 1]).map(move |p| (p, c)))
             .map(|(p, c)| (row_idx[p], c, p))
             .collect();
-        Self::analyze_with_tail(n, 0, &entries, max_rhs)
+        Self::analyze_with_tail(n, 0, &entries, &[], max_rhs)
     }
 
     /// Analyses the n × n symmetric matrix given by the (row, column, value
@@ -98,9 +144,10 @@ impl Cholesky {
         n: usize,
         tail: usize,
         entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
         max_rhs: usize,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let sym = Symbolic::analyze(n, tail, entries)?;
+        let sym = Symbolic::analyze(n, tail, entries, cliques)?;
         // The solve kernels are specialised up to 8 right-hand sides.
         let max_rhs = max_rhs.clamp(1, 8);
         let widest = sym
@@ -123,6 +170,50 @@ impl Cholesky {
     /// their diagonal parts).
     pub fn len_values(&self) -> usize {
         self.values.len()
+    }
+
+    /// The shapes of the factor of this pattern under AMD and under the
+    /// nested dissection (comparisons; see `analyze_with_tail`).
+    #[cfg(test)]
+    pub fn both_shapes(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+    ) -> (FactorShape, FactorShape) {
+        Symbolic::both_shapes(n, tail, entries, cliques)
+    }
+
+    /// [`analyze_with_tail`](Self::analyze_with_tail) with the nested
+    /// dissection forced, leaves of `leaf_rows` (tests).
+    #[cfg(test)]
+    pub fn dissected(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        leaf_rows: usize,
+    ) -> Self {
+        let sym = Symbolic::dissected(n, tail, entries, cliques, leaf_rows);
+        let widest = sym
+            .supernodes
+            .iter()
+            .map(|s| s.w as usize)
+            .max()
+            .unwrap_or(0);
+        Self {
+            inv: vec![0.0; widest],
+            values: vec![0.0; sym.len_values()],
+            work: vec![0.0; n],
+            max_rhs: 1,
+            regularized: 0,
+            sym,
+        }
+    }
+
+    /// The factor's [`FactorShape`].
+    pub fn shape(&self) -> FactorShape {
+        self.sym.shape()
     }
 
     /// Numeric factorisation of the matrix whose values are `a` (indexed by

@@ -2,9 +2,12 @@
 //! elimination tree, supernodes, the block layout, the update plan; and the
 //! triangular solves, which only walk that structure.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::amd;
+use super::Ordering;
+use super::dissection;
+
+/// Leading blocks of fewer rows are ordered by AMD alone (the dissection
+/// cannot win on so few).
+const MIN_DISSECTION: usize = 2 * dissection::LEAF_ROWS;
 
 /// Columns `c0 .. c0 + w` of L, whose rows below the diagonal block are the
 /// same `nrows` rows (`rows[rows .. rows + nrows]`, ascending). Its block is
@@ -38,6 +41,8 @@ pub(super) struct Symbolic {
     pub n: usize,
     /// Trailing rows and columns ordered last and not factored.
     pub tail: usize,
+    /// The fill-reducing order of the leading block.
+    pub ordering: Ordering,
     /// Supernodes before the tail's (all of them without a tail).
     pub lead_supernodes: usize,
     /// iperm[original index] = index in the factor's order.
@@ -66,17 +71,50 @@ impl Symbolic {
         self.len_values
     }
 
+    /// Sizes and operation counts (see [`FactorShape`](super::FactorShape)).
+    pub fn shape(&self) -> super::FactorShape {
+        let lead = &self.supernodes[..self.lead_supernodes];
+        let mut factor_flops = 0;
+        let mut solve_flops = 0;
+        for sn in &self.supernodes {
+            for u in &self.updates[sn.updates.0 as usize..sn.updates.1 as usize] {
+                let wd = self.supernodes[u.src as usize].w as usize;
+                let (nb, m) = ((u.b - u.a) as usize, u.m as usize);
+                factor_flops += (0..nb).map(|ci| (m - ci) * wd).sum::<usize>();
+            }
+        }
+        for sn in lead {
+            let (w, r) = (sn.w as usize, sn.nrows as usize);
+            factor_flops += w * w * w / 6 + w * w * r / 2;
+            solve_flops += 2 * (w * (w + 1) / 2 + w * r);
+        }
+        super::FactorShape {
+            ordering: self.ordering,
+            n: self.n,
+            tail: self.tail,
+            supernodes: lead.len(),
+            widest: lead.iter().map(|s| s.w as usize).max().unwrap_or(0),
+            values: self.len_values,
+            factor_flops,
+            solve_flops,
+        }
+    }
+
     /// `entries`: (row, column, value index) of the lower triangle of the
     /// n × n matrix (row ≥ column; every diagonal entry present); its last
     /// `tail` rows and columns are ordered last and left unfactored.
+    /// `cliques`: groups of leading rows that couple with each other (the
+    /// rows on one body), for the nested dissection; empty: AMD only.
     pub fn analyze(
         n: usize,
         tail: usize,
         entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
     ) -> Result<Self, faer::sparse::FaerError> {
         let lead = n - tail;
-        // 1. Fill-reducing order of the leading block (AMD on the pattern of
-        //    A + Aᵀ); the tail keeps its place at the end.
+        // 1. Fill-reducing order of the leading block (the tail keeps its
+        //    place at the end): AMD on the pattern of A + Aᵀ, and for a
+        //    larger block a nested dissection too; the cheaper factor wins.
         let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
         for &(r, c, _) in entries {
             if r < lead {
@@ -91,22 +129,97 @@ impl Symbolic {
             row_idx.extend_from_slice(c);
             col_ptr.push(row_idx.len());
         }
-        let mut perm = vec![0usize; lead];
-        let mut perm_inv = vec![0usize; lead];
-        if lead > 0 {
-            let nnz = row_idx.len();
-            let pattern =
-                SymbolicSparseColMatRef::new_checked(lead, lead, &col_ptr, None, &row_idx);
-            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(lead, nnz))
-                .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
-            amd::order_maybe_unsorted(
-                &mut perm,
-                &mut perm_inv,
-                pattern,
-                amd::Control::default(),
-                MemStack::new(&mut mem),
-            )?;
+        let amd = dissection::amd_order(lead, &col_ptr, &row_idx)?;
+        let by_amd = Self::with_order(n, tail, entries, &amd, Ordering::Amd)?;
+        if lead < MIN_DISSECTION || cliques.is_empty() {
+            return Ok(by_amd);
         }
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for (c, rows) in cols.iter().enumerate() {
+            for &r in rows {
+                if r != c {
+                    adj[c].push(r);
+                    adj[r].push(c);
+                }
+            }
+        }
+        let nd = dissection::dissection_order(&adj, cliques, dissection::LEAF_ROWS)?;
+        let by_nd = Self::with_order(n, tail, entries, &nd, Ordering::Dissection)?;
+        Ok(if by_nd.shape().cost() < by_amd.shape().cost() {
+            by_nd
+        } else {
+            by_amd
+        })
+    }
+
+    /// The shapes of the factor under AMD and under the nested dissection
+    /// (comparisons).
+    #[cfg(test)]
+    pub fn both_shapes(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+    ) -> (super::FactorShape, super::FactorShape) {
+        let lead = n - tail;
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead {
+                cols[c].push(r);
+            }
+        }
+        let (mut cp, mut ri) = (vec![0usize], Vec::new());
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            ri.extend_from_slice(c);
+            cp.push(ri.len());
+        }
+        let amd = dissection::amd_order(lead, &cp, &ri).unwrap();
+        (
+            Self::with_order(n, tail, entries, &amd, Ordering::Amd)
+                .unwrap()
+                .shape(),
+            Self::dissected(n, tail, entries, cliques, dissection::LEAF_ROWS).shape(),
+        )
+    }
+
+    /// The factor under the nested dissection with leaves of `leaf_rows`
+    /// (tests).
+    #[cfg(test)]
+    pub fn dissected(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        leaf_rows: usize,
+    ) -> Self {
+        let lead = n - tail;
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead && r != c {
+                adj[c].push(r);
+                adj[r].push(c);
+            }
+        }
+        for a in &mut adj {
+            a.sort_unstable();
+            a.dedup();
+        }
+        let nd = dissection::dissection_order(&adj, cliques, leaf_rows).unwrap();
+        Self::with_order(n, tail, entries, &nd, Ordering::Dissection).unwrap()
+    }
+
+    /// [`analyze`](Self::analyze) with the leading block's fill-reducing
+    /// order given (`perm_inv[old] = new`).
+    fn with_order(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        perm_inv: &[usize],
+        ordering: Ordering,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let lead = n - tail;
         // 2. Elimination tree, then a postorder of the leading block's tree
         //    (every subtree a contiguous range of columns), the tail after it:
         //    a topological order of the whole tree.
@@ -129,7 +242,7 @@ impl Symbolic {
             }
             r
         };
-        let parent = etree(&rows_of(&perm_inv, lead));
+        let parent = etree(&rows_of(perm_inv, lead));
         let post = postorder(&parent);
         // post[new] = old (in the AMD order); compose.
         let mut post_inv = vec![0usize; lead];
@@ -284,6 +397,7 @@ impl Symbolic {
         Ok(Self {
             n,
             tail,
+            ordering,
             lead_supernodes,
             iperm: iperm.iter().map(|&v| v as u32).collect(),
             load,

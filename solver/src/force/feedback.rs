@@ -272,6 +272,35 @@ impl Feedback {
         self.solve.factor_nnz()
     }
 
+    /// The sparse Cholesky factor's shape and operation counts.
+    pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
+        self.solve.factor_shape()
+    }
+
+    /// Rows of A's joint block, finger rows, and stored values of A_JJ's
+    /// lower triangle.
+    pub fn gram_size(&self) -> (usize, usize, usize) {
+        (self.gram.n_j, self.gram.m_f, self.gram.nnz())
+    }
+
+    /// The Eq. 7 matrix's pattern as the factor gets it (comparisons).
+    #[cfg(test)]
+    #[allow(clippy::type_complexity)]
+    pub fn factor_entries(&self) -> (usize, usize, Vec<(usize, usize, usize)>, Vec<Vec<usize>>) {
+        (
+            self.gram.n_j + self.gram.m_f,
+            self.gram.m_f,
+            self.gram.factor_entries(),
+            self.gram.cliques(),
+        )
+    }
+
+    /// One numeric factorisation of the last assembled A (timing).
+    #[cfg(test)]
+    pub fn refactor(&mut self) -> Result<(), FactorError> {
+        self.solve.factor(&self.gram)
+    }
+
     /// Advances the motion history to `q` (unless `advance` is false: a
     /// refresh at an unchanged state) and computes every finger's output at
     /// the evaluated `ev` (C and C_q at `q` with `targets`). `lambda` holds

@@ -180,6 +180,24 @@ impl Gram {
         self.pattern.row_idx().len()
     }
 
+    /// The J rows (J indices) touching each moving body: A_JJ is the union
+    /// of these cliques (the nested dissection splits along them).
+    /// Allocates.
+    pub fn cliques(&self) -> Vec<Vec<usize>> {
+        self.bodies
+            .iter()
+            .map(|b| {
+                self.entries[b.entries.clone()]
+                    .iter()
+                    .filter_map(|e| match self.slot[e.row] {
+                        Slot::J(j) => Some(j),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
     /// The whole (n_J + m_f)-square matrix's lower triangle as (row, column,
     /// index in `values`), J rows first then F rows: A_JJ's pattern, the
     /// entries of A_FJ the assembly can write (rows sharing a body with a

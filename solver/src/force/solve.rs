@@ -77,7 +77,8 @@ impl MultiplierSolve {
     /// replaces the numeric Cholesky in [`solve`](Self::solve). Allocates.
     pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
-        let llt = Cholesky::analyze_with_tail(n + m, m, &gram.factor_entries(), 1)?;
+        let llt =
+            Cholesky::analyze_with_tail(n + m, m, &gram.factor_entries(), &gram.cliques(), 1)?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
         Ok(Self {
             llt,
@@ -103,6 +104,11 @@ impl MultiplierSolve {
     /// dense blocks).
     pub fn factor_nnz(&self) -> usize {
         self.llt.len_values()
+    }
+
+    /// The Cholesky factor's shape and operation counts.
+    pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
+        self.llt.shape()
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for

@@ -58,6 +58,8 @@
 mod contact;
 mod converged;
 mod objective;
+#[cfg(test)]
+mod probe;
 mod report;
 mod semantic;
 mod stages;
@@ -189,6 +191,16 @@ impl Program {
         redundancy.rows.extend_from_slice(&local);
         redundancy.rows.sort_unstable();
         scaling.mask(&redundancy.rows);
+        // The rows the ordered check masked leave A's pattern too: kept as
+        // decoupled unit rows they cost factorisation and solve work on
+        // explicit zeros (a planar lattice: 196 of its 1213 joint rows).
+        if redundancy.rows.len() > local.len() {
+            for &i in &redundancy.rows {
+                excluded[i] = true;
+            }
+            feedback = Feedback::new(&model, &ev, &settings, &excluded)
+                .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
+        }
         let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
         let h = settings.step / (1.0 + settings.gain * sigma_max);
         check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
@@ -386,9 +398,46 @@ fn divergence_limits(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn program_is_send() {
         fn is_send<T: Send>() {}
         is_send::<super::Program>();
+    }
+
+    /// The rows the ordered redundancy check masks are not in A's pattern:
+    /// the joint block's order is the equality rows minus the masked ones
+    /// (the Peaucellier linkage: 9 of 57), where with the check off every
+    /// row is in it. (That the force stays exact is
+    /// `redundant_linkage_static_force_matches_the_reference`, against an
+    /// SVD null-space reference.)
+    #[test]
+    fn masked_rows_leave_the_force_factor() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/peaucellier.toml");
+        let model = Arc::new(crate::scene::load(&path).unwrap().compile().unwrap().model);
+        let settings = SolverSettings::default();
+        let p = Program::new(model.clone(), settings).unwrap();
+        let masked = p.redundancy().rows.len();
+        assert_eq!(masked, 9);
+        let fingers: usize = model
+            .fingers()
+            .iter()
+            .map(|f| model.constraints()[f.constraint.index()].rows.len())
+            .sum();
+        let (n_j, m_f, _) = p.feedback.gram_size();
+        assert_eq!(m_f, fingers);
+        assert_eq!(n_j, model.n_rows() - fingers - masked);
+        let all = Program::new(
+            model.clone(),
+            SolverSettings {
+                redundancy: RedundancyCheck::Off,
+                ..settings
+            },
+        )
+        .unwrap();
+        assert_eq!(all.feedback.gram_size().0, model.n_rows() - fingers);
+        assert!(p.force_factor_nnz() < all.force_factor_nnz());
     }
 }

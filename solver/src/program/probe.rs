@@ -1,0 +1,119 @@
+//! `HAPTLOOP_PROBE=a.toml,b.toml cargo test --release -p haptloop-solver
+//! --lib program::probe -- --ignored --nocapture`: the shape of each scene's
+//! Eq. 7 factor and the time of its parts (assembly + factorisation + solve,
+//! the factorisation alone, one projected step), interleaved. Prints; asserts
+//! nothing but that the ticks succeed.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use crate::{FingerTarget, Program, SolverSettings};
+
+fn scenes() -> Vec<(String, crate::Model, SolverSettings)> {
+    let mut out = Vec::new();
+    let list = std::env::var("HAPTLOOP_PROBE").unwrap_or_default();
+    for path in list.split(',').filter(|p| !p.is_empty()) {
+        let loaded = crate::scene::load(std::path::Path::new(path)).expect("scene loads");
+        let compiled = loaded.compile().expect("scene compiles");
+        let mut settings = SolverSettings::default();
+        let s = &compiled.settings;
+        if let Some(v) = s.step {
+            settings.step = v;
+        }
+        if let Some(v) = s.iterations {
+            settings.iterations = v;
+        }
+        out.push((compiled.name.clone(), compiled.model, settings));
+    }
+    out
+}
+
+#[test]
+#[ignore]
+fn probe() {
+    for (name, model, settings) in scenes() {
+        let model = Arc::new(model);
+        let t0 = Instant::now();
+        let mut p = Program::new(model.clone(), settings).expect("program builds");
+        let build = t0.elapsed();
+        let targets0: Vec<FingerTarget> = model.initial_targets();
+        let mut targets = targets0.clone();
+        let dt = Duration::from_millis(1);
+        let a = p.assemble(&targets0, 100, 1e-10);
+        assert!(a.converged, "{a:?}");
+        let shape = p.feedback.factor_shape();
+        let (n_j, m_f, nnz_a) = p.feedback.gram_size();
+        let red = p.redundancy();
+        println!(
+            "{name}: {} coords × {} rows; A: n_J {n_j}, m_f {m_f}, nnz(A_JJ lower) {nnz_a}; masked {} ({} local); build {:.1} ms",
+            model.n_coords(),
+            model.n_rows(),
+            red.rows.len(),
+            red.local,
+            build.as_secs_f64() * 1e3
+        );
+        println!(
+            "  L ({:?}): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
+            shape.ordering,
+            shape.supernodes,
+            shape.widest,
+            shape.values,
+            shape.factor_flops / 1000,
+            shape.solve_flops / 1000
+        );
+        let (n, tail, entries, cliques) = p.feedback.factor_entries();
+        let (amd, nd) = crate::cholesky::Cholesky::both_shapes(n, tail, &entries, &cliques);
+        for (label, sh) in [("AMD", amd), ("dissection", nd)] {
+            println!(
+                "  {label}: {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd, cost {} k",
+                sh.supernodes,
+                sh.widest,
+                sh.values,
+                sh.factor_flops / 1000,
+                sh.solve_flops / 1000,
+                sh.cost() / 1000
+            );
+        }
+        let reps = (2_000_000 / shape.factor_flops.max(1)).clamp(20, 2000);
+        let mut t = [0.0f64; 3];
+        for round in 0..5 {
+            // A few ticks of motion between rounds.
+            for k in 0..5 {
+                let a = 0.002 * ((round * 5 + k) as f64 * 0.3).sin();
+                for (t, t0) in targets.iter_mut().zip(&targets0) {
+                    t.position_m = t0.position_m + nalgebra::Vector3::new(a, 0.5 * a, 0.0);
+                }
+                let r = p.tick(&targets, dt);
+                assert_eq!(
+                    r.status,
+                    crate::program::TickOutcome::Ok,
+                    "round {round} tick {k}"
+                );
+            }
+            let s = Instant::now();
+            for _ in 0..reps {
+                assert_eq!(p.refresh(), crate::program::TickOutcome::Ok);
+            }
+            t[0] += s.elapsed().as_secs_f64();
+            let s = Instant::now();
+            for _ in 0..reps {
+                p.feedback.refactor().unwrap();
+            }
+            t[1] += s.elapsed().as_secs_f64();
+            let saved = p.q.clone();
+            let s = Instant::now();
+            for _ in 0..reps {
+                let _ = p.iterate(&targets, 1);
+                p.q.copy_from_slice(&saved);
+            }
+            t[2] += s.elapsed().as_secs_f64();
+        }
+        let per = |x: f64| x / (5 * reps) as f64 * 1e6;
+        println!(
+            "  evaluate + assemble + factor + solve {:.1} µs; factor {:.1} µs; projected step {:.1} µs",
+            per(t[0]),
+            per(t[1]),
+            per(t[2])
+        );
+    }
+}
