@@ -295,6 +295,18 @@ impl Feedback {
         )
     }
 
+    /// Switches the factor's AVX2 + FMA kernels off or on (comparisons).
+    #[cfg(test)]
+    pub fn set_simd(&mut self, on: bool) {
+        self.solve.set_simd(on);
+    }
+
+    /// x ← A_JJ⁻¹ x with the last factor (timing).
+    #[cfg(test)]
+    pub fn solve_joint(&mut self, x: &mut [f64]) {
+        self.solve.solve_joint(x);
+    }
+
     /// One numeric factorisation of the last assembled A (timing).
     #[cfg(test)]
     pub fn refactor(&mut self) -> Result<(), FactorError> {

@@ -106,6 +106,12 @@ impl MultiplierSolve {
         self.llt.len_values()
     }
 
+    /// Switches the factor's AVX2 + FMA kernels off or on (comparisons).
+    #[cfg(test)]
+    pub fn set_simd(&mut self, on: bool) {
+        self.llt.set_simd(on);
+    }
+
     /// The Cholesky factor's shape and operation counts.
     pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
         self.llt.shape()

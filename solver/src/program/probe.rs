@@ -1,11 +1,40 @@
 //! `HAPTLOOP_PROBE=a.toml,b.toml cargo test --release -p haptloop-solver
 //! --lib program::probe -- --ignored --nocapture`: the shape of each scene's
 //! Eq. 7 factor and the time of its parts (assembly + factorisation + solve,
-//! the factorisation alone, one projected step), interleaved. Prints; asserts
-//! nothing but that the ticks succeed.
+//! the factorisation alone, one projected step), interleaved. Times are the
+//! thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), which a shared machine's
+//! other processes do not add to. Prints; asserts nothing but that the
+//! ticks succeed.
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+/// This thread's CPU time.
+struct Instant(f64);
+
+impl Instant {
+    fn now() -> Self {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid, writable timespec.
+        unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        Instant(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+    }
+
+    fn elapsed(&self) -> Elapsed {
+        Elapsed(Self::now().0 - self.0)
+    }
+}
+
+struct Elapsed(f64);
+
+impl Elapsed {
+    fn as_secs_f64(&self) -> f64 {
+        self.0
+    }
+}
 
 use crate::{FingerTarget, Program, SolverSettings};
 
@@ -36,6 +65,7 @@ fn probe() {
         let t0 = Instant::now();
         let mut p = Program::new(model.clone(), settings).expect("program builds");
         let build = t0.elapsed();
+        let build = Elapsed(build.as_secs_f64());
         let targets0: Vec<FingerTarget> = model.initial_targets();
         let mut targets = targets0.clone();
         let dt = Duration::from_millis(1);
@@ -50,7 +80,7 @@ fn probe() {
             model.n_rows(),
             red.rows.len(),
             red.local,
-            build.as_secs_f64() * 1e3
+            build.0 * 1e3
         );
         println!(
             "  L ({:?}): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
@@ -109,6 +139,36 @@ fn probe() {
             t[2] += s.elapsed().as_secs_f64();
         }
         let per = |x: f64| x / (5 * reps) as f64 * 1e6;
+        // Baseline against AVX2 + FMA kernels, interleaved, best of 9
+        // rounds each.
+        let (n_j, _, _) = p.feedback.gram_size();
+        let mut x = vec![0.0; n_j];
+        let mut best = [[f64::INFINITY; 2]; 2];
+        for _ in 0..9 {
+            for (k, on) in [false, true].into_iter().enumerate() {
+                p.feedback.set_simd(on);
+                let s = Instant::now();
+                for _ in 0..reps {
+                    p.feedback.refactor().unwrap();
+                }
+                best[0][k] = best[0][k].min(s.elapsed().as_secs_f64() / reps as f64);
+                let s = Instant::now();
+                for r in 0..reps {
+                    x.fill(r as f64);
+                    p.feedback.solve_joint(&mut x);
+                }
+                best[1][k] = best[1][k].min(s.elapsed().as_secs_f64() / reps as f64);
+            }
+        }
+        println!(
+            "  best of 9: factor baseline {:.1} µs, AVX2+FMA {:.1} µs ({:.2}×); solve {:.1} / {:.1} µs ({:.2}×)",
+            best[0][0] * 1e6,
+            best[0][1] * 1e6,
+            best[0][0] / best[0][1],
+            best[1][0] * 1e6,
+            best[1][1] * 1e6,
+            best[1][0] / best[1][1]
+        );
         println!(
             "  evaluate + assemble + factor + solve {:.1} µs; factor {:.1} µs; projected step {:.1} µs",
             per(t[0]),
