@@ -307,6 +307,20 @@ impl Feedback {
         self.solve.solve_joint(x);
     }
 
+    /// One assembly of A at the last force solve's state (timing).
+    #[cfg(test)]
+    pub fn reassemble(&mut self, ev: &Evaluation) {
+        let q = &self.motion.q_prev;
+        self.gram.assemble(
+            q,
+            ev.jacobian(),
+            &self.scale,
+            &self.masses,
+            &self.b,
+            &mut self.y,
+        );
+    }
+
     /// One numeric factorisation of the last assembled A (timing).
     #[cfg(test)]
     pub fn refactor(&mut self) -> Result<(), FactorError> {
