@@ -224,6 +224,19 @@ impl Cholesky {
         self.simd = on && kernels::simd_available();
     }
 
+    /// Swaps the factor's values with `values` when the lengths agree
+    /// (returns whether it did).
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn swap_values(&mut self, values: &mut Vec<f64>) -> bool {
+        if values.len() != self.values.len() {
+            return false;
+        }
+        std::mem::swap(&mut self.values, values);
+        true
+    }
+
     /// The factor's [`FactorShape`].
     pub fn shape(&self) -> FactorShape {
         self.sym.shape()

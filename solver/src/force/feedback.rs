@@ -33,7 +33,7 @@ struct FingerRows {
 }
 
 /// Buffers and factor of the force computation.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(crate) struct Feedback {
     pub masses: Vec<BodyMass>,
     pub motion: Motion,
@@ -99,11 +99,12 @@ impl Feedback {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
         let gram = Gram::new(model, jac, &masses, excluded);
-        let cg = match settings.force_solver {
-            ForceSolver::Cholesky => None,
-            ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
+        let (cg, matvec) = match settings.force_solver {
+            ForceSolver::Cholesky => (None, None),
+            ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
+            ForceSolver::Matvec { max_iterations } => (None, Some(max_iterations)),
         };
-        let solve = MultiplierSolve::new(&gram, cg)?;
+        let solve = MultiplierSolve::new(&gram, cg, matvec)?;
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
         let fingers = model
@@ -264,7 +265,47 @@ impl Feedback {
 
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
     pub fn cg_iterations(&self) -> u32 {
-        self.solve.cg.as_ref().map_or(0, |c| c.iterations)
+        self.solve.cg_iterations()
+    }
+
+    /// Identifies the force factor's pattern (see `MultiplierSolve::id`).
+    pub fn factor_id(&self) -> u64 {
+        self.solve.id()
+    }
+
+    /// Adopts a factor refreshed for this program (`MultiplierSolve::adopt`).
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn adopt_factor(&mut self, values: &mut Vec<f64>) -> bool {
+        let adopted = self.solve.adopt(values);
+        if adopted {
+            self.generation = self.generation.wrapping_add(1);
+        }
+        adopted
+    }
+
+    /// The slow thread's refresh of the force factor: activates the rows at
+    /// `ev` (evaluated at `q`; inequalities by their values, multipliers
+    /// unknown), assembles and regularises A as a force solve does, and
+    /// factors it into `out`. This feedback's own factor is left as it was.
+    pub fn refactor_into(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        ev: &Evaluation,
+        out: &mut Vec<f64>,
+    ) -> Result<(), FactorError> {
+        self.forced.fill(false);
+        // cy is scratch here: zero multipliers.
+        self.cy.fill(0.0);
+        let zero = std::mem::take(&mut self.cy);
+        self.activate(s, ev.values(), &zero);
+        self.cy = zero;
+        self.motion.q_prev.copy_from_slice(q);
+        self.assemble_regularized(ev, settings);
+        self.solve.refreshed(&self.gram, out)
     }
 
     /// Stored values of the sparse Cholesky factor (diagnostics).
@@ -506,6 +547,20 @@ impl Feedback {
         settings: &SolverSettings,
     ) -> Result<(), FactorError> {
         self.generation = self.generation.wrapping_add(1);
+        self.assemble_regularized(ev, settings);
+        let jac = ev.jacobian();
+        jac.mul_vec(&self.y, &mut self.cy)
+            .map_err(|_| FactorError)?;
+        for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
+            *v *= sc;
+        }
+        self.solve.solve(&self.gram, &self.cy, &self.known)
+    }
+
+    /// Assembles the scaled Gram matrix with the current row scales (0
+    /// drops a row: unit diagonal) at the motion history's newest q, and
+    /// y = M̃⁻¹ b; adds the Tikhonov term and the contact compliance.
+    fn assemble_regularized(&mut self, ev: &Evaluation, settings: &SolverSettings) {
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
         let q = &self.motion.q_prev;
@@ -529,12 +584,6 @@ impl Feedback {
                 self.gram.values[d] + mu
             };
         }
-        jac.mul_vec(&self.y, &mut self.cy)
-            .map_err(|_| FactorError)?;
-        for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
-            *v *= sc;
-        }
-        self.solve.solve(&self.gram, &self.cy, &self.known)
     }
 
     /// Each finger's coupling error p − t and its rate, and the known

@@ -48,7 +48,7 @@ struct BodyRows {
 }
 
 /// Pattern, destinations and values of A (see the module docs).
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(crate) struct Gram {
     pub slot: Vec<Slot>,
     /// Finger rows in F order.

@@ -52,6 +52,7 @@ mod gram;
 mod inertia;
 mod motion;
 mod output;
+mod pcg;
 mod redundancy;
 mod reference;
 pub(crate) mod small;

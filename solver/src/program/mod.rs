@@ -60,6 +60,7 @@ mod converged;
 mod objective;
 #[cfg(test)]
 mod probe;
+mod refresh;
 mod report;
 mod semantic;
 mod stages;
@@ -69,6 +70,7 @@ mod tick;
 pub use contact::DYNAMIC_DAMPING_PER_S;
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
+pub use refresh::{FactorRefresher, RefreshedFactor};
 pub use semantic::SNAP_RISE_S;
 pub use stages::{SolverStage, StageMarks};
 pub use tick::MAX_ACTIVATIONS;
@@ -143,6 +145,8 @@ pub struct Program {
     feedback: Feedback,
     outputs: Vec<FingerOutput>,
     report: TickReport,
+    /// Refreshed force factors adopted (matvec-only tick).
+    factor_adoptions: u64,
 }
 
 impl Program {
@@ -155,6 +159,20 @@ impl Program {
         settings.validate()?;
         // The fused gradient pass holds at most six rows per constraint; a
         // contact pair's witness rows are one constraint of many rows.
+        if matches!(settings.force_solver, crate::ForceSolver::Matvec { .. }) {
+            if model.contact().slots > 0 {
+                return Err(ProgramError::Unsupported(
+                    "the matvec-only tick (`force_solver = \"matvec\"`) does not cover contact \
+                     rows: this scene needs the Cholesky force solver",
+                ));
+            }
+            if !model.layout().design_vars().is_empty() {
+                return Err(ProgramError::Unsupported(
+                    "the matvec-only tick (`force_solver = \"matvec\"`) does not cover design \
+                     variables: this scene needs the Cholesky force solver",
+                ));
+            }
+        }
         if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
             return Err(ProgramError::Unsupported(
                 "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
@@ -262,6 +280,7 @@ impl Program {
             spare_outputs: vec![FingerOutput::default(); model.fingers().len()],
             outputs: vec![FingerOutput::default(); model.fingers().len()],
             report: TickReport::default(),
+            factor_adoptions: 0,
             feedback,
             ev,
             h,

@@ -10,6 +10,7 @@ mod convergence;
 mod design;
 mod force;
 mod limits;
+mod matvec;
 mod planar;
 mod program;
 mod redundant;
