@@ -35,6 +35,10 @@ pub struct BenchArgs {
     /// solver's.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub iterations: Option<u32>,
+    /// Eq. 7 solver, as for `run`: `cholesky` (default) or `matvec[:N]`
+    /// (no factorisation in the tick).
+    #[arg(long, value_name = "SOLVER", value_parser = super::values::force_solver)]
+    pub force_solver: Option<haptloop_solver::ForceSolver>,
 }
 
 /// p50, p99, p99.9 and max of one figure, ns.
@@ -72,6 +76,8 @@ struct BenchJson {
     ticks: u64,
     rate_hz: u32,
     iterations: u32,
+    /// The Eq. 7 solver: `cholesky`, `matvec` or `matvec:N`.
+    force_solver: String,
     tick_ns: Quantiles,
     tick_without_device_ns: Quantiles,
     /// Mean of `tick_without_device_ns`.
@@ -108,10 +114,12 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         seconds,
         rate_hz: Some(rate),
         iterations: args.iterations,
+        force_solver: args.force_solver,
         deterministic: true,
         ..SessionOptions::default()
     };
     let plan = Plan::new(&scene, &options)?;
+    let plan_solver = plan.solver.force_solver;
     let outcome = session::run(&scene, plan, stop, &mut |_| {})?;
     let s = Summary::of(&outcome);
     let json = BenchJson {
@@ -119,6 +127,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         ticks: s.ticks,
         rate_hz: s.rate_hz,
         iterations: s.iterations,
+        force_solver: plan_solver.label(),
         tick_ns: s.stages_ns.tick.into(),
         tick_without_device_ns: s.stages_ns.tick_without_device.into(),
         tick_without_device_mean_ns: s.stages_ns.tick_without_device_mean,
@@ -148,12 +157,13 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} update iteration{} per tick",
+        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} update iteration{} per tick, {} force solver",
         b.scene,
         b.ticks,
         b.rate_hz,
         b.iterations,
-        if b.iterations == 1 { "" } else { "s" }
+        if b.iterations == 1 { "" } else { "s" },
+        b.force_solver
     );
     let _ = writeln!(
         out,

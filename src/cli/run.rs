@@ -37,6 +37,13 @@ pub struct RunArgs {
     /// Eq. 1–3).
     #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
     pub update: Option<haptloop_solver::UpdateRule>,
+    /// Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
+    /// default) or `matvec` (no factorisation in the tick: conjugate
+    /// gradients preconditioned by a factor the slow loop refreshes; for
+    /// the largest scenes, not for contact), `matvec:N` to cap its
+    /// iterations at N (default 4).
+    #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
+    pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the
     /// scene's, else the solver's.
     #[arg(long, value_parser = values::positive)]
@@ -93,6 +100,7 @@ impl Default for RunArgs {
             rate: None,
             iterations: None,
             update: None,
+            force_solver: None,
             gain: None,
             velocity_filter_ms: None,
             deterministic: false,
@@ -166,6 +174,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         rate_hz: args.rate,
         iterations: args.iterations,
         update: args.update,
+        force_solver: args.force_solver,
         gain: args.gain,
         velocity_filter: args
             .velocity_filter_ms

@@ -100,6 +100,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) period: Duration,
     pub(super) program: Box<Handover>,
     pub(super) programs: ProgramReceiver<Handover>,
+    /// Force factors the slow loop refreshed (the matvec-only tick).
+    pub(super) refresh: Option<super::refresh::RefreshReceiver>,
     /// A tick whose violation exceeds this is treated as a failed solve
     /// (force cut, re-projection): the mechanism has come apart, m.
     pub(super) broken_m: f64,
@@ -210,6 +212,9 @@ impl<C: Clock> TickBody for FastLoop<C> {
             self.stats
                 .contact
                 .record_latency(tick.index.saturating_sub(at));
+        }
+        if let Some(r) = &mut self.refresh {
+            r.apply(&mut self.program.program);
         }
         self.timer.lap(Stage::Handover);
 

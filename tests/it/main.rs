@@ -8,6 +8,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod bench;
 mod contact;
 mod design;
+mod matvec;
 mod docs;
 mod reference;
 mod scene_format;

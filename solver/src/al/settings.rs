@@ -30,7 +30,7 @@ pub enum ForceSolver {
         /// Cap per right-hand side (bounds the tick's time).
         max_iterations: u32,
     },
-    /// The matvec-only tick (scene key `force_solver = "matvec"`): no
+    /// The matvec-only tick (`haptloop run --force-solver matvec`): no
     /// numeric factorisation on the fast thread. Eq. 7's joint block is
     /// solved by conjugate gradients on the assembled C_q M⁻¹ C_qᵀ, all its
     /// right-hand sides in lockstep, warm-started from the previous tick's
@@ -51,6 +51,17 @@ pub enum ForceSolver {
 }
 
 impl ForceSolver {
+    /// How the command line spells it: `cholesky`, `matvec` (the default
+    /// cap), `matvec:N`, `cg:N`.
+    pub fn label(&self) -> String {
+        match *self {
+            ForceSolver::Cholesky => "cholesky".into(),
+            f if f == ForceSolver::MATVEC => "matvec".into(),
+            ForceSolver::Matvec { max_iterations } => format!("matvec:{max_iterations}"),
+            ForceSolver::ConjugateGradient { max_iterations } => format!("cg:{max_iterations}"),
+        }
+    }
+
     /// The matvec-only tick with its default cap: 4 iterations (the
     /// sweep's fronts, BENCHMARKS.md).
     pub const MATVEC: ForceSolver = ForceSolver::Matvec { max_iterations: 4 };

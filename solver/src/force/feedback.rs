@@ -314,12 +314,14 @@ impl Feedback {
     }
 
     /// The sparse Cholesky factor's shape and operation counts.
+    #[cfg(test)]
     pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
         self.solve.factor_shape()
     }
 
     /// Rows of A's joint block, finger rows, and stored values of A_JJ's
     /// lower triangle.
+    #[cfg(test)]
     pub fn gram_size(&self) -> (usize, usize, usize) {
         (self.gram.n_j, self.gram.m_f, self.gram.nnz())
     }

@@ -148,11 +148,6 @@ impl MultiplierSolve {
         self.id
     }
 
-    /// Stored values of the factor (a refreshed factor's length).
-    pub fn factor_len(&self) -> usize {
-        self.llt.len_values()
-    }
-
     /// Replaces the factor's values by `values` (a factorisation of this
     /// solve's A computed elsewhere, see [`refreshed`](Self::refreshed)),
     /// handing the old ones back in `values`. False (nothing changed) on a
@@ -205,6 +200,7 @@ impl MultiplierSolve {
     }
 
     /// The Cholesky factor's shape and operation counts.
+    #[cfg(test)]
     pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
         self.llt.shape()
     }

@@ -162,13 +162,13 @@ impl Program {
         if matches!(settings.force_solver, crate::ForceSolver::Matvec { .. }) {
             if model.contact().slots > 0 {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`force_solver = \"matvec\"`) does not cover contact \
+                    "the matvec-only tick (`--force-solver matvec`) does not cover contact \
                      rows: this scene needs the Cholesky force solver",
                 ));
             }
             if !model.layout().design_vars().is_empty() {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`force_solver = \"matvec\"`) does not cover design \
+                    "the matvec-only tick (`--force-solver matvec`) does not cover design \
                      variables: this scene needs the Cholesky force solver",
                 ));
             }
