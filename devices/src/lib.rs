@@ -41,6 +41,7 @@ pub mod replay;
 pub mod rig;
 pub mod safety;
 pub mod trace;
+mod trace_read;
 
 pub use device::{
     ARM_JOINTS, Device, DeviceFault, DeviceInfo, DeviceLimits, DeviceReading, MotorReport,
@@ -49,13 +50,18 @@ pub use device::{
 pub use error::{DeviceError, TraceError};
 pub use fault::{FaultKind, FaultSchedule, InjectedFault};
 pub use hand::{Grip, Hand, TargetSample, Trajectory};
-pub use hand_trace::HandTrace;
+pub use hand_trace::{HandTrace, MAX_HAND_SAMPLES, MAX_HAND_TRACE_BYTES};
 pub use mount::Mount;
-pub use phantom::{KNOWN_MODELS, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom};
-pub use replay::ReplayDevice;
+pub use phantom::{
+    KNOWN_MODELS, MotorDrive, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom,
+};
+pub use replay::{ReplayCheck, ReplayDevice};
 pub use rig::{DynDevice, MountedDevice, SceneReading};
 pub use safety::{
     CutReason, CutRecord, FaultRecord, Health, SafeDevice, SafetyConfig, SafetyCounters,
     SafetyEvent, WriteOutcome,
 };
-pub use trace::{Trace, TraceHeader, TraceRecorder, TraceRow, TraceStream};
+pub use trace::{
+    MAX_COMMAND_N, MAX_TRACE_BYTES, MAX_TRACE_ROWS, Trace, TraceHeader, TraceRecorder, TraceRow,
+    TraceStream,
+};

@@ -1,26 +1,48 @@
 //! [`ReplayDevice`]: plays a recorded [`Trace`] back as a device, so a
-//! deterministic session driven by it reproduces the recorded forces bit for bit.
+//! deterministic session driven by it reproduces the recorded session bit
+//! for bit, and says where it does not.
 //!
 //! `read(now)` returns the reading built from the counts and gimbal
 //! orientation of the last row whose time is ≤ `now` (the same conversion a
 //! live device uses: [`crate::PhantomModel::reading_from_counts`]); before the
 //! first row it reports [`DeviceFault::Dropped`], and more than one period
 //! past the last row [`DeviceFault::Disconnected`]: a trace that ends is a
-//! device that went away, so the safety layer latches and cuts force. `write`
-//! moves nothing; it reports the force as produced (a replayed device has no
-//! motors), so the safety layer sees a healthy device.
+//! device that went away, so the safety layer latches and cuts force.
+//!
+//! `write` runs the arm's own motor model ([`MotorDrive`]: thermal cut,
+//! Jᵀ at the sensed angles of the replayed counts, saturation) on the force
+//! it is sent, as the simulated arm does, so the produced force, thermal cuts
+//! and saturations are those of the recording. It also compares that force
+//! with the row's recorded `out_*`: a replay of the same scene with the same
+//! settings sends exactly the recorded force on every tick; the first tick
+//! that differs ([`ReplayCheck`]) means the trace is not this session's
+//! recording (another scene's rows under an edited header, other flags).
 //!
 //! # Real-time
 //! `read` advances a cursor (amortised O(1)); no allocation.
 
 use std::time::Duration;
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport};
 use crate::error::DeviceError;
-use crate::phantom::PhantomModel;
+use crate::phantom::{MotorDrive, PhantomModel};
 use crate::trace::Trace;
+
+/// How a replay's forces compared with the recording's.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ReplayCheck {
+    /// Ticks whose force sent to the device was compared with the row's
+    /// recorded `out_*`.
+    pub compared: u64,
+    /// Of those, ticks where the two differ (bit for bit).
+    pub diverged: u64,
+    /// Session time of the first tick that differs.
+    pub first_divergence: Option<Duration>,
+    /// Largest |sent − recorded|, N.
+    pub max_difference_n: f64,
+}
 
 /// A device that replays recorded encoder counts.
 #[derive(Debug, Clone)]
@@ -29,17 +51,28 @@ pub struct ReplayDevice {
     info: DeviceInfo,
     trace: Trace,
     cursor: usize,
+    drive: MotorDrive,
+    /// Jacobian at the angles of the counts read last.
+    sensed_jacobian: Matrix3<f64>,
+    /// The row whose recorded force the last write was compared with.
+    compared_row: Option<usize>,
+    check: ReplayCheck,
 }
 
 impl ReplayDevice {
     /// A replay of `trace`; its header's model must be a known model.
     pub fn new(trace: Trace) -> Result<Self, DeviceError> {
         let model = PhantomModel::by_name(&trace.header.model)?;
+        let sensed_jacobian = model.geometry.jacobian(&Vector3::zeros());
         Ok(Self {
             model,
             info: model.info(),
             trace,
             cursor: 0,
+            drive: MotorDrive::new(model, true, true),
+            sensed_jacobian,
+            compared_row: None,
+            check: ReplayCheck::default(),
         })
     }
 
@@ -56,6 +89,38 @@ impl ReplayDevice {
     /// True once `read` has reached the last row.
     pub fn finished(&self) -> bool {
         self.cursor + 1 >= self.trace.rows.len()
+    }
+
+    /// How the forces sent so far compare with the recording's.
+    pub fn check(&self) -> ReplayCheck {
+        self.check
+    }
+
+    /// Compares the first force written at a row's own time with the force
+    /// recorded there.
+    fn compare(&mut self, force_n_device: &Vector3<f64>, now: Duration) {
+        let Some(row) = self.trace.rows.get(self.cursor) else {
+            return;
+        };
+        if row.time != now || self.compared_row == Some(self.cursor) {
+            return;
+        }
+        self.compared_row = Some(self.cursor);
+        self.check.compared += 1;
+        let recorded = row.output_n_device;
+        let same = force_n_device
+            .iter()
+            .zip(recorded.iter())
+            .all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same {
+            self.check.diverged += 1;
+            self.check.first_divergence.get_or_insert(now);
+            let d = (force_n_device - recorded).norm();
+            // A NaN difference (a non-finite force) counts as the largest.
+            if d.is_nan() || d > self.check.max_difference_n {
+                self.check.max_difference_n = d;
+            }
+        }
     }
 }
 
@@ -77,6 +142,7 @@ impl Device for ReplayDevice {
             }
             Some(row) if row.time <= now => {
                 let mut r = self.model.reading_from_counts(&row.counts, now);
+                self.sensed_jacobian = self.model.geometry.jacobian(&r.joint_angles_rad);
                 let [w, x, y, z] = row.orientation_wxyz;
                 r.orientation_device = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
                 Ok(r)
@@ -88,16 +154,13 @@ impl Device for ReplayDevice {
     fn write(
         &mut self,
         force_n_device: Vector3<f64>,
-        _now: Duration,
+        now: Duration,
     ) -> Result<MotorReport, DeviceFault> {
-        if !force_n_device.iter().all(|v| v.is_finite()) {
-            return Ok(MotorReport::off());
-        }
-        Ok(MotorReport {
-            force_n_device,
-            ..MotorReport::off()
-        })
+        self.compare(&force_n_device, now);
+        Ok(self.drive.write(force_n_device, &self.sensed_jacobian, now))
     }
 
-    fn motors_off(&mut self, _now: Duration) {}
+    fn motors_off(&mut self, now: Duration) {
+        self.drive.off(now);
+    }
 }
