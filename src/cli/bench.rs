@@ -36,7 +36,7 @@ pub struct BenchArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub iterations: Option<u32>,
     /// Eq. 7 solver, as for `run`: `cholesky` (default) or `matvec[:N]`
-    /// (no factorisation in the tick).
+    /// (experimental: no factorisation in the tick).
     #[arg(long, value_name = "SOLVER", value_parser = super::values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,
 }

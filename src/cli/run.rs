@@ -38,10 +38,11 @@ pub struct RunArgs {
     #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
     pub update: Option<haptloop_solver::UpdateRule>,
     /// Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
-    /// default) or `matvec` (no factorisation in the tick: conjugate
-    /// gradients preconditioned by a factor the slow loop refreshes; for
-    /// the largest scenes, not for contact), `matvec:N` to cap its
-    /// iterations at N (default 4).
+    /// default) or `matvec` (experimental: no factorisation in the tick,
+    /// conjugate gradients preconditioned by a factor the slow loop
+    /// refreshes; not for contact; measured slower than `cholesky` and
+    /// failing ticks on the Bennett linkage and the lattice, BENCHMARKS.md),
+    /// `matvec:N` to cap its iterations at N (default 4).
     #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the

@@ -238,6 +238,7 @@ impl Cholesky {
     }
 
     /// The factor's [`FactorShape`].
+    #[cfg(test)]
     pub fn shape(&self) -> FactorShape {
         self.sym.shape()
     }

@@ -106,6 +106,8 @@ fn probe() {
         }
         let reps = (2_000_000 / shape.factor_flops.max(1)).clamp(20, 2000);
         let mut t = [0.0f64; 3];
+        let mut motion_ticks = 0u64;
+        let mut factorisations = 0u64;
         for round in 0..5 {
             // A few ticks of motion between rounds.
             for k in 0..5 {
@@ -113,7 +115,10 @@ fn probe() {
                 for (t, t0) in targets.iter_mut().zip(&targets0) {
                     t.position_m = t0.position_m + nalgebra::Vector3::new(a, 0.5 * a, 0.0);
                 }
+                let g = p.feedback.generation;
                 let r = p.tick(&targets, dt);
+                factorisations += p.feedback.generation.wrapping_sub(g);
+                motion_ticks += 1;
                 assert_eq!(
                     r.status,
                     crate::program::TickOutcome::Ok,
@@ -167,6 +172,10 @@ fn probe() {
             }
         }
         p.refresh();
+        println!(
+            "  Eq. 7 factorisations a tick: {:.2} ({factorisations} in {motion_ticks} ticks of motion)",
+            factorisations as f64 / motion_ticks as f64
+        );
         println!("  best of 9: assembly {:.1} µs", assembly * 1e6);
         println!(
             "  best of 9: factor baseline {:.1} µs, AVX2+FMA {:.1} µs ({:.2}×); solve {:.1} / {:.1} µs ({:.2}×)",
