@@ -8,10 +8,10 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod bench;
 mod contact;
 mod design;
-mod matvec;
 mod docs;
 mod exits;
 mod limits;
+mod matvec;
 mod messages;
 mod preflight;
 mod reference;

@@ -110,7 +110,14 @@ fn the_cli_takes_the_matvec_force_solver() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = haptloop()
-        .args(["bench", "bennett", "--ticks", "300", "--force-solver", "matvec"])
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "300",
+            "--force-solver",
+            "matvec",
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -118,15 +125,32 @@ fn the_cli_takes_the_matvec_force_solver() {
     assert!(out.contains("matvec force solver"), "{out}");
 
     let o = haptloop()
-        .args(["bench", "bennett", "--ticks", "10", "--force-solver", "matvec:0"])
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "matvec:0",
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("--force-solver") && err.contains("matvec:0"), "{err}");
+    assert!(
+        err.contains("--force-solver") && err.contains("matvec:0"),
+        "{err}"
+    );
 
     let o = haptloop()
-        .args(["bench", "box-slide", "--ticks", "10", "--force-solver", "matvec"])
+        .args([
+            "bench",
+            "box-slide",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "matvec",
+        ])
         .output()
         .unwrap();
     assert!(!o.status.success());
@@ -186,5 +210,8 @@ fn the_sweep_measures_the_matvec_points_force_error() {
         chol.force_max_n
     );
     let csv = haptloop::report::sweep::csv(&s);
-    assert!(csv.contains(",matvec,") && csv.contains(",matvec:200,"), "{csv}");
+    assert!(
+        csv.contains(",matvec,") && csv.contains(",matvec:200,"),
+        "{csv}"
+    );
 }
