@@ -24,7 +24,9 @@ const IN_FLIGHT: usize = 2;
 pub struct RefreshSender {
     tx: ProgramSender<RefreshedFactor>,
     refresher: FactorRefresher,
-    /// Buffers back from the fast loop (or new), reused.
+    /// Buffers back from the fast loop (or new), reused. Boxed: the
+    /// channel moves boxes, and a box kept is a box not allocated again.
+    #[allow(clippy::vec_box)]
     spare: Vec<Box<RefreshedFactor>>,
     /// Factors sent.
     pub sent: u64,

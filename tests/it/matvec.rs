@@ -38,7 +38,8 @@ fn matvec(seconds: f64) -> SessionOptions {
 fn the_matvec_fast_loop_allocates_nothing_while_factors_arrive() {
     // Stewart only: on the Bennett linkage and the lattice the matvec tick
     // fails ticks and the slow loop re-projects (BENCHMARKS.md, issue 23).
-    for name in ["stewart"] {
+    {
+        let name = "stewart";
         let scene = resolve(name).unwrap();
         let plan = Plan::new(&scene, &matvec(3.0)).unwrap();
         let clock = MockClock::new(Nanos(0));

@@ -343,14 +343,14 @@ impl SolverSettings {
                 );
             }
         }
-        if let ForceSolver::Matvec { max_iterations } = self.force_solver {
-            if max_iterations == 0 || max_iterations > 1000 {
-                return bad(
-                    "force_solver.max_iterations",
-                    max_iterations as f64,
-                    "1 ..= 1000",
-                );
-            }
+        if let ForceSolver::Matvec { max_iterations } = self.force_solver
+            && (max_iterations == 0 || max_iterations > 1000)
+        {
+            return bad(
+                "force_solver.max_iterations",
+                max_iterations as f64,
+                "1 ..= 1000",
+            );
         }
         if !(nonneg(self.force_regularization) && self.force_regularization < 1.0) {
             return bad(

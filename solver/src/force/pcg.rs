@@ -110,7 +110,7 @@ impl Pcg {
                     rn
                 };
                 worst = worst.max(rel);
-                if rn <= TOLERANCE * self.bnorm[c] || !(self.rz[c] > 0.0) {
+                if rn <= TOLERANCE * self.bnorm[c] || self.rz[c].is_nan() || self.rz[c] <= 0.0 {
                     self.done[c] = true;
                 }
                 all &= self.done[c];
@@ -130,15 +130,15 @@ impl Pcg {
                 }
                 sym_mul(gram, &self.p[col.clone()], &mut self.ap[col.clone()]);
                 let pap = dot(&self.p[col.clone()], &self.ap[col.clone()]);
-                if !(pap > 0.0) {
+                if pap.is_nan() || pap <= 0.0 {
                     self.done[c] = true;
                     self.r[col].fill(0.0);
                     continue;
                 }
                 let alpha = self.rz[c] / pap;
                 let x = &mut rhs[col.clone()];
-                for i in 0..n {
-                    x[i] += alpha * self.p[c * n + i];
+                for (i, xi) in x.iter_mut().enumerate() {
+                    *xi += alpha * self.p[c * n + i];
                     self.r[c * n + i] -= alpha * self.ap[c * n + i];
                 }
             }
@@ -240,12 +240,12 @@ impl Bordered {
             self.iterations += 1;
             bordered_mul(gram, k_inv, &self.p, &mut self.ap);
             let pap = dot(&self.p, &self.ap);
-            if !(pap > 0.0) {
+            if pap.is_nan() || pap <= 0.0 {
                 break;
             }
             let alpha = rz / pap;
-            for i in 0..x.len() {
-                x[i] += alpha * self.p[i];
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi += alpha * self.p[i];
                 self.r[i] -= alpha * self.ap[i];
             }
             self.z.copy_from_slice(&self.r);
