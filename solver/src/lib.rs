@@ -130,6 +130,6 @@ pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };
 pub use program::{
-    AssemblyReport, ConvergedTick, Divergence, DivergenceLimits, FingerOutput, Program,
-    ProgramError, TickOutcome, TickReport, TickState,
+    AssemblyReport, ConvergedTick, Divergence, DivergenceLimits, FactorRefresher, FingerOutput,
+    Program, ProgramError, RefreshedFactor, TickOutcome, TickReport, TickState,
 };

@@ -37,6 +37,10 @@ pub struct BenchArgs {
     /// solver's.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub iterations: Option<u32>,
+    /// Eq. 7 solver, as for `run`: `cholesky` (default) or `matvec[:N]`
+    /// (experimental: no factorisation in the tick).
+    #[arg(long, value_name = "SOLVER", value_parser = super::values::force_solver)]
+    pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Update rule of the fast loop, as for `run`: `projected` or
     /// `gradient`. Default: the scene's, else `projected`.
     #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
@@ -89,6 +93,8 @@ struct BenchJson {
     ticks: u64,
     rate_hz: u32,
     iterations: u32,
+    /// The Eq. 7 solver: `cholesky`, `matvec` or `matvec:N`.
+    force_solver: String,
     /// The update rule, `projected` or `gradient`.
     update: &'static str,
     /// Constraint gain K.
@@ -131,6 +137,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         seconds,
         rate_hz: Some(rate),
         iterations: args.iterations,
+        force_solver: args.force_solver,
         update: args.update,
         gain: args.gain,
         velocity_filter: args
@@ -140,6 +147,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         ..SessionOptions::default()
     };
     let plan = Plan::new(&scene, &options)?;
+    let plan_solver = plan.solver.force_solver;
     let (update, gain) = (plan.solver.update, plan.solver.gain);
     let velocity_filter_ms = plan.solver.velocity_filter.as_secs_f64() * 1e3;
     let outcome = session::run(&scene, plan, stop, &mut |_| {})?;
@@ -149,6 +157,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         ticks: s.ticks,
         rate_hz: s.rate_hz,
         iterations: s.iterations,
+        force_solver: plan_solver.label(),
         update: crate::report::sweep::rule(update),
         gain,
         velocity_filter_ms,
@@ -182,7 +191,7 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} {} update iteration{} per tick, gain {}, velocity filter {} ms",
+        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} {} update iteration{} per tick, gain {}, velocity filter {} ms, {} force solver",
         b.scene,
         b.ticks,
         b.rate_hz,
@@ -190,7 +199,8 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
         b.update,
         if b.iterations == 1 { "" } else { "s" },
         b.gain,
-        b.velocity_filter_ms
+        b.velocity_filter_ms,
+        b.force_solver
     );
     let _ = writeln!(
         out,

@@ -37,6 +37,14 @@ pub struct RunArgs {
     /// Eq. 1–3).
     #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
     pub update: Option<haptloop_solver::UpdateRule>,
+    /// Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
+    /// default) or `matvec` (experimental: no factorisation in the tick,
+    /// conjugate gradients preconditioned by a factor the slow loop
+    /// refreshes; not for contact; measured slower than `cholesky` and
+    /// failing ticks on the Bennett linkage and the lattice, BENCHMARKS.md),
+    /// `matvec:N` to cap its iterations at N (default 4).
+    #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
+    pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the
     /// scene's, else the solver's.
     #[arg(long, value_parser = values::positive)]
@@ -102,6 +110,7 @@ impl Default for RunArgs {
             rate: None,
             iterations: None,
             update: None,
+            force_solver: None,
             gain: None,
             velocity_filter_ms: None,
             deterministic: false,
@@ -171,6 +180,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         rate_hz: args.rate,
         iterations: args.iterations,
         update: args.update,
+        force_solver: args.force_solver,
         gain: args.gain,
         velocity_filter: args
             .velocity_filter_ms

@@ -32,6 +32,10 @@ pub struct SweepArgs {
     /// Update rules: `projected`, `gradient`.
     #[arg(long, value_delimiter = ',', default_value = "gradient,projected", value_parser = values::update_rule)]
     pub update: Vec<UpdateRule>,
+    /// Eq. 7 solvers: `cholesky`, `matvec` (the matvec-only tick, at most 4
+    /// conjugate-gradient iterations a solve), `matvec:N`.
+    #[arg(long, value_delimiter = ',', default_value = "cholesky", value_parser = values::force_solver)]
+    pub force_solver: Vec<haptloop_solver::ForceSolver>,
     /// Constraint gains K (each finite, > 0). Default: the scene's.
     #[arg(long, value_delimiter = ',', value_parser = values::positive)]
     pub gain: Vec<f64>,
@@ -111,9 +115,11 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
     let iterations = first_of_each(&args.iterations);
     let rate_hz = first_of_each(&args.rate);
     let update = first_of_each(&args.update);
+    let force_solver = first_of_each(&args.force_solver);
     let grid = Grid {
         iterations,
         update,
+        force_solver,
         gain,
         rate_hz,
         velocity_filter_ms,

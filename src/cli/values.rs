@@ -95,6 +95,28 @@ pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
     }
 }
 
+/// The Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
+/// default) or `matvec` (the matvec-only tick: conjugate gradients
+/// preconditioned by a factor the slow loop refreshes, at most 4 iterations
+/// a solve), `matvec:N` for a cap of N (1–1000).
+pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
+    use haptloop_solver::ForceSolver;
+    let s = s.trim();
+    match s.split_once(':') {
+        None if s == "cholesky" => Ok(ForceSolver::Cholesky),
+        None if s == "matvec" => Ok(ForceSolver::MATVEC),
+        Some(("matvec", n)) => match n.trim().parse::<u32>() {
+            Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::Matvec { max_iterations }),
+            _ => Err(format!(
+                "`{n}` is not an iteration cap of 1–1000 (as in `matvec:8`)"
+            )),
+        },
+        _ => Err(format!(
+            "unknown force solver `{s}` (expected `cholesky`, `matvec` or `matvec:N`)"
+        )),
+    }
+}
+
 fn number(s: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()

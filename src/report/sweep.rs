@@ -17,6 +17,15 @@ pub(crate) fn rule(u: UpdateRule) -> &'static str {
     }
 }
 
+/// The rule column: the update rule, and the force solver unless it is the
+/// Cholesky (`projected matvec`).
+fn rule_label(k: &crate::sweep::Knobs) -> String {
+    match k.force_solver {
+        haptloop_solver::ForceSolver::Cholesky => rule(k.update).to_string(),
+        f => format!("{} {}", rule(k.update), f.label()),
+    }
+}
+
 /// A max/RMS pair as `sweep.json` writes it (non-finite by name).
 #[derive(Debug, Clone, Copy, Serialize)]
 struct Fig {
@@ -50,6 +59,8 @@ struct TickNs {
 struct JsonPoint {
     iterations: u32,
     update: &'static str,
+    /// `cholesky`, `matvec` or `matvec:N`.
+    force_solver: String,
     gain: f64,
     rate_hz: u32,
     velocity_filter_ms: f64,
@@ -111,6 +122,7 @@ fn json_point(p: &Point) -> JsonPoint {
     JsonPoint {
         iterations: p.knobs.iterations,
         update: rule(p.knobs.update),
+        force_solver: p.knobs.force_solver.label(),
         gain: p.knobs.gain,
         rate_hz: p.knobs.rate_hz,
         velocity_filter_ms: p.knobs.velocity_filter_ms,
@@ -158,7 +170,7 @@ pub fn json(s: &Sweep) -> Result<String> {
 /// that were not measured are `NaN`).
 pub fn csv(s: &Sweep) -> String {
     let mut out = String::from(
-        "index,iterations,update,gain,rate_hz,velocity_filter_ms,tick_p50_ns,tick_p99_ns,tick_max_ns,\
+        "index,iterations,update,force_solver,gain,rate_hz,velocity_filter_ms,tick_p50_ns,tick_p99_ns,tick_max_ns,\
          overruns,load,violation_max_m,violation_rms_m,force_error_max_n,force_error_rms_n,force_max_n,\
          tracking_max_m,tracking_rms_m,failed_ticks,reference_samples,penetration_m,passive,pareto,recommended,verdict\n",
     );
@@ -166,9 +178,10 @@ pub fn csv(s: &Sweep) -> String {
         let j = json_point(p);
         let _ = writeln!(
             out,
-            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             j.iterations,
             j.update,
+            j.force_solver,
             j.gain,
             j.rate_hz,
             j.velocity_filter_ms,
@@ -226,7 +239,7 @@ pub fn table(s: &Sweep) -> String {
     );
     let _ = writeln!(
         out,
-        "\n  {:>3} {:<9} {:>3} {:>7} {:>6} {:>5} {:>8} {:>8} {:>6} {:>5} {:>9} {:>9} {:>9} {:>8} {:>6}  front · verdict",
+        "\n  {:>3} {:<16} {:>3} {:>7} {:>6} {:>5} {:>8} {:>8} {:>6} {:>5} {:>9} {:>9} {:>9} {:>8} {:>6}  front · verdict",
         "#",
         "rule",
         "it",
@@ -283,8 +296,8 @@ pub fn table(s: &Sweep) -> String {
         };
         let _ = writeln!(
             out,
-            "  {i:>3} {:<9} {:>3} {:>7} {:>6} {:>5} {tp50:>8} {tp99:>8} {load:>6} {over:>5} {viol:>9} {fmax:>9} {frms:>9} {track:>8} {failed:>6}  {mark} {verdict}",
-            rule(k.update),
+            "  {i:>3} {:<16} {:>3} {:>7} {:>6} {:>5} {tp50:>8} {tp99:>8} {load:>6} {over:>5} {viol:>9} {fmax:>9} {frms:>9} {track:>8} {failed:>6}  {mark} {verdict}",
+            rule_label(k),
             k.iterations,
             format!("{}", k.gain),
             k.rate_hz,
@@ -356,7 +369,7 @@ pub fn table(s: &Sweep) -> String {
                 out,
                 "recommended: #{i}: {} update, {} iteration{}, gain {}, {} Hz, velocity filter {} ms \
                  ({:.1} % of a core) — the cheapest point with {crit}",
-                rule(k.update),
+                rule_label(k),
                 k.iterations,
                 if k.iterations == 1 { "" } else { "s" },
                 k.gain,

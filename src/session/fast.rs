@@ -106,6 +106,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) period: Duration,
     pub(super) program: Box<Handover>,
     pub(super) programs: ProgramReceiver<Handover>,
+    /// Force factors the slow loop refreshed (the matvec-only tick).
+    pub(super) refresh: Option<super::refresh::RefreshReceiver>,
     /// A tick whose violation exceeds this is treated as a failed solve
     /// (force cut, re-projection): the mechanism has come apart, m.
     pub(super) broken_m: f64,
@@ -221,6 +223,9 @@ impl<C: Clock> TickBody for FastLoop<C> {
         }
         self.switches
             .apply(now.as_secs_f64(), &mut self.program.program);
+        if let Some(r) = &mut self.refresh {
+            r.apply(&mut self.program.program);
+        }
         self.timer.lap(Stage::Handover);
 
         for i in 0..self.targets.len() {

@@ -19,6 +19,7 @@ mod fast;
 mod plan;
 mod recorder;
 mod reference;
+mod refresh;
 mod rig;
 mod semantic;
 mod slow;
@@ -230,6 +231,10 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         ..Snapshot::default()
     });
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
+    let (refresh_tx, refresh_rx) = match refresh::channel(&program.program) {
+        Some((tx, rx)) => (Some(tx), Some(rx)),
+        None => (None, None),
+    };
     let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
     let fingers = model.fingers().len();
     let targets = model.initial_targets();
@@ -291,6 +296,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         program,
         broken_m,
         programs: programs_rx,
+        refresh: refresh_rx,
         rig,
         targets,
         snapshot,
@@ -315,6 +321,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let slow = SlowLoop {
         snapshots,
         programs: programs_tx,
+        refresh: refresh_tx,
         model: mechanism.clone(),
         settings: plan.solver,
         placement: Placement::analyze(&scene.compiled.joints_only, &options)

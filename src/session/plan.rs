@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
 use haptloop_rt::thread::ThreadConfig;
 use haptloop_solver::geometry::ContactSettings;
-use haptloop_solver::{SolverSettings, UpdateRule};
+use haptloop_solver::{ForceSolver, SolverSettings, UpdateRule};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -35,6 +35,8 @@ pub struct SessionOptions {
     pub iterations: Option<u32>,
     /// Update rule override (projected or Nelson & Cohen's gradient step).
     pub update: Option<UpdateRule>,
+    /// Eq. 7 solver override (the Cholesky, or the matvec-only tick).
+    pub force_solver: Option<ForceSolver>,
     /// Constraint gain K override.
     pub gain: Option<f64>,
     /// Velocity low-pass time constant override (zero: off).
@@ -71,6 +73,7 @@ impl Default for SessionOptions {
             rate_hz: None,
             iterations: None,
             update: None,
+            force_solver: None,
             gain: None,
             velocity_filter: None,
             deterministic: false,
@@ -144,6 +147,15 @@ impl Plan {
         }
         if let Some(u) = options.update {
             solver.update = u;
+        }
+        if let Some(f) = options.force_solver {
+            if matches!(f, ForceSolver::Matvec { .. }) && scene.compiled.shaped_bodies > 0 {
+                bail!(
+                    "--force-solver matvec does not cover contact: scene `{}` has shaped bodies",
+                    scene.compiled.name
+                );
+            }
+            solver.force_solver = f;
         }
         if let Some(k) = options.gain.or(s.gain) {
             if !(k.is_finite() && k > 0.0) {

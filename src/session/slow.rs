@@ -82,6 +82,9 @@ pub struct SlowStats {
     pub placements_not_converged: u64,
     /// Programs sent to the fast loop.
     pub programs_sent: u64,
+    /// Force factors refreshed and sent to the fast loop (the matvec-only
+    /// tick).
+    pub factor_refreshes: u64,
     /// Replaced programs collected back and dropped here.
     pub programs_dropped: u64,
     /// The last placement's outcome.
@@ -100,6 +103,8 @@ pub struct SlowStats {
 pub struct SlowLoop {
     pub(super) snapshots: MailboxReader<Snapshot>,
     pub(super) programs: ProgramSender<Handover>,
+    /// Refreshes the running program's force factor (the matvec-only tick).
+    pub(super) refresh: Option<super::refresh::RefreshSender>,
     pub(super) model: Arc<Model>,
     /// The same mechanism without fingers (same q layout): re-projection finds
     /// the nearest assembled configuration and lets the fingers land where
@@ -150,6 +155,13 @@ impl SlowLoop {
             return;
         }
         self.stats.fresh_snapshots += 1;
+        if let Some(r) = &mut self.refresh {
+            let snap = self.snapshots.latest();
+            if snap.solved {
+                r.step(&snap.q);
+            }
+            self.stats.factor_refreshes = r.sent;
+        }
         if self.semantic.is_some() && self.semantic_step() {
             return;
         }
@@ -225,6 +237,9 @@ impl SlowLoop {
         let Some(program) = program else {
             return;
         };
+        if let Some(r) = &mut self.refresh {
+            r.follow(&program);
+        }
         if self
             .programs
             .try_send(Box::new(Handover {

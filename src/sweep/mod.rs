@@ -31,7 +31,7 @@ use crate::session::{self, Plan, SessionOptions, SessionOutcome};
 use anyhow::Result;
 use haptloop_devices::{Grip, PhantomModel};
 use haptloop_rt::schedule::StopFlag;
-use haptloop_solver::UpdateRule;
+use haptloop_solver::{ForceSolver, UpdateRule};
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -44,6 +44,8 @@ pub struct Grid {
     pub iterations: Vec<u32>,
     /// Update rules.
     pub update: Vec<UpdateRule>,
+    /// Eq. 7 solvers (the Cholesky, the matvec-only tick).
+    pub force_solver: Vec<ForceSolver>,
     /// Constraint gains K.
     pub gain: Vec<f64>,
     /// Loop rates, Hz.
@@ -59,6 +61,8 @@ pub struct Knobs {
     pub iterations: u32,
     /// Update rule.
     pub update: UpdateRule,
+    /// Eq. 7 solver.
+    pub force_solver: ForceSolver,
     /// Constraint gain K.
     pub gain: f64,
     /// Loop rate, Hz.
@@ -68,21 +72,25 @@ pub struct Knobs {
 }
 
 impl Grid {
-    /// Every combination, rate slowest, then rule, iterations, gain, filter.
+    /// Every combination, rate slowest, then rule, force solver,
+    /// iterations, gain, filter.
     pub fn points(&self) -> Vec<Knobs> {
         let mut out = Vec::new();
         for &rate_hz in &self.rate_hz {
             for &update in &self.update {
-                for &iterations in &self.iterations {
-                    for &gain in &self.gain {
-                        for &velocity_filter_ms in &self.velocity_filter_ms {
-                            out.push(Knobs {
-                                iterations,
-                                update,
-                                gain,
-                                rate_hz,
-                                velocity_filter_ms,
-                            });
+                for &force_solver in &self.force_solver {
+                    for &iterations in &self.iterations {
+                        for &gain in &self.gain {
+                            for &velocity_filter_ms in &self.velocity_filter_ms {
+                                out.push(Knobs {
+                                    iterations,
+                                    update,
+                                    force_solver,
+                                    gain,
+                                    rate_hz,
+                                    velocity_filter_ms,
+                                });
+                            }
                         }
                     }
                 }
@@ -281,6 +289,7 @@ fn session_options(k: &Knobs, o: &Options) -> SessionOptions {
         rate_hz: Some(k.rate_hz),
         iterations: Some(k.iterations),
         update: Some(k.update),
+        force_solver: Some(k.force_solver),
         gain: Some(k.gain),
         velocity_filter: Some(Duration::from_secs_f64(k.velocity_filter_ms / 1000.0)),
         deterministic: true,

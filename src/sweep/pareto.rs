@@ -211,6 +211,7 @@ mod tests {
             knobs: Knobs {
                 iterations: 4,
                 update: UpdateRule::Projected,
+                force_solver: haptloop_solver::ForceSolver::Cholesky,
                 gain: 1000.0,
                 rate_hz,
                 velocity_filter_ms: 10.0,

@@ -227,6 +227,7 @@ fn no_recommendation_says_why_for_each_point() {
     let grid = Grid {
         iterations: vec![1, 2],
         update: vec![UpdateRule::Gradient],
+        force_solver: vec![haptloop_solver::ForceSolver::Cholesky],
         gain: vec![1000.0],
         rate_hz: vec![1000],
         velocity_filter_ms: vec![10.0],

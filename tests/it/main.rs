@@ -15,6 +15,7 @@ mod export;
 mod figures;
 mod limits;
 mod load_bounds;
+mod matvec;
 mod messages;
 mod physics;
 mod preflight;

@@ -169,6 +169,7 @@ fn sweep_results_do_not_depend_on_the_thread_count() {
     let grid = Grid {
         iterations: vec![1, 4],
         update: vec![UpdateRule::Gradient, UpdateRule::Projected],
+        force_solver: vec![haptloop_solver::ForceSolver::Cholesky],
         gain: vec![1000.0, 1.0],
         rate_hz: vec![1000],
         velocity_filter_ms: vec![10.0],

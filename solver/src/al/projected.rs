@@ -34,8 +34,8 @@
 //! (equalities) and ν = max(0, −y) (inequalities).
 //!
 //! **Redundant rows** (found by `Program::new`, see `force::redundancy`)
-//! take no part: the factor holds them as decoupled unit rows with a zero
-//! right-hand side, so their y is exactly 0. Without that, A_JJ is singular
+//! take no part: they are left out of A's pattern, so their y is exactly 0.
+//! Without that, A_JJ is singular
 //! and off the manifold the right-hand side has parts in C_q's left null
 //! space that the round-off pivots turn into enormous y.
 //!

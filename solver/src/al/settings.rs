@@ -30,6 +30,41 @@ pub enum ForceSolver {
         /// Cap per right-hand side (bounds the tick's time).
         max_iterations: u32,
     },
+    /// The matvec-only tick (`haptloop run --force-solver matvec`): no
+    /// numeric factorisation on the fast thread. Eq. 7's joint block is
+    /// solved by conjugate gradients on the assembled C_q M⁻¹ C_qᵀ, all its
+    /// right-hand sides in lockstep, warm-started from the previous tick's
+    /// solutions and preconditioned by a Cholesky factor of the same matrix
+    /// that the slow thread refreshes at a recent configuration
+    /// ([`Program::factor_refresher`](crate::Program::factor_refresher));
+    /// the projected update's steps are solved the same way (conjugate
+    /// gradients preconditioned by that factor); the gradient update (Eq. 3)
+    /// needs no factor. A tick costs products with C_q and A and solves
+    /// with the factor, no factorisation; its force error against the
+    /// converged reference is what `max_iterations` buys. Not for contact
+    /// rows or design variables.
+    Matvec {
+        /// Cap on the conjugate-gradient iterations per force solve (all
+        /// right-hand sides step together) and per projected step.
+        max_iterations: u32,
+    },
+}
+
+impl ForceSolver {
+    /// How the command line spells it: `cholesky`, `matvec` (the default
+    /// cap), `matvec:N`, `cg:N`.
+    pub fn label(&self) -> String {
+        match *self {
+            ForceSolver::Cholesky => "cholesky".into(),
+            f if f == ForceSolver::MATVEC => "matvec".into(),
+            ForceSolver::Matvec { max_iterations } => format!("matvec:{max_iterations}"),
+            ForceSolver::ConjugateGradient { max_iterations } => format!("cg:{max_iterations}"),
+        }
+    }
+
+    /// The matvec-only tick with its default cap: 4 iterations (the
+    /// sweep's fronts, BENCHMARKS.md).
+    pub const MATVEC: ForceSolver = ForceSolver::Matvec { max_iterations: 4 };
 }
 
 /// Whether and how [`Program::new`](crate::Program::new) looks for redundant
@@ -308,6 +343,15 @@ impl SolverSettings {
                     "the projected update needs the Cholesky factor",
                 );
             }
+        }
+        if let ForceSolver::Matvec { max_iterations } = self.force_solver
+            && (max_iterations == 0 || max_iterations > 1000)
+        {
+            return bad(
+                "force_solver.max_iterations",
+                max_iterations as f64,
+                "1 ..= 1000",
+            );
         }
         if !(nonneg(self.force_regularization) && self.force_regularization < 1.0) {
             return bad(

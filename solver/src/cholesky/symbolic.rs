@@ -2,9 +2,12 @@
 //! elimination tree, supernodes, the block layout, the update plan; and the
 //! triangular solves, which only walk that structure.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::amd;
+use super::Ordering;
+use super::dissection;
+
+/// Leading blocks of fewer rows are ordered by AMD alone (the dissection
+/// cannot win on so few).
+const MIN_DISSECTION: usize = 2 * dissection::LEAF_ROWS;
 
 /// Columns `c0 .. c0 + w` of L, whose rows below the diagonal block are the
 /// same `nrows` rows (`rows[rows .. rows + nrows]`, ascending). Its block is
@@ -38,6 +41,8 @@ pub(super) struct Symbolic {
     pub n: usize,
     /// Trailing rows and columns ordered last and not factored.
     pub tail: usize,
+    /// The fill-reducing order of the leading block.
+    pub ordering: Ordering,
     /// Supernodes before the tail's (all of them without a tail).
     pub lead_supernodes: usize,
     /// iperm[original index] = index in the factor's order.
@@ -66,17 +71,50 @@ impl Symbolic {
         self.len_values
     }
 
+    /// Sizes and operation counts (see [`FactorShape`](super::FactorShape)).
+    pub fn shape(&self) -> super::FactorShape {
+        let lead = &self.supernodes[..self.lead_supernodes];
+        let mut factor_flops = 0;
+        let mut solve_flops = 0;
+        for sn in &self.supernodes {
+            for u in &self.updates[sn.updates.0 as usize..sn.updates.1 as usize] {
+                let wd = self.supernodes[u.src as usize].w as usize;
+                let (nb, m) = ((u.b - u.a) as usize, u.m as usize);
+                factor_flops += (0..nb).map(|ci| (m - ci) * wd).sum::<usize>();
+            }
+        }
+        for sn in lead {
+            let (w, r) = (sn.w as usize, sn.nrows as usize);
+            factor_flops += w * w * w / 6 + w * w * r / 2;
+            solve_flops += 2 * (w * (w + 1) / 2 + w * r);
+        }
+        super::FactorShape {
+            ordering: self.ordering,
+            n: self.n,
+            tail: self.tail,
+            supernodes: lead.len(),
+            widest: lead.iter().map(|s| s.w as usize).max().unwrap_or(0),
+            values: self.len_values,
+            factor_flops,
+            solve_flops,
+        }
+    }
+
     /// `entries`: (row, column, value index) of the lower triangle of the
     /// n × n matrix (row ≥ column; every diagonal entry present); its last
     /// `tail` rows and columns are ordered last and left unfactored.
+    /// `cliques`: groups of leading rows that couple with each other (the
+    /// rows on one body), for the nested dissection; empty: AMD only.
     pub fn analyze(
         n: usize,
         tail: usize,
         entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
     ) -> Result<Self, faer::sparse::FaerError> {
         let lead = n - tail;
-        // 1. Fill-reducing order of the leading block (AMD on the pattern of
-        //    A + Aᵀ); the tail keeps its place at the end.
+        // 1. Fill-reducing order of the leading block (the tail keeps its
+        //    place at the end): AMD on the pattern of A + Aᵀ, and for a
+        //    larger block a nested dissection too; the cheaper factor wins.
         let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
         for &(r, c, _) in entries {
             if r < lead {
@@ -91,22 +129,97 @@ impl Symbolic {
             row_idx.extend_from_slice(c);
             col_ptr.push(row_idx.len());
         }
-        let mut perm = vec![0usize; lead];
-        let mut perm_inv = vec![0usize; lead];
-        if lead > 0 {
-            let nnz = row_idx.len();
-            let pattern =
-                SymbolicSparseColMatRef::new_checked(lead, lead, &col_ptr, None, &row_idx);
-            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(lead, nnz))
-                .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
-            amd::order_maybe_unsorted(
-                &mut perm,
-                &mut perm_inv,
-                pattern,
-                amd::Control::default(),
-                MemStack::new(&mut mem),
-            )?;
+        let amd = dissection::amd_order(lead, &col_ptr, &row_idx)?;
+        let by_amd = Self::with_order(n, tail, entries, &amd, Ordering::Amd)?;
+        if lead < MIN_DISSECTION || cliques.is_empty() {
+            return Ok(by_amd);
         }
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for (c, rows) in cols.iter().enumerate() {
+            for &r in rows {
+                if r != c {
+                    adj[c].push(r);
+                    adj[r].push(c);
+                }
+            }
+        }
+        let nd = dissection::dissection_order(&adj, cliques, dissection::LEAF_ROWS)?;
+        let by_nd = Self::with_order(n, tail, entries, &nd, Ordering::Dissection)?;
+        Ok(if by_nd.shape().cost() < by_amd.shape().cost() {
+            by_nd
+        } else {
+            by_amd
+        })
+    }
+
+    /// The shapes of the factor under AMD and under the nested dissection
+    /// (comparisons).
+    #[cfg(test)]
+    pub fn both_shapes(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+    ) -> (super::FactorShape, super::FactorShape) {
+        let lead = n - tail;
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead {
+                cols[c].push(r);
+            }
+        }
+        let (mut cp, mut ri) = (vec![0usize], Vec::new());
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            ri.extend_from_slice(c);
+            cp.push(ri.len());
+        }
+        let amd = dissection::amd_order(lead, &cp, &ri).unwrap();
+        (
+            Self::with_order(n, tail, entries, &amd, Ordering::Amd)
+                .unwrap()
+                .shape(),
+            Self::dissected(n, tail, entries, cliques, dissection::LEAF_ROWS).shape(),
+        )
+    }
+
+    /// The factor under the nested dissection with leaves of `leaf_rows`
+    /// (tests).
+    #[cfg(test)]
+    pub fn dissected(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        leaf_rows: usize,
+    ) -> Self {
+        let lead = n - tail;
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
+        for &(r, c, _) in entries {
+            if r < lead && r != c {
+                adj[c].push(r);
+                adj[r].push(c);
+            }
+        }
+        for a in &mut adj {
+            a.sort_unstable();
+            a.dedup();
+        }
+        let nd = dissection::dissection_order(&adj, cliques, leaf_rows).unwrap();
+        Self::with_order(n, tail, entries, &nd, Ordering::Dissection).unwrap()
+    }
+
+    /// [`analyze`](Self::analyze) with the leading block's fill-reducing
+    /// order given (`perm_inv[old] = new`).
+    fn with_order(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        perm_inv: &[usize],
+        ordering: Ordering,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let lead = n - tail;
         // 2. Elimination tree, then a postorder of the leading block's tree
         //    (every subtree a contiguous range of columns), the tail after it:
         //    a topological order of the whole tree.
@@ -129,7 +242,7 @@ impl Symbolic {
             }
             r
         };
-        let parent = etree(&rows_of(&perm_inv, lead));
+        let parent = etree(&rows_of(perm_inv, lead));
         let post = postorder(&parent);
         // post[new] = old (in the AMD order); compose.
         let mut post_inv = vec![0usize; lead];
@@ -284,6 +397,7 @@ impl Symbolic {
         Ok(Self {
             n,
             tail,
+            ordering,
             lead_supernodes,
             iperm: iperm.iter().map(|&v| v as u32).collect(),
             load,
@@ -293,150 +407,6 @@ impl Symbolic {
             rel,
             len_values: val,
         })
-    }
-
-    /// work ← L⁻¹ work over the leading block's columns (`k` interleaved
-    /// right-hand sides): the tail entries end as r_T − L_TL w.
-    pub fn forward(&self, values: &[f64], work: &mut [f64], k: usize) {
-        match k {
-            1 => self.forward_one(values, work),
-            2 => self.forward_k::<2>(values, work),
-            3 => self.forward_k::<3>(values, work),
-            4 => self.forward_k::<4>(values, work),
-            5 => self.forward_k::<5>(values, work),
-            6 => self.forward_k::<6>(values, work),
-            7 => self.forward_k::<7>(values, work),
-            _ => self.forward_k::<8>(values, work),
-        }
-    }
-
-    /// work ← L⁻ᵀ work over the leading block's columns, with the tail
-    /// entries as they are (subtracting L_TLᵀ x_T).
-    pub fn backward(&self, values: &[f64], work: &mut [f64], k: usize) {
-        match k {
-            1 => self.backward_one(values, work),
-            2 => self.backward_k::<2>(values, work),
-            3 => self.backward_k::<3>(values, work),
-            4 => self.backward_k::<4>(values, work),
-            5 => self.backward_k::<5>(values, work),
-            6 => self.backward_k::<6>(values, work),
-            7 => self.backward_k::<7>(values, work),
-            _ => self.backward_k::<8>(values, work),
-        }
-    }
-
-    /// [`forward`](Self::forward) for one right-hand side: per supernode a
-    /// kernel of its width (1–16 unrolled at compile time).
-    fn forward_one(&self, values: &[f64], work: &mut [f64]) {
-        for sn in &self.supernodes[..self.lead_supernodes] {
-            let (c0, w) = (sn.c0 as usize, sn.w as usize);
-            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
-            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
-            macro_rules! fixed {
-                ($($n:literal)*) => {
-                    match w {
-                        $($n => forward_fixed::<$n>(block, below, c0, work),)*
-                        _ => forward_any(block, below, c0, w, work),
-                    }
-                };
-            }
-            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
-        }
-    }
-
-    /// [`backward`](Self::backward) for one right-hand side.
-    fn backward_one(&self, values: &[f64], work: &mut [f64]) {
-        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
-            let (c0, w) = (sn.c0 as usize, sn.w as usize);
-            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
-            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
-            macro_rules! fixed {
-                ($($n:literal)*) => {
-                    match w {
-                        $($n => backward_fixed::<$n>(block, below, c0, work),)*
-                        _ => backward_any(block, below, c0, w, work),
-                    }
-                };
-            }
-            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
-        }
-    }
-
-    fn forward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
-        for sn in &self.supernodes[..self.lead_supernodes] {
-            let (c0, w) = (sn.c0 as usize, sn.w as usize);
-            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
-            let (head, tail) = work.split_at_mut((c0 + w) * K);
-            let xs = &mut head[c0 * K..];
-            for jj in 0..w {
-                let row = &block[jj * w..jj * w + w];
-                let mut acc = [0.0; K];
-                acc.copy_from_slice(&xs[jj * K..jj * K + K]);
-                for (l, &lv) in row[..jj].iter().enumerate() {
-                    let xl = &xs[l * K..l * K + K];
-                    for t in 0..K {
-                        acc[t] -= lv * xl[t];
-                    }
-                }
-                let inv = 1.0 / row[jj];
-                for t in 0..K {
-                    xs[jj * K + t] = acc[t] * inv;
-                }
-            }
-            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
-            let base = c0 + w;
-            for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
-                let mut acc = [0.0; K];
-                for (l, &lv) in row.iter().enumerate() {
-                    let xl = &xs[l * K..l * K + K];
-                    for t in 0..K {
-                        acc[t] += lv * xl[t];
-                    }
-                }
-                let at = (r as usize - base) * K;
-                let xr = &mut tail[at..at + K];
-                for t in 0..K {
-                    xr[t] -= acc[t];
-                }
-            }
-        }
-    }
-
-    fn backward_k<const K: usize>(&self, values: &[f64], work: &mut [f64]) {
-        for sn in self.supernodes[..self.lead_supernodes].iter().rev() {
-            let (c0, w) = (sn.c0 as usize, sn.w as usize);
-            let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
-            let below = &self.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
-            let base = c0 + w;
-            let (head, tail) = work.split_at_mut(base * K);
-            let xs = &mut head[c0 * K..];
-            for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
-                let at = (r as usize - base) * K;
-                let mut xr = [0.0; K];
-                xr.copy_from_slice(&tail[at..at + K]);
-                for (l, &lv) in row.iter().enumerate() {
-                    let xl = &mut xs[l * K..l * K + K];
-                    for t in 0..K {
-                        xl[t] -= lv * xr[t];
-                    }
-                }
-            }
-            for jj in (0..w).rev() {
-                let row = &block[jj * w..jj * w + w];
-                let inv = 1.0 / row[jj];
-                let mut xj = [0.0; K];
-                for t in 0..K {
-                    xj[t] = xs[jj * K + t] * inv;
-                    xs[jj * K + t] = xj[t];
-                }
-                for (l, &lv) in row[..jj].iter().enumerate() {
-                    let xl = &mut xs[l * K..l * K + K];
-                    for t in 0..K {
-                        xl[t] -= lv * xj[t];
-                    }
-                }
-            }
-        }
     }
 }
 
@@ -481,90 +451,6 @@ fn amalgamate(starts: &[usize], parent: &[usize], colpat: &[Vec<u32>]) -> Vec<us
     let mut out: Vec<usize> = runs.iter().map(|r| r.0).collect();
     out.push(end);
     out
-}
-
-/// One supernode of the forward substitution, width `W`: x_S ← L_SS⁻¹ x_S,
-/// then x_r −= L_rS x_S for each row r below.
-#[inline(always)]
-fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
-    let (rows, _) = block.as_chunks::<W>();
-    let (diag, under) = rows.split_at(W);
-    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
-    for j in 0..W {
-        let mut s = xs[j];
-        for l in 0..j {
-            s -= diag[j][l] * xs[l];
-        }
-        xs[j] = s / diag[j][j];
-    }
-    work[c0..c0 + W].copy_from_slice(&xs);
-    for (row, &r) in under.iter().zip(below) {
-        let mut s = 0.0;
-        for l in 0..W {
-            s += row[l] * xs[l];
-        }
-        work[r as usize] -= s;
-    }
-}
-
-/// [`forward_fixed`] for any width.
-#[inline]
-fn forward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
-    for jj in 0..w {
-        let row = &block[jj * w..jj * w + w];
-        let mut s = work[c0 + jj];
-        for (l, &lv) in row[..jj].iter().enumerate() {
-            s -= lv * work[c0 + l];
-        }
-        work[c0 + jj] = s / row[jj];
-    }
-    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
-        let xs = &work[c0..c0 + w];
-        let s: f64 = row.iter().zip(xs).map(|(a, b)| a * b).sum();
-        work[r as usize] -= s;
-    }
-}
-
-/// One supernode of the backward substitution, width `W`:
-/// x_S ← L_SS⁻ᵀ (x_S − Σ_r L_rSᵀ x_r).
-#[inline(always)]
-fn backward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: &mut [f64]) {
-    let (rows, _) = block.as_chunks::<W>();
-    let (diag, under) = rows.split_at(W);
-    let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
-    for (row, &r) in under.iter().zip(below) {
-        let xr = work[r as usize];
-        for l in 0..W {
-            xs[l] -= row[l] * xr;
-        }
-    }
-    for j in (0..W).rev() {
-        xs[j] /= diag[j][j];
-        let xj = xs[j];
-        for l in 0..j {
-            xs[l] -= diag[j][l] * xj;
-        }
-    }
-    work[c0..c0 + W].copy_from_slice(&xs);
-}
-
-/// [`backward_fixed`] for any width.
-#[inline]
-fn backward_any(block: &[f64], below: &[u32], c0: usize, w: usize, work: &mut [f64]) {
-    for (row, &r) in block[w * w..].chunks_exact(w).zip(below) {
-        let xr = work[r as usize];
-        for (l, &lv) in row.iter().enumerate() {
-            work[c0 + l] -= lv * xr;
-        }
-    }
-    for jj in (0..w).rev() {
-        let row = &block[jj * w..jj * w + w];
-        work[c0 + jj] /= row[jj];
-        let xj = work[c0 + jj];
-        for (l, &lv) in row[..jj].iter().enumerate() {
-            work[c0 + l] -= lv * xj;
-        }
-    }
 }
 
 /// Elimination tree (Liu) from each row's columns below the diagonal;

@@ -58,6 +58,9 @@ fn gram_like(
     &g * g.transpose() + DMatrix::identity(n, n) * 0.1
 }
 
+/// Factors `a` and solves k right-hand sides with the baseline kernels and
+/// (where the CPU has them) the AVX2 + FMA kernels, each against nalgebra's
+/// dense Cholesky.
 fn check(a: &DMatrix<f64>, k: usize) {
     let n = a.nrows();
     let keep = a.map(|x| x != 0.0);
@@ -67,18 +70,24 @@ fn check(a: &DMatrix<f64>, k: usize) {
         epsilon: 0.0,
         delta: 0.0,
     };
-    f.factor(&v, reg).unwrap();
-    assert_eq!(f.regularized, 0);
+    let chol = a.clone().cholesky().expect("SPD");
     let mut rng = Lcg(7);
     let b: Vec<f64> = (0..n * k).map(|_| rng.next() - 0.5).collect();
-    let mut x = b.clone();
-    f.solve(&mut x, k);
-    let chol = a.clone().cholesky().expect("SPD");
-    for t in 0..k {
-        let want = chol.solve(&DVector::from_column_slice(&b[t * n..(t + 1) * n]));
-        let got = DVector::from_column_slice(&x[t * n..(t + 1) * n]);
-        let err = (&got - &want).amax() / want.amax().max(1e-300);
-        assert!(err < 1e-10, "n {n}, rhs {t}: relative error {err:e}");
+    for simd in [false, true] {
+        f.set_simd(simd);
+        f.factor(&v, reg).unwrap();
+        assert_eq!(f.regularized, 0);
+        let mut x = b.clone();
+        f.solve(&mut x, k);
+        for t in 0..k {
+            let want = chol.solve(&DVector::from_column_slice(&b[t * n..(t + 1) * n]));
+            let got = DVector::from_column_slice(&x[t * n..(t + 1) * n]);
+            let err = (&got - &want).amax() / want.amax().max(1e-300);
+            assert!(
+                err < 1e-10,
+                "n {n}, rhs {t}, simd {simd}: relative error {err:e}"
+            );
+        }
     }
 }
 
@@ -229,7 +238,7 @@ fn a_tail_leaves_its_schur_complement_and_solves_through_it() {
         let n = a.nrows();
         let l = n - t;
         let (entries, values) = entries_of(&a);
-        let mut f = Cholesky::analyze_with_tail(n, t, &entries, 1).unwrap();
+        let mut f = Cholesky::analyze_with_tail(n, t, &entries, &[], 1).unwrap();
         let reg = Regularization {
             epsilon: 0.0,
             delta: 0.0,
@@ -274,5 +283,70 @@ fn a_tail_leaves_its_schur_complement_and_solves_through_it() {
             .solve(&DVector::from_column_slice(&b[..l]));
         let err = (DVector::from_vec(y) - &want).amax() / want.amax();
         assert!(err < 1e-10, "leading block: relative error {err:e}");
+    }
+}
+
+/// A nested dissection order (forced, small leaves) is a permutation and
+/// factors exactly: the solve through it equals a dense Cholesky's, on a
+/// lattice of bodies whose cliques are given, with a finger-like tail.
+#[test]
+fn a_nested_dissection_order_solves_exactly() {
+    let (w, h) = (9, 7);
+    let mut lattice = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let b = y * w + x;
+            if x + 1 < w {
+                lattice.push((b, b + 1));
+            }
+            if y + 1 < h {
+                lattice.push((b, b + w));
+            }
+        }
+    }
+    let rows = 3;
+    let a = gram_like(&lattice, rows, w * h, 21);
+    let n = a.nrows();
+    let t = rows;
+    let mut cliques = vec![Vec::new(); w * h];
+    for (e, &(b0, b1)) in lattice.iter().enumerate() {
+        for r in 0..rows {
+            let i = e * rows + r;
+            if i < n - t {
+                cliques[b0].push(i);
+                cliques[b1].push(i);
+            }
+        }
+    }
+    let (entries, values) = entries_of(&a);
+    for leaf in [6, 20, 60] {
+        let mut f = Cholesky::dissected(n, t, &entries, &cliques, leaf);
+        assert_eq!(f.shape().ordering, Ordering::Dissection);
+        let mut seen = vec![false; n];
+        for &p in &f.sym.iperm {
+            assert!(!seen[p as usize], "leaf {leaf}: {p} twice");
+            seen[p as usize] = true;
+        }
+        f.factor(
+            &values,
+            Regularization {
+                epsilon: 0.0,
+                delta: 0.0,
+            },
+        )
+        .unwrap();
+        let b: Vec<f64> = (0..n).map(|i| (i % 7) as f64 - 3.0).collect();
+        let mut x = b.clone();
+        f.solve_with_tail(&mut x, |s, xt| {
+            let sm = DMatrix::from_fn(t, t, |r, c| s[r.max(c) * t + r.min(c)]);
+            let sol = sm
+                .cholesky()
+                .unwrap()
+                .solve(&DVector::from_column_slice(xt));
+            xt.copy_from_slice(sol.as_slice());
+        });
+        let want = a.clone().cholesky().unwrap().solve(&DVector::from_vec(b));
+        let err = (DVector::from_vec(x) - &want).amax() / want.amax();
+        assert!(err < 1e-10, "leaf {leaf}: relative error {err:e}");
     }
 }

@@ -93,7 +93,7 @@ impl Cg {
 }
 
 /// y = A x for the symmetric A_JJ stored as its lower triangle (CSC).
-fn sym_mul(gram: &Gram, x: &[f64], y: &mut [f64]) {
+pub(super) fn sym_mul(gram: &Gram, x: &[f64], y: &mut [f64]) {
     let (cp, ri) = (gram.pattern.col_ptr(), gram.pattern.row_idx());
     let vals = &gram.values;
     y.fill(0.0);

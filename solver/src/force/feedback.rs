@@ -44,7 +44,7 @@ impl FingerRows {
 }
 
 /// Buffers and factor of the force computation.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(crate) struct Feedback {
     pub masses: Vec<BodyMass>,
     pub motion: Motion,
@@ -120,11 +120,12 @@ impl Feedback {
         let masses = BodyMass::of_model(model);
         let n_bodies = masses.len();
         let gram = Gram::new(model, jac, &masses, excluded);
-        let cg = match settings.force_solver {
-            ForceSolver::Cholesky => None,
-            ForceSolver::ConjugateGradient { max_iterations } => Some(max_iterations),
+        let (cg, matvec) = match settings.force_solver {
+            ForceSolver::Cholesky => (None, None),
+            ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
+            ForceSolver::Matvec { max_iterations } => (None, Some(max_iterations)),
         };
-        let solve = MultiplierSolve::new(&gram, cg)?;
+        let solve = MultiplierSolve::new(&gram, cg, matvec)?;
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -326,12 +327,109 @@ impl Feedback {
 
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
     pub fn cg_iterations(&self) -> u32 {
-        self.solve.cg.as_ref().map_or(0, |c| c.iterations)
+        self.solve.cg_iterations()
+    }
+
+    /// Identifies the force factor's pattern (see `MultiplierSolve::id`).
+    pub fn factor_id(&self) -> u64 {
+        self.solve.id()
+    }
+
+    /// Adopts a factor refreshed for this program (`MultiplierSolve::adopt`).
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn adopt_factor(&mut self, values: &mut Vec<f64>) -> bool {
+        let adopted = self.solve.adopt(values);
+        if adopted {
+            self.generation = self.generation.wrapping_add(1);
+        }
+        adopted
+    }
+
+    /// The slow thread's refresh of the force factor: activates the rows at
+    /// `ev` (evaluated at `q`; inequalities by their values, multipliers
+    /// unknown), assembles and regularises A as a force solve does, and
+    /// factors it into `out`. This feedback's own factor is left as it was.
+    pub fn refactor_into(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        ev: &Evaluation,
+        out: &mut Vec<f64>,
+    ) -> Result<(), FactorError> {
+        self.forced.fill(false);
+        // cy is scratch here: zero multipliers.
+        self.cy.fill(0.0);
+        let zero = std::mem::take(&mut self.cy);
+        self.activate(s, ev.values(), &zero);
+        self.cy = zero;
+        self.motion.q_prev.copy_from_slice(q);
+        self.assemble_regularized(ev, settings);
+        self.solve.refreshed(&self.gram, out)
     }
 
     /// Stored values of the sparse Cholesky factor (diagnostics).
     pub fn factor_nnz(&self) -> usize {
         self.solve.factor_nnz()
+    }
+
+    /// The sparse Cholesky factor's shape and operation counts.
+    #[cfg(test)]
+    pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
+        self.solve.factor_shape()
+    }
+
+    /// Rows of A's joint block, finger rows, and stored values of A_JJ's
+    /// lower triangle.
+    #[cfg(test)]
+    pub fn gram_size(&self) -> (usize, usize, usize) {
+        (self.gram.n_j, self.gram.m_f, self.gram.nnz())
+    }
+
+    /// The Eq. 7 matrix's pattern as the factor gets it (comparisons).
+    #[cfg(test)]
+    #[allow(clippy::type_complexity)]
+    pub fn factor_entries(&self) -> (usize, usize, Vec<(usize, usize, usize)>, Vec<Vec<usize>>) {
+        (
+            self.gram.n_j + self.gram.m_f,
+            self.gram.m_f,
+            self.gram.factor_entries(),
+            self.gram.cliques(),
+        )
+    }
+
+    /// Switches the factor's AVX2 + FMA kernels off or on (comparisons).
+    #[cfg(test)]
+    pub fn set_simd(&mut self, on: bool) {
+        self.solve.set_simd(on);
+    }
+
+    /// x ← A_JJ⁻¹ x with the last factor (timing).
+    #[cfg(test)]
+    pub fn solve_joint(&mut self, x: &mut [f64]) {
+        self.solve.solve_joint(x);
+    }
+
+    /// One assembly of A at the last force solve's state (timing).
+    #[cfg(test)]
+    pub fn reassemble(&mut self, ev: &Evaluation) {
+        let q = &self.motion.q_prev;
+        self.gram.assemble(
+            q,
+            ev.jacobian(),
+            &self.scale,
+            &self.masses,
+            &self.b,
+            &mut self.y,
+        );
+    }
+
+    /// One numeric factorisation of the last assembled A (timing).
+    #[cfg(test)]
+    pub fn refactor(&mut self) -> Result<(), FactorError> {
+        self.solve.factor(&self.gram)
     }
 
     /// Advances the motion history to `q` (unless `advance` is false: a
@@ -577,6 +675,20 @@ impl Feedback {
         settings: &SolverSettings,
     ) -> Result<(), FactorError> {
         self.generation = self.generation.wrapping_add(1);
+        self.assemble_regularized(ev, settings);
+        let jac = ev.jacobian();
+        jac.mul_vec(&self.y, &mut self.cy)
+            .map_err(|_| FactorError)?;
+        for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
+            *v *= sc;
+        }
+        self.solve.solve(&self.gram, &self.cy, &self.known)
+    }
+
+    /// Assembles the scaled Gram matrix with the current row scales (0
+    /// drops a row: unit diagonal) at the motion history's newest q, and
+    /// y = M̃⁻¹ b; adds the Tikhonov term and the contact compliance.
+    fn assemble_regularized(&mut self, ev: &Evaluation, settings: &SolverSettings) {
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
         let q = &self.motion.q_prev;
@@ -600,12 +712,6 @@ impl Feedback {
                 self.gram.values[d] + mu
             };
         }
-        jac.mul_vec(&self.y, &mut self.cy)
-            .map_err(|_| FactorError)?;
-        for (v, sc) in self.cy.iter_mut().zip(&self.scale) {
-            *v *= sc;
-        }
-        self.solve.solve(&self.gram, &self.cy, &self.known)
     }
 
     /// Each finger's coupling error p − t and its rate, and the known

@@ -63,7 +63,7 @@ struct BodyRows {
 }
 
 /// Pattern, destinations and values of A (see the module docs).
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(crate) struct Gram {
     pub slot: Vec<Slot>,
     /// Finger rows in F order.
@@ -252,6 +252,24 @@ impl Gram {
     /// Number of stored values of A_JJ's lower triangle.
     pub fn nnz(&self) -> usize {
         self.pattern.row_idx().len()
+    }
+
+    /// The J rows (J indices) touching each moving body: A_JJ is the union
+    /// of these cliques (the nested dissection splits along them).
+    /// Allocates.
+    pub fn cliques(&self) -> Vec<Vec<usize>> {
+        self.bodies
+            .iter()
+            .map(|b| {
+                self.entries[b.entries.clone()]
+                    .iter()
+                    .filter_map(|e| match self.slot[e.row] {
+                        Slot::J(j) => Some(j),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// The whole (n_J + m_f)-square matrix's lower triangle as (row, column,

@@ -21,7 +21,7 @@
 //!    Minimum norm over *all* rows would instead split a statically
 //!    indeterminate load between rigid joints and the finger in proportions
 //!    that depend on the rows' units. Rows masked as redundant (below) are
-//!    decoupled unit rows with a zero right-hand side: multiplier exactly 0.
+//!    left out of A's pattern: multiplier exactly 0.
 //! 4. **Wrench** (`wrench`): Eq. 8, W = (|e|²/4) Ω W_c (¼ G W_c for unit e),
 //!    the finger's world force and its torque about the attachment point.
 //! 5. **Virtual coupling**: F_c = k (p − t) + b d(p − t)/dt between the
@@ -56,6 +56,7 @@ mod gram;
 pub(crate) mod inertia;
 mod motion;
 mod output;
+mod pcg;
 mod redundancy;
 mod reference;
 pub(crate) mod small;

@@ -25,10 +25,16 @@
 //! bit-identical run to run.
 //!
 //! `ForceSolver::ConjugateGradient` keeps the explicit form: CG solves
-//! A_JJ X = [r_J A_JF] and S is formed from X.
+//! A_JJ X = [r_J A_JF] and S is formed from X. So does the matvec-only
+//! tick (`ForceSolver::Matvec`, `pcg`), whose CG is preconditioned by a
+//! factor the slow thread refreshes ([`MultiplierSolve::adopt`]); that
+//! factor also serves the projected update.
+
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::cg::Cg;
 use super::gram::{Gram, Slot};
+use super::pcg::{Bordered, Pcg};
 use super::small::{cholesky_solve, min_norm_solve};
 use crate::cholesky::{Cholesky, Regularization};
 
@@ -38,6 +44,7 @@ use crate::cholesky::{Cholesky, Regularization};
 pub(crate) struct FactorError;
 
 /// Symbolic factor and every buffer of the solve.
+#[derive(Clone)]
 pub(crate) struct MultiplierSolve {
     llt: Cholesky,
     /// n_J + m_f: the right-hand side in J then F order, solved in place.
@@ -59,7 +66,20 @@ pub(crate) struct MultiplierSolve {
     pub rank: usize,
     /// `Some`: conjugate gradients instead of the numeric Cholesky.
     pub cg: Option<Cg>,
+    /// `Some`: the matvec-only tick (CG preconditioned by a refreshed
+    /// factor), and its projected steps' CG.
+    pub pcg: Option<Pcg>,
+    bordered: Option<Bordered>,
+    /// The factor holds a factorisation of this solve's A (made here or
+    /// adopted): the matvec-only tick may precondition with it.
+    seeded: bool,
+    /// Identifies this solve's symbolic factor: a refreshed factor is
+    /// adopted only by the solve it was computed for.
+    id: u64,
 }
+
+/// Source of [`MultiplierSolve`] ids.
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
 impl std::fmt::Debug for MultiplierSolve {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -74,16 +94,36 @@ impl std::fmt::Debug for MultiplierSolve {
 impl MultiplierSolve {
     /// Symbolic analysis of `gram`'s pattern (A_JJ and the finger rows as
     /// the tail); with `cg_iterations`, a capped conjugate-gradient solve
-    /// replaces the numeric Cholesky in [`solve`](Self::solve). Allocates.
-    pub fn new(gram: &Gram, cg_iterations: Option<u32>) -> Result<Self, faer::sparse::FaerError> {
+    /// replaces the numeric Cholesky in [`solve`](Self::solve); with
+    /// `matvec_iterations`, the matvec-only tick's preconditioned one does
+    /// once the factor is seeded. Allocates.
+    pub fn new(
+        gram: &Gram,
+        cg_iterations: Option<u32>,
+        matvec_iterations: Option<u32>,
+    ) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
-        let llt = Cholesky::analyze_with_tail(n + m, m, &gram.factor_entries(), 1)?;
+        // The matvec-only tick preconditions all 1 + m_f columns at once.
+        let max_rhs = if matvec_iterations.is_some() {
+            1 + m
+        } else {
+            1
+        };
+        let llt = Cholesky::analyze_with_tail(
+            n + m,
+            m,
+            &gram.factor_entries(),
+            &gram.cliques(),
+            max_rhs,
+        )?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
+        let pcg = matvec_iterations.map(|it| Pcg::new(n, 1 + m, it));
+        let bordered = matvec_iterations.map(|it| Bordered::new(n + m, it));
         Ok(Self {
             llt,
             x: vec![0.0; n + m],
             lambda_j: vec![0.0; n],
-            rhs: if cg.is_some() {
+            rhs: if cg.is_some() || pcg.is_some() {
                 vec![0.0; n * (1 + m)]
             } else {
                 Vec::new()
@@ -96,13 +136,73 @@ impl MultiplierSolve {
             lambda_f: vec![0.0; m],
             rank: 0,
             cg,
+            pcg,
+            bordered,
+            seeded: false,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         })
+    }
+
+    /// The id a refreshed factor must carry to be adopted.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Replaces the factor's values by `values` (a factorisation of this
+    /// solve's A computed elsewhere, see [`refreshed`](Self::refreshed)),
+    /// handing the old ones back in `values`. False (nothing changed) on a
+    /// length mismatch.
+    ///
+    /// # Real-time
+    /// No allocation: the two buffers swap.
+    pub fn adopt(&mut self, values: &mut Vec<f64>) -> bool {
+        if self.llt.swap_values(values) {
+            self.seeded = true;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Factors `gram`'s assembled, regularised A into `out` (resized to
+    /// the factor's length), leaving this solve's own factor as it was: the
+    /// slow thread's refresh of a matvec-only program's factor.
+    pub fn refreshed(&mut self, gram: &Gram, out: &mut Vec<f64>) -> Result<(), FactorError> {
+        out.resize(self.llt.len_values(), 0.0);
+        let seeded = self.seeded;
+        self.llt.swap_values(out);
+        let done = self.factor(gram);
+        self.llt.swap_values(out);
+        self.seeded = seeded;
+        done
+    }
+
+    /// Conjugate-gradient iterations of the last solve (0 with the
+    /// Cholesky).
+    pub fn cg_iterations(&self) -> u32 {
+        match (&self.cg, &self.pcg) {
+            (Some(c), _) => c.iterations,
+            (None, Some(p)) if self.seeded => p.iterations,
+            _ => 0,
+        }
     }
 
     /// Number of stored values of the Cholesky factor L (its supernodes'
     /// dense blocks).
     pub fn factor_nnz(&self) -> usize {
         self.llt.len_values()
+    }
+
+    /// Switches the factor's AVX2 + FMA kernels off or on (comparisons).
+    #[cfg(test)]
+    pub fn set_simd(&mut self, on: bool) {
+        self.llt.set_simd(on);
+    }
+
+    /// The Cholesky factor's shape and operation counts.
+    #[cfg(test)]
+    pub fn factor_shape(&self) -> crate::cholesky::FactorShape {
+        self.llt.shape()
     }
 
     /// Factors `gram`'s (already assembled and regularised) A_JJ and solves for
@@ -120,11 +220,12 @@ impl MultiplierSolve {
         r: &[f64],
         known: &[Option<f64>],
     ) -> Result<(), FactorError> {
-        if self.cg.is_some() {
+        if self.cg.is_some() || (self.pcg.is_some() && self.seeded) {
             return self.solve_cg(gram, r, known);
         }
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
         self.factor(gram)?;
+        self.seeded = true;
         // S from the tail block (lower triangle), mirrored.
         let block = self.llt.tail_block();
         for f in 0..m {
@@ -193,6 +294,8 @@ impl MultiplierSolve {
         self.rhs[n..].copy_from_slice(a_fj);
         if let Some(cg) = &mut self.cg {
             cg.solve(gram, &mut self.rhs);
+        } else if let Some(pcg) = &mut self.pcg {
+            pcg.solve(gram, &mut self.llt, &mut self.rhs);
         }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
@@ -250,6 +353,9 @@ impl MultiplierSolve {
     /// No allocation; one numeric sparse Cholesky with the fixed symbolic
     /// factor.
     pub fn factor(&mut self, gram: &Gram) -> Result<(), FactorError> {
+        // Whatever this factors (a redundancy test matrix, a refresh), the
+        // solve seeds itself again before preconditioning with it.
+        self.seeded = false;
         let max_diag = gram
             .diag
             .iter()
@@ -303,15 +409,32 @@ impl MultiplierSolve {
             x,
             schur_keep,
             small,
+            bordered,
             ..
         } = self;
-        let ok = llt.solve_with_tail(x, |_, s| {
-            small.copy_from_slice(schur_keep);
-            for f in 0..m {
-                small[f * m + f] += k_inv[f];
-            }
-            cholesky_solve(small, s)
-        });
+        let ok = match bordered {
+            // The matvec-only tick: CG preconditioned by the refreshed
+            // factor with its own Schur complement (a consistent one).
+            Some(cg) => cg.solve(gram, k_inv, x, |v| {
+                llt.solve_with_tail(v, |block, s| {
+                    for f in 0..m {
+                        for g in 0..=f {
+                            small[f * m + g] = block[f * m + g];
+                            small[g * m + f] = block[f * m + g];
+                        }
+                        small[f * m + f] += k_inv[f];
+                    }
+                    cholesky_solve(small, s)
+                })
+            }),
+            None => llt.solve_with_tail(x, |_, s| {
+                small.copy_from_slice(schur_keep);
+                for f in 0..m {
+                    small[f * m + f] += k_inv[f];
+                }
+                cholesky_solve(small, s)
+            }),
+        };
         if !ok {
             return Err(FactorError);
         }

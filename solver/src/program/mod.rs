@@ -61,6 +61,9 @@ mod converged;
 mod design_flags;
 mod inertial;
 mod objective;
+#[cfg(test)]
+mod probe;
+mod refresh;
 mod report;
 mod semantic;
 mod stages;
@@ -69,6 +72,7 @@ mod tick;
 
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
+pub use refresh::{FactorRefresher, RefreshedFactor};
 pub use semantic::SNAP_RISE_S;
 pub use stages::{SolverStage, StageMarks};
 pub use tick::MAX_ACTIVATIONS;
@@ -149,6 +153,8 @@ pub struct Program {
     feedback: Feedback,
     outputs: Vec<FingerOutput>,
     report: TickReport,
+    /// Refreshed force factors adopted (matvec-only tick).
+    factor_adoptions: u64,
 }
 
 impl Program {
@@ -161,6 +167,20 @@ impl Program {
         settings.validate()?;
         // The fused gradient pass holds at most six rows per constraint; a
         // contact pair's witness rows are one constraint of many rows.
+        if matches!(settings.force_solver, crate::ForceSolver::Matvec { .. }) {
+            if model.contact().slots > 0 {
+                return Err(ProgramError::Unsupported(
+                    "the matvec-only tick (`--force-solver matvec`) does not cover contact \
+                     rows: this scene needs the Cholesky force solver",
+                ));
+            }
+            if !model.layout().design_vars().is_empty() {
+                return Err(ProgramError::Unsupported(
+                    "the matvec-only tick (`--force-solver matvec`) does not cover design \
+                     variables: this scene needs the Cholesky force solver",
+                ));
+            }
+        }
         if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
             return Err(ProgramError::Unsupported(
                 "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
@@ -204,6 +224,16 @@ impl Program {
         redundancy.rows.extend_from_slice(&local);
         redundancy.rows.sort_unstable();
         scaling.mask(&redundancy.rows);
+        // The rows the ordered check masked leave A's pattern too: kept as
+        // decoupled unit rows they cost factorisation and solve work on
+        // explicit zeros (a planar lattice: 196 of its 1213 joint rows).
+        if redundancy.rows.len() > local.len() {
+            for &i in &redundancy.rows {
+                excluded[i] = true;
+            }
+            feedback = Feedback::new(&model, &ev, &settings, &excluded)
+                .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
+        }
         let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
         let h = settings.step / (1.0 + settings.gain * sigma_max);
         check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
@@ -278,6 +308,7 @@ impl Program {
             spare_outputs: vec![FingerOutput::default(); model.fingers().len()],
             outputs: vec![FingerOutput::default(); model.fingers().len()],
             report: TickReport::default(),
+            factor_adoptions: 0,
             feedback,
             ev,
             h,
@@ -434,9 +465,46 @@ fn divergence_limits(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn program_is_send() {
         fn is_send<T: Send>() {}
         is_send::<super::Program>();
+    }
+
+    /// The rows the ordered redundancy check masks are not in A's pattern:
+    /// the joint block's order is the equality rows minus the masked ones
+    /// (the Peaucellier linkage: 9 of 57), where with the check off every
+    /// row is in it. (That the force stays exact is
+    /// `redundant_linkage_static_force_matches_the_reference`, against an
+    /// SVD null-space reference.)
+    #[test]
+    fn masked_rows_leave_the_force_factor() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/peaucellier.toml");
+        let model = Arc::new(crate::scene::load(&path).unwrap().compile().unwrap().model);
+        let settings = SolverSettings::default();
+        let p = Program::new(model.clone(), settings).unwrap();
+        let masked = p.redundancy().rows.len();
+        assert_eq!(masked, 9);
+        let fingers: usize = model
+            .fingers()
+            .iter()
+            .map(|f| model.constraints()[f.constraint.index()].rows.len())
+            .sum();
+        let (n_j, m_f, _) = p.feedback.gram_size();
+        assert_eq!(m_f, fingers);
+        assert_eq!(n_j, model.n_rows() - fingers - masked);
+        let all = Program::new(
+            model.clone(),
+            SolverSettings {
+                redundancy: RedundancyCheck::Off,
+                ..settings
+            },
+        )
+        .unwrap();
+        assert_eq!(all.feedback.gram_size().0, model.n_rows() - fingers);
+        assert!(p.force_factor_nnz() < all.force_factor_nnz());
     }
 }

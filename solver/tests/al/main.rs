@@ -11,6 +11,7 @@ mod design;
 mod force;
 mod gears;
 mod limits;
+mod matvec;
 mod planar;
 mod program;
 mod redundant;
