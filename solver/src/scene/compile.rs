@@ -57,6 +57,8 @@ pub struct SceneSettings {
     pub dynamics: Option<bool>,
     /// Contact penetration beyond which the slow loop backs up, m.
     pub penetration_tolerance: Option<f64>,
+    /// Pre-emptive witness guards (`contact_guards`).
+    pub contact_guards: Option<bool>,
 }
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
@@ -184,6 +186,7 @@ fn settings(s: &SolverSection) -> SceneSettings {
         velocity_filter: f(&s.velocity_filter),
         dynamics: s.dynamics.as_ref().map(|x| *x.get_ref()),
         penetration_tolerance: f(&s.penetration_tolerance),
+        contact_guards: s.contact_guards.as_ref().map(|x| *x.get_ref()),
     }
 }
 
