@@ -98,6 +98,7 @@ mod jacobian;
 pub mod mechanisms;
 mod model;
 pub mod objective;
+pub mod place;
 pub mod placement;
 pub mod program;
 pub mod rotation;

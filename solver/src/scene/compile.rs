@@ -355,9 +355,10 @@ fn normalised(q: Quat) -> Quat {
 }
 
 impl LoadedScene {
-    /// Builds the model and wires devices to fingers. Every error names the
-    /// file, line and column of the offending value.
-    pub fn compile(&self) -> Result<CompiledScene, SceneError> {
+    /// The scene's bodies, joints, fingers and objectives as a
+    /// [`ModelBuilder`], not built yet (`compile` builds it and maps its
+    /// errors to spans; `haptloop place` builds a goal model from it).
+    pub fn builder(&self) -> ModelBuilder {
         let s = &self.spec;
         let mut builder = ModelBuilder::new();
         if let Some(g) = &s.scene.gravity {
@@ -393,6 +394,14 @@ impl LoadedScene {
         for o in &s.objectives {
             builder.objective(objective_spec(o));
         }
+        builder
+    }
+
+    /// Builds the model and wires devices to fingers. Every error names the
+    /// file, line and column of the offending value.
+    pub fn compile(&self) -> Result<CompiledScene, SceneError> {
+        let s = &self.spec;
+        let builder = self.builder();
         // The same mechanism without finger rows: same bodies (fingertips
         // included), same layout of q, joint rows only (for re-projection
         // onto the nearest assembled configuration, which must not hold a

@@ -16,6 +16,7 @@ mod compile;
 mod compile_semantic;
 mod error;
 mod flags;
+mod placed;
 mod polygon;
 mod semantic;
 pub mod spec;
@@ -26,6 +27,7 @@ pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, Sce
 pub use compile_semantic::HoldDecl;
 pub use error::SceneError;
 pub use flags::Flagged;
+pub use placed::BodyPose;
 pub use write::mechanism_tables;
 
 use std::ops::Range;
