@@ -12,6 +12,7 @@ mod docs;
 mod exits;
 mod limits;
 mod messages;
+mod place;
 mod preflight;
 mod reference;
 mod replay;
