@@ -3,6 +3,7 @@
 
 mod bench;
 mod check;
+mod export;
 mod output;
 mod place;
 mod preflight;
@@ -88,6 +89,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// List the built-in scenes, one line each.
     Scenes,
+    /// Write a scene in another program's format: `export mjcf SCENE`.
+    ///
+    /// MJCF is MuJoCo's: the model `benches/peers/` steps beside haptloop.
+    Export(export::ExportArgs),
     /// Validate a scene file (or built-in name) and print what it compiles to.
     ///
     /// Errors name the file, line and column and what was expected; the exit
@@ -137,6 +142,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene, seconds }) => check::run(&scene, seconds),
         Some(Command::Bench(args)) => bench::run(&args, &stop),
+        Some(Command::Export(args)) => export::run(&args),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         Some(Command::Place(args)) => place::run(&args),

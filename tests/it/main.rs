@@ -10,6 +10,7 @@ mod contact;
 mod design;
 mod docs;
 mod exits;
+mod export;
 mod limits;
 mod messages;
 mod place;

@@ -355,6 +355,13 @@ fn normalised(q: Quat) -> Quat {
 }
 
 impl LoadedScene {
+    /// The `[[joint]]` tables as the model builder takes them, in file order
+    /// (axes as written, not normalised), e.g. to write the mechanism in
+    /// another program's format.
+    pub fn joint_specs(&self) -> Vec<JointSpec> {
+        self.spec.joints.iter().map(joint_spec).collect()
+    }
+
     /// The scene's bodies, joints, fingers and objectives as a
     /// [`ModelBuilder`], not built yet (`compile` builds it and maps its
     /// errors to spans; `haptloop place` builds a goal model from it).
