@@ -86,10 +86,18 @@ fn a_wrong_body_or_goal_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.toml");
     let out = out.to_str().unwrap();
-    let o = place(&["stewart", "--body", "base", "--goal", "0,0,0.13", "--out", out]);
+    let o = place(&[
+        "stewart", "--body", "base", "--goal", "0,0,0.13", "--out", out,
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
-    assert!(text(&o).contains("body `base`") && text(&o).contains("platform"), "{}", text(&o));
-    let o = place(&["stewart", "--body", "platform", "--goal", "0,0.13", "--out", out]);
+    assert!(
+        text(&o).contains("body `base`") && text(&o).contains("platform"),
+        "{}",
+        text(&o)
+    );
+    let o = place(&[
+        "stewart", "--body", "platform", "--goal", "0,0.13", "--out", out,
+    ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("expected 3 (x,y,z)"), "{}", text(&o));
     assert!(!Path::new(out).exists());
