@@ -36,7 +36,16 @@ fn read_back(path: &Path) -> ([f64; 3], f64) {
     let p = m.body_position(m.q0(), id).unwrap();
     let mut e = Evaluation::new(m);
     e.evaluate_values(m, m.q0(), &[]).unwrap();
-    let worst = e.values().iter().fold(0.0_f64, |w, v| w.max(v.abs()));
+    // Equality rows vanish; inequality rows (stroke limits) only must not
+    // be violated.
+    let v = e.values();
+    let eq = v[m.equality_rows()]
+        .iter()
+        .fold(0.0_f64, |w, v| w.max(v.abs()));
+    let ineq = v[m.inequality_rows()]
+        .iter()
+        .fold(0.0_f64, |w, v| w.max(-v));
+    let worst = eq.max(ineq);
     (p.into(), worst)
 }
 

@@ -396,15 +396,22 @@ impl ActiveSet {
         }
         let mut out = Vec::with_capacity(8);
         // §3.2.1: an overlapping pair's held vertices' neighbours below
-        // their face expand the witness; without new violators, the
-        // primitives of an earlier expansion stay while they are near.
+        // their face expand the witness; without new violators (and without
+        // guards), the primitives of an earlier expansion stay while near.
+        // With the guards on, the next features already have rows, and the
+        // expansion is only asked for when the cores overlap (no nearest
+        // features at all); off, at any penetration.
         let mut expanded = Vec::new();
         if let Some(prev) = &was {
-            if depth > 0.0 {
+            let expand_now = match s.guards {
+                true => q.features.is_none(),
+                false => depth > 0.0,
+            };
+            if expand_now {
                 let made = expand_on_penetration(&view, &prev.witnesses, &mut expanded);
                 cycle.expansions += made;
             }
-            if expanded.is_empty() {
+            if expanded.is_empty() && !s.guards {
                 let near = |w: &&Witness| value_at(w, &view.pa, &view.pb).0 < window;
                 expanded.extend(prev.expanded.iter().filter(near));
             }
