@@ -110,6 +110,18 @@ pub const BUILTIN: &[Builtin] = &[
         name: "chain",
         text: include_str!("../scenes/chain.toml"),
     },
+    Builtin {
+        name: "flexible-ik",
+        text: include_str!("../scenes/flexible-ik.toml"),
+    },
+    Builtin {
+        name: "dodge-belly",
+        text: include_str!("../scenes/dodge-belly.toml"),
+    },
+    Builtin {
+        name: "ball-bowl",
+        text: include_str!("../scenes/ball-bowl.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.

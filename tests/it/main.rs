@@ -19,6 +19,7 @@ mod reference;
 mod replay;
 mod scene_format;
 mod scenes;
+mod seeds;
 mod semantic;
 mod session;
 mod stability;
