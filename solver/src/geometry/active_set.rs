@@ -38,7 +38,7 @@ use parry3d_f64::query::{ShapeCastOptions, cast_shapes};
 
 use super::broad::BroadPhase;
 use super::convert::{Pose3, to_glam};
-use super::expansion::{expand_on_penetration, merge};
+use super::expansion::{expand_on_penetration, expand_overlap, merge};
 use super::narrow::{PairCache, PairQuery, query_pair};
 use super::pair::PairView;
 use super::primitives::{expand, primitives, select, value_at};
@@ -395,32 +395,36 @@ impl ActiveSet {
             return;
         }
         let mut out = Vec::with_capacity(8);
-        // §3.2.1: an overlapping pair's held vertices' neighbours below
-        // their face expand the witness; without new violators (and without
-        // guards), the primitives of an earlier expansion stay while near.
-        // With the guards on, the next features already have rows, and the
-        // expansion is only asked for when the cores overlap (no nearest
-        // features at all); off, at any penetration.
         let mut expanded = Vec::new();
-        if let Some(prev) = &was {
-            let expand_now = match s.guards {
-                true => q.features.is_none(),
-                false => depth > 0.0,
-            };
-            if expand_now {
-                let made = expand_on_penetration(&view, &prev.witnesses, &mut expanded);
-                cycle.expansions += made;
+        if s.guards {
+            // The next features already have rows: the expansion is asked
+            // for only when the cores overlap (no nearest features at all).
+            if q.features.is_some() {
+                primitives(&view, &q, &mut out);
+            } else if let Some(prev) = &was {
+                cycle.expansions += expand_overlap(&view, &prev.witnesses, &mut out);
             }
-            if expanded.is_empty() && !s.guards {
-                let near = |w: &&Witness| value_at(w, &view.pa, &view.pb).0 < window;
-                expanded.extend(prev.expanded.iter().filter(near));
+        } else {
+            // §3.2.1 at any penetration: a tracked pair's held vertices'
+            // neighbours below their face expand the witness; without new
+            // violators, the primitives of an earlier expansion stay while
+            // they are near.
+            if let Some(prev) = &was {
+                if depth > 0.0 {
+                    let made = expand_on_penetration(&view, &prev.witnesses, &mut expanded);
+                    cycle.expansions += made;
+                }
+                if expanded.is_empty() {
+                    let near = |w: &&Witness| value_at(w, &view.pa, &view.pb).0 < window;
+                    expanded.extend(prev.expanded.iter().filter(near));
+                }
             }
-        }
-        merge(&mut out, &expanded);
-        if q.features.is_some() {
-            let mut nearest = Vec::with_capacity(8);
-            primitives(&view, &q, &mut nearest);
-            merge(&mut out, &nearest);
+            merge(&mut out, &expanded);
+            if q.features.is_some() {
+                let mut nearest = Vec::with_capacity(8);
+                primitives(&view, &q, &mut nearest);
+                merge(&mut out, &nearest);
+            }
         }
         if out.is_empty() {
             out.push(fallback(&view, &q));

@@ -26,7 +26,8 @@
 use super::pair::PairView;
 use super::polyhedron::Feature;
 use super::primitives::flipped;
-use crate::constraint::witness::{Witness, edge_face, face_face};
+use super::primitives::value_at;
+use crate::constraint::witness::{PlaneWitness, Witness, edge_face, face_face};
 
 /// A vertex key packed by [`super::pair::pack`] (dimension 0).
 const DIM_SHIFT: u32 = 30;
@@ -162,4 +163,83 @@ pub(super) fn merge(out: &mut Vec<Witness>, extra: &[Witness]) {
             out.push(*w);
         }
     }
+}
+
+/// With the guards on (`ContactSettings::guards`): the expansion as it ran
+/// before the guards could be switched off, kept exactly, since the guarded
+/// scenes' figures were measured with it. Subsequent penetration (§3.2.1): the cores overlap, so there are no
+/// nearest features. For each vertex–face primitive of the last cycle, find
+/// the vertices next to its vertex that now lie below its plane; with one,
+/// the edge from the contact vertex to it becomes the witness (edge–face),
+/// with more, their common face (face–face). Returns the expansions made.
+pub(super) fn expand_overlap(view: &PairView, prev: &[Witness], out: &mut Vec<Witness>) -> u32 {
+    let mut made = 0;
+    for w in prev {
+        let Witness::Plane(p) = w else { continue };
+        let pe = p.point_end as usize;
+        let (vkey, fkey) = (p.features[pe], p.features[1 - pe]);
+        if vkey >= 1 << 30 || fkey >> 30 != 2 {
+            continue;
+        }
+        let face = fkey & ((1 << 30) - 1);
+        let v = if pe == 0 { *view } else { view.swapped() };
+        let (Some(pp), Some(ps)) = (v.a.polyhedron(), v.b.polyhedron()) else {
+            continue;
+        };
+        let start = out.len();
+        let violators: Vec<u32> = pp.vertex_edges[vkey as usize]
+            .iter()
+            .map(|&e| pp.other_end(e, vkey))
+            .filter(|&nb| {
+                let (val, _) = value_at(
+                    &Witness::Plane(PlaneWitness {
+                        point: pp.vertices[nb as usize],
+                        point_end: 0,
+                        ..*p
+                    }),
+                    &v.pa,
+                    &v.pb,
+                );
+                val < 0.0
+            })
+            .collect();
+        match violators.as_slice() {
+            [] => continue,
+            [nb] => {
+                let Some(e) = pp.edge_between(vkey, *nb) else {
+                    continue;
+                };
+                let ends = pp.edges[e as usize].vertices;
+                edge_face::reduce(
+                    &v,
+                    [pp.vertices[ends[0] as usize], pp.vertices[ends[1] as usize]],
+                    (
+                        [Feature::Vertex(ends[0]), Feature::Vertex(ends[1])],
+                        Feature::Edge(e),
+                    ),
+                    ps,
+                    face,
+                    out,
+                );
+            }
+            many => {
+                let shared = pp.vertex_faces[vkey as usize].iter().copied().find(|&f| {
+                    many.iter()
+                        .all(|nb| pp.vertex_faces[*nb as usize].contains(&f))
+                });
+                match shared {
+                    Some(f) => face_face::reduce(&v, pp, f, ps, face, out),
+                    None => continue,
+                }
+            }
+        }
+        if pe == 1 {
+            let a_to_b = view.a_to_b();
+            for w in &mut out[start..] {
+                *w = flipped(*w, &a_to_b);
+            }
+        }
+        made += 1;
+    }
+    made
 }
