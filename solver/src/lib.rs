@@ -101,6 +101,7 @@ pub mod mechanisms;
 mod model;
 pub mod objective;
 pub mod parametric;
+pub mod place;
 pub mod placement;
 pub mod program;
 pub mod rotation;

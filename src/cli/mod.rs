@@ -5,6 +5,7 @@ mod bench;
 mod check;
 mod export;
 mod output;
+mod place;
 mod preflight;
 mod probe;
 mod rt_args;
@@ -108,6 +109,18 @@ enum Command {
         #[arg(long, default_value_t = check::DEFAULT_TRIAL_SECONDS, value_parser = values::seconds)]
         seconds: f64,
     },
+    /// Place a body at a goal: pull to goal or solve for goal (Choi & Cremer §4.3).
+    ///
+    /// Assembles the scene's mechanism (its bodies and joints, the scene's
+    /// fingers left out) with a goal on the body's origin, then moves the
+    /// goal to --goal: in pull mode through intermediate goals every --step
+    /// metres, in solve mode at once. A step at which Newton-KKT does not
+    /// converge within --max-iterations is split in halves (subgoal
+    /// subdivision). Writes the scene with its bodies at the placed
+    /// configuration and reports Newton iterations per step; the exit
+    /// status is 3 when the goal was not reached (the file then holds the
+    /// last converged subgoal).
+    Place(place::PlaceArgs),
 }
 
 /// Parses the command line and runs the chosen command.
@@ -132,6 +145,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
+        Some(Command::Place(args)) => place::run(&args),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),
     }

@@ -190,6 +190,9 @@ impl Plan {
         if let Some(d) = s.penetration_tolerance {
             contact.penetration_tolerance_m = d;
         }
+        if let Some(g) = s.contact_guards {
+            contact.guards = g;
+        }
         // The contact speed limit, in scenes where things can touch: no body
         // moves farther in one slow-loop cycle than the contact distance (see
         // SolverSettings::contact_step_m).

@@ -18,6 +18,7 @@ mod load_bounds;
 mod matvec;
 mod messages;
 mod physics;
+mod place;
 mod preflight;
 mod reference;
 mod replay;

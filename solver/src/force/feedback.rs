@@ -406,12 +406,6 @@ impl Feedback {
         self.solve.set_simd(on);
     }
 
-    /// x ← A_JJ⁻¹ x with the last factor (timing).
-    #[cfg(test)]
-    pub fn solve_joint(&mut self, x: &mut [f64]) {
-        self.solve.solve_joint(x);
-    }
-
     /// One assembly of A at the last force solve's state (timing).
     #[cfg(test)]
     pub fn reassemble(&mut self, ev: &Evaluation) {

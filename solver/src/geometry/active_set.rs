@@ -8,9 +8,11 @@
 //!        ──► per pair: add below contact_distance + reach (pre-emptive),
 //!            replace primitives whose features changed (required removal),
 //!            drop beyond release_distance (optional removal),
-//!            expand to nearby vertices (§3.2.1 before it happens),
+//!            guard nearby vertices and edges (§3.2.1 before it happens;
+//!            `ContactSettings::guards`),
 //!            on penetration: expand the witness to the higher-dimensional
-//!            feature and ask for a backup (revert, add, retry)
+//!            feature (`expansion.rs`) and, deeper than the tolerance, ask
+//!            for a backup (revert, add, retry)
 //!        ──► Cycle: did the set of pairs change (a new program) or only the
 //!            primitives in their slots (a witness table for the running one)
 //! ```
@@ -37,13 +39,13 @@ use parry3d_f64::query::{ShapeCastOptions, cast_shapes};
 
 use super::broad::BroadPhase;
 use super::convert::{Pose3, to_glam};
+use super::expansion::{expand_on_penetration, expand_overlap, merge};
 use super::narrow::{PairCache, PairQuery, query_pair};
 use super::pair::PairView;
-use super::polyhedron::Feature;
 use super::primitives::{expand, primitives, select, value_at};
 use super::shape::Collider;
 use crate::constraint::witness::friction::{stick_rows, twist_row};
-use crate::constraint::witness::{PlaneWitness, Witness, WitnessType, edge_face, face_face};
+use crate::constraint::witness::{PlaneWitness, Witness, WitnessType};
 
 /// Knobs of the active set, metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,6 +63,14 @@ pub struct ContactSettings {
     /// Pairs a moving body (fingertips included) is tracked in at most,
     /// nearest first (see [`MAX_PAIRS_PER_BODY`]).
     pub max_pairs_per_body: usize,
+    /// Pre-emptive guards (§3.2's "preventatively adds inequalities once
+    /// nearest feature distances fall below some threshold", extended to
+    /// every vertex and edge within a pair's reach): on, a tilting body's
+    /// next corner has a row before it touches. Off, only the nearest
+    /// features have rows, and a penetration is answered by the backup and
+    /// the §3.2.1 expansion alone (the paper's other approach). Scene key
+    /// `[solver] contact_guards`; default on.
+    pub guards: bool,
 }
 
 /// Contact pairs a moving body takes part in at most. Every pair brings
@@ -83,6 +93,7 @@ impl Default for ContactSettings {
             slots_per_pair: 8,
             finger_slots: 2,
             max_pairs_per_body: MAX_PAIRS_PER_BODY,
+            guards: true,
         }
     }
 }
@@ -120,6 +131,9 @@ struct Tracked {
     witnesses: Vec<Witness>,
     /// Stick rows: two tangent rows and, between two bodies, the twist row.
     friction: Option<[PlaneWitness; 3]>,
+    /// Primitives made by a §3.2.1 expansion, kept while they stay within
+    /// the pair's window (the backup's retry needs them).
+    expanded: Vec<Witness>,
     distance_m: f64,
 }
 
@@ -147,8 +161,13 @@ pub struct Cycle {
     pub backups: Vec<[u32; 2]>,
     /// Deepest penetration seen, metres (0 if none).
     pub max_penetration_m: f64,
-    /// Witnesses expanded to a higher-dimensional feature on penetration.
+    /// Witnesses expanded to a higher-dimensional feature on penetration
+    /// (§3.2.1).
     pub expansions: u32,
+    /// Of `backups`, the pairs that tunnelled (swept through each other
+    /// between two cycles without being close at either); the others were
+    /// deeper than the tolerance.
+    pub tunnels: u32,
     /// Candidate pairs from the broad phase.
     pub candidates: u32,
     /// Tracked pairs after the cycle.
@@ -447,6 +466,7 @@ impl ActiveSet {
         // would hold it): that asks for a backup whatever it looks like now.
         if was.is_none() && self.tunnelled(pair, poses) {
             cycle.backups.push(pair);
+            cycle.tunnels += 1;
         }
         let mut cache = was.as_ref().map(|t| t.cache.clone()).unwrap_or_default();
         let Some(q) = query_pair(view.a, &view.pa, view.b, &view.pb, window, &mut cache) else {
@@ -466,15 +486,43 @@ impl ActiveSet {
             return;
         }
         let mut out = Vec::with_capacity(8);
-        if q.features.is_some() {
-            primitives(&view, &q, &mut out);
-        } else if let Some(prev) = &was {
-            cycle.expansions += expand_on_penetration(&view, &prev.witnesses, &mut out);
+        let mut expanded = Vec::new();
+        if s.guards {
+            // The next features already have rows: the expansion is asked
+            // for only when the cores overlap (no nearest features at all).
+            if q.features.is_some() {
+                primitives(&view, &q, &mut out);
+            } else if let Some(prev) = &was {
+                cycle.expansions += expand_overlap(&view, &prev.witnesses, &mut out);
+            }
+        } else {
+            // §3.2.1 at any penetration: a tracked pair's held vertices'
+            // neighbours below their face expand the witness; without new
+            // violators, the primitives of an earlier expansion stay while
+            // they are near.
+            if let Some(prev) = &was {
+                if depth > 0.0 {
+                    let made = expand_on_penetration(&view, &prev.witnesses, &mut expanded);
+                    cycle.expansions += made;
+                }
+                if expanded.is_empty() {
+                    let near = |w: &&Witness| value_at(w, &view.pa, &view.pb).0 < window;
+                    expanded.extend(prev.expanded.iter().filter(near));
+                }
+            }
+            merge(&mut out, &expanded);
+            if q.features.is_some() {
+                let mut nearest = Vec::with_capacity(8);
+                primitives(&view, &q, &mut nearest);
+                merge(&mut out, &nearest);
+            }
         }
         if out.is_empty() {
             out.push(fallback(&view, &q));
         }
-        expand(&view, reach, (-q.distance_m).max(0.0), &mut out);
+        if s.guards {
+            expand(&view, reach, (-q.distance_m).max(0.0), &mut out);
+        }
         select(&view, slots, &mut out);
         if depth > s.penetration_tolerance_m {
             cycle.backups.push(pair);
@@ -494,6 +542,7 @@ impl ActiveSet {
                 cache,
                 witnesses: out,
                 friction,
+                expanded,
                 distance_m: q.distance_m,
             },
         );
@@ -549,83 +598,6 @@ fn changes(old: &[Witness], new: &[Witness]) -> u32 {
         .filter(|o| !new.iter().any(|w| w.same_features(o)))
         .count();
     (added + removed) as u32
-}
-
-/// Subsequent penetration (§3.2.1): the cores overlap, so there are no
-/// nearest features. For each vertex–face primitive of the last cycle, find
-/// the vertices next to its vertex that now lie below its plane; with one,
-/// the edge from the contact vertex to it becomes the witness (edge–face),
-/// with more, their common face (face–face). Returns the expansions made.
-fn expand_on_penetration(view: &PairView, prev: &[Witness], out: &mut Vec<Witness>) -> u32 {
-    let mut made = 0;
-    for w in prev {
-        let Witness::Plane(p) = w else { continue };
-        let pe = p.point_end as usize;
-        let (vkey, fkey) = (p.features[pe], p.features[1 - pe]);
-        if vkey >= 1 << 30 || fkey >> 30 != 2 {
-            continue;
-        }
-        let face = fkey & ((1 << 30) - 1);
-        let v = if pe == 0 { *view } else { view.swapped() };
-        let (Some(pp), Some(ps)) = (v.a.polyhedron(), v.b.polyhedron()) else {
-            continue;
-        };
-        let start = out.len();
-        let violators: Vec<u32> = pp.vertex_edges[vkey as usize]
-            .iter()
-            .map(|&e| pp.other_end(e, vkey))
-            .filter(|&nb| {
-                let (val, _) = value_at(
-                    &Witness::Plane(PlaneWitness {
-                        point: pp.vertices[nb as usize],
-                        point_end: 0,
-                        ..*p
-                    }),
-                    &v.pa,
-                    &v.pb,
-                );
-                val < 0.0
-            })
-            .collect();
-        match violators.as_slice() {
-            [] => continue,
-            [nb] => {
-                let Some(e) = pp.edge_between(vkey, *nb) else {
-                    continue;
-                };
-                let ends = pp.edges[e as usize].vertices;
-                edge_face::reduce(
-                    &v,
-                    [pp.vertices[ends[0] as usize], pp.vertices[ends[1] as usize]],
-                    (
-                        [Feature::Vertex(ends[0]), Feature::Vertex(ends[1])],
-                        Feature::Edge(e),
-                    ),
-                    ps,
-                    face,
-                    out,
-                );
-            }
-            many => {
-                let shared = pp.vertex_faces[vkey as usize].iter().copied().find(|&f| {
-                    many.iter()
-                        .all(|nb| pp.vertex_faces[*nb as usize].contains(&f))
-                });
-                match shared {
-                    Some(f) => face_face::reduce(&v, pp, f, ps, face, out),
-                    None => continue,
-                }
-            }
-        }
-        if pe == 1 {
-            let a_to_b = view.a_to_b();
-            for w in &mut out[start..] {
-                *w = super::primitives::flipped(*w, &a_to_b);
-            }
-        }
-        made += 1;
-    }
-    made
 }
 
 /// A plane through the deepest points of a penetration (parry's contact),

@@ -57,6 +57,8 @@ pub struct SceneSettings {
     pub dynamics: Option<bool>,
     /// Contact penetration beyond which the slow loop backs up, m.
     pub penetration_tolerance: Option<f64>,
+    /// Pre-emptive witness guards (`contact_guards`).
+    pub contact_guards: Option<bool>,
 }
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
@@ -187,6 +189,7 @@ fn settings(s: &SolverSection) -> SceneSettings {
         velocity_filter: f(&s.velocity_filter),
         dynamics: s.dynamics.as_ref().map(|x| *x.get_ref()),
         penetration_tolerance: f(&s.penetration_tolerance),
+        contact_guards: s.contact_guards.as_ref().map(|x| *x.get_ref()),
     }
 }
 
@@ -442,9 +445,10 @@ impl LoadedScene {
         self.spec.joints.iter().map(joint_spec).collect()
     }
 
-    /// Builds the model and wires devices to fingers. Every error names the
-    /// file, line and column of the offending value.
-    pub fn compile(&self) -> Result<CompiledScene, SceneError> {
+    /// The scene's bodies, joints, fingers and objectives as a
+    /// [`ModelBuilder`], not built yet (`compile` builds it and maps its
+    /// errors to spans; `haptloop place` builds a goal model from it).
+    pub fn builder(&self) -> ModelBuilder {
         let s = &self.spec;
         let mut builder = ModelBuilder::new();
         if let Some(g) = &s.scene.gravity {
@@ -483,6 +487,14 @@ impl LoadedScene {
         for o in &s.objectives {
             builder.objective(objective_spec(o));
         }
+        builder
+    }
+
+    /// Builds the model and wires devices to fingers. Every error names the
+    /// file, line and column of the offending value.
+    pub fn compile(&self) -> Result<CompiledScene, SceneError> {
+        let s = &self.spec;
+        let builder = self.builder();
         // The same mechanism without finger rows: same bodies (fingertips
         // included), same layout of q, joint rows only (for re-projection
         // onto the nearest assembled configuration, which must not hold a

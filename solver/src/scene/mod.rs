@@ -21,6 +21,7 @@ mod gear;
 pub mod limits;
 pub mod magnitudes;
 mod no_effect;
+mod placed;
 mod polygon;
 mod semantic;
 pub mod spec;
@@ -32,6 +33,7 @@ pub use compile_semantic::HoldDecl;
 pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_switches};
 pub use error::SceneError;
 pub use flags::Flagged;
+pub use placed::BodyPose;
 pub use write::mechanism_tables;
 
 use std::ops::Range;

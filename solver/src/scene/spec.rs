@@ -171,6 +171,9 @@ pub struct SolverSection {
     pub dynamics: Option<Spanned<bool>>,
     /// Extra: contact penetration beyond which the slow loop backs up, m.
     pub penetration_tolerance: Option<Spanned<f64>>,
+    /// Extra: pre-emptive witness guards on nearby vertices and edges
+    /// (default on; off leaves penetrations to the backup and §3.2.1).
+    pub contact_guards: Option<Spanned<bool>>,
 }
 
 /// `[[body]]`.

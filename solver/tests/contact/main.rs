@@ -7,7 +7,9 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 
 mod common;
 // The solver tests' finite differences, shared.
+mod backup_paths;
 mod drags;
+mod expansion;
 #[allow(dead_code)]
 #[path = "../solver/fd.rs"]
 mod fd;

@@ -12,5 +12,6 @@ mod convergence;
 mod dense_columns;
 mod inequalities;
 mod least_squares;
+mod modes;
 mod reference;
 mod singular;
