@@ -3,7 +3,8 @@
 //! `phantom-omni` / `phantom-touch`), the simulated [`Hand`] that holds them,
 //! the [`SafeDevice`] safety layer every device sits behind, injected faults,
 //! [`Mount`]s that place several devices in one scene, and trace
-//! record ([`TraceRecorder`]) / replay ([`ReplayDevice`]).
+//! record ([`TraceRecorder`]) / replay ([`ReplayDevice`]), and the
+//! [`VirtualDevice`] a person moves with the mouse through a [`Pointer`].
 //!
 //! Data flow, once per tick and per device (all `Copy` values, no allocation):
 //!
@@ -37,10 +38,12 @@ pub mod hand_trace;
 pub mod mount;
 pub mod passivity;
 pub mod phantom;
+pub mod pointer;
 pub mod replay;
 pub mod rig;
 pub mod safety;
 pub mod trace;
+pub mod virtual_device;
 
 pub use device::{
     ARM_JOINTS, Device, DeviceFault, DeviceInfo, DeviceLimits, DeviceReading, MotorReport,
@@ -52,6 +55,7 @@ pub use hand::{Grip, Hand, TargetSample, Trajectory};
 pub use hand_trace::HandTrace;
 pub use mount::Mount;
 pub use phantom::{KNOWN_MODELS, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom};
+pub use pointer::{POINTER_RANGE_M, POINTER_RESOLUTION_M, Pointer};
 pub use replay::ReplayDevice;
 pub use rig::{DynDevice, MountedDevice, SceneReading};
 pub use safety::{
@@ -59,3 +63,4 @@ pub use safety::{
     SafetyEvent, WriteOutcome,
 };
 pub use trace::{Trace, TraceHeader, TraceRecorder, TraceRow, TraceStream};
+pub use virtual_device::{VIRTUAL_MODEL, VirtualDevice, VirtualParams};

@@ -3,7 +3,8 @@
 //!
 //! `read(now)` returns the reading built from the counts and gimbal
 //! orientation of the last row whose time is ≤ `now` (the same conversion a
-//! live device uses: [`crate::PhantomModel::reading_from_counts`]); before the
+//! live device uses: [`crate::PhantomModel::reading_from_counts`], or
+//! [`crate::VirtualParams::reading_from_counts`] for a `virtual` trace); before the
 //! first row it reports [`DeviceFault::Dropped`], and more than one period
 //! past the last row [`DeviceFault::Disconnected`]: a trace that ends is a
 //! device that went away, so the safety layer latches and cuts force. `write`
@@ -21,23 +22,40 @@ use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport}
 use crate::error::DeviceError;
 use crate::phantom::PhantomModel;
 use crate::trace::Trace;
+use crate::virtual_device::{VIRTUAL_MODEL, VirtualParams};
+
+/// How recorded counts become a reading.
+#[derive(Debug, Clone, Copy)]
+enum Counts {
+    /// A PHANToM's joint encoders.
+    Phantom(&'static PhantomModel),
+    /// A virtual device's tip in micrometres.
+    Virtual,
+}
 
 /// A device that replays recorded encoder counts.
 #[derive(Debug, Clone)]
 pub struct ReplayDevice {
-    model: &'static PhantomModel,
+    model: Counts,
     info: DeviceInfo,
     trace: Trace,
     cursor: usize,
 }
 
 impl ReplayDevice {
-    /// A replay of `trace`; its header's model must be a known model.
+    /// A replay of `trace`; its header's model must be a known model (a
+    /// PHANToM or `virtual`).
     pub fn new(trace: Trace) -> Result<Self, DeviceError> {
-        let model = PhantomModel::by_name(&trace.header.model)?;
+        let (model, info) = if trace.header.model == VIRTUAL_MODEL {
+            let params = VirtualParams::for_rate_hz(trace.header.rate_hz);
+            (Counts::Virtual, params.info())
+        } else {
+            let m = PhantomModel::by_name(&trace.header.model)?;
+            (Counts::Phantom(m), m.info())
+        };
         Ok(Self {
             model,
-            info: model.info(),
+            info,
             trace,
             cursor: 0,
         })
@@ -76,7 +94,10 @@ impl Device for ReplayDevice {
                 Err(DeviceFault::Disconnected)
             }
             Some(row) if row.time <= now => {
-                let mut r = self.model.reading_from_counts(&row.counts, now);
+                let mut r = match self.model {
+                    Counts::Phantom(m) => m.reading_from_counts(&row.counts, now),
+                    Counts::Virtual => VirtualParams::reading_from_counts(&row.counts, now),
+                };
                 let [w, x, y, z] = row.orientation_wxyz;
                 r.orientation_device = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
                 Ok(r)
