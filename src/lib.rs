@@ -17,3 +17,4 @@ pub mod report;
 pub mod scenes;
 pub mod session;
 pub mod sweep;
+pub mod view;

@@ -1,7 +1,7 @@
 //! Built-in scenes (embedded, so `haptloop run four-bar` works from any
 //! directory) and resolution of a `SCENE|FILE` argument into a checked scene.
 
-use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel};
+use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel, VIRTUAL_MODEL};
 use haptloop_solver::scene::{self, CompiledScene, HandPath, LoadedScene, SceneError};
 use std::path::Path;
 
@@ -111,6 +111,28 @@ pub struct Scene {
     pub traces: Vec<Option<HandTrace>>,
 }
 
+impl Scene {
+    /// The scene with every device replaced by `model` (`--device`): a
+    /// known model, else an error listing them. A virtual device drops its
+    /// scripted hand (the live page moves it).
+    pub fn with_device_model(mut self, model: &str) -> Result<Scene, String> {
+        if model != VIRTUAL_MODEL && PhantomModel::by_name(model).is_err() {
+            return Err(format!(
+                "--device: unknown device model `{model}`; known models: {}, {VIRTUAL_MODEL}",
+                KNOWN_MODELS.join(", ")
+            ));
+        }
+        for (d, trace) in self.compiled.devices.iter_mut().zip(&mut self.traces) {
+            d.model = model.to_owned();
+            if model == VIRTUAL_MODEL {
+                d.hand.path = HandPath::Still;
+                *trace = None;
+            }
+        }
+        Ok(self)
+    }
+}
+
 /// Resolves `arg` (a built-in name or a path), then parses, validates and
 /// compiles it, checks device models and loads hand traces. Every error names
 /// the file, line and column.
@@ -141,13 +163,22 @@ pub fn check_loaded(loaded: LoadedScene) -> Result<Scene, SceneError> {
     let compiled = loaded.compile()?;
     let mut traces = Vec::with_capacity(compiled.devices.len());
     for d in &compiled.devices {
-        if PhantomModel::by_name(&d.model).is_err() {
+        if d.model != VIRTUAL_MODEL && PhantomModel::by_name(&d.model).is_err() {
             return Err(loaded.error_at(
                 d.model_span.clone(),
                 format!(
-                    "unknown device model `{}`; known models: {}",
+                    "unknown device model `{}`; known models: {}, {VIRTUAL_MODEL}",
                     d.model,
                     KNOWN_MODELS.join(", ")
+                ),
+            ));
+        }
+        if d.model == VIRTUAL_MODEL && d.hand.path != HandPath::Still {
+            return Err(loaded.error_at(
+                d.model_span.clone(),
+                format!(
+                    "device `{}` is virtual: the live page's mouse moves it, not a scripted `hand` (remove `hand`, or use a PHANToM model)",
+                    d.name
                 ),
             ));
         }

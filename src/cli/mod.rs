@@ -10,6 +10,7 @@ mod run;
 mod scenes;
 mod sweep;
 mod values;
+mod view;
 
 use anyhow::Result;
 use clap::{CommandFactory, Parser, Subcommand};
@@ -81,6 +82,13 @@ enum Command {
     /// write, bookkeeping, the whole tick and the tick without the device
     /// stages; then the slow loop's step time and the constraint violation.
     Bench(bench::BenchArgs),
+    /// Write RUN_DIR/view.html: a run in 3-D, one file that opens from disk.
+    ///
+    /// Orbit, pan and zoom; a timeline with play, pause and speed; the
+    /// bodies (shapes, or links between joint anchors), fingers, force
+    /// arrows, contact points and normals; force, violation and penetration
+    /// plots; the semantic events on the timeline. `run` writes it too.
+    View(view::ViewArgs),
     /// List the built-in scenes, one line each.
     Scenes,
     /// Validate a scene file (or built-in name) and print what it compiles to.
@@ -114,6 +122,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
+        Some(Command::View(args)) => view::run(&args),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),
     }

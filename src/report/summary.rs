@@ -471,6 +471,9 @@ pub struct Summary {
     /// semantic areas or holds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub semantic: Option<super::semantic::Semantic>,
+    /// What each virtual device did (`model = "virtual"`, `--device virtual`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub virtual_devices: Vec<crate::session::VirtualOutcome>,
     /// Trace samples dropped (queue full).
     pub trace_dropped: u64,
     /// What the OS granted the fast thread (real-time mode).
@@ -654,6 +657,7 @@ impl Summary {
                 }
             }),
             semantic: o.semantic.as_ref().map(Into::into),
+            virtual_devices: o.virtual_devices.clone(),
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,

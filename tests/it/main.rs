@@ -6,6 +6,7 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod bench;
+mod browser;
 mod contact;
 mod design;
 mod docs;
@@ -17,3 +18,4 @@ mod session;
 mod stability;
 mod sweep;
 mod trust;
+mod view;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Rebuilds three.bundle.js, the three.js the viewer inlines into view.html,
 # from three's npm package at the pinned version, with esbuild (pinned too):
-# one classic script (an IIFE defining the global `THREE`, OrbitControls
+# one classic script (an IIFE defining the global `THREE`, OrbitControls and ConvexGeometry
 # included), so the page needs no module loading, no server and no network.
 # Run it only to move to another three.js version (change THREE below), then
 # commit three.bundle.js and LICENSE together. Needs node and npm.
