@@ -395,6 +395,16 @@ fn start_live(
     }
 }
 
+impl<C: Clock> Built<C> {
+    /// Starts the live exchange of a built session (`plan.live`): hands the
+    /// hook the viewer's ends and `recorder` the reporter's (what `run`
+    /// does when the loops start; public for tests that drive the loops
+    /// themselves).
+    pub fn start_live(&mut self, plan: &Plan, recorder: &mut Recorder) {
+        start_live(plan, self.live.take(), recorder);
+    }
+}
+
 /// Sessions whose loops are running, process-wide. While none is (a session
 /// is still being built: program, factorisations, assembly), there is nothing
 /// to stop at a tick boundary, so the command line's signal handler exits at

@@ -66,3 +66,357 @@ fn a_virtual_device_comes_to_rest_where_its_pointer_spring_balances_the_force() 
         "the linkage held the tip back with {force_late} N"
     );
 }
+
+/// Every built-in scene, mechanisms included, is tracked: every moving
+/// body at 100 Hz of session time from t = 0 (fixed ones once), every
+/// finger at 100 Hz, and a body without a shape has points to be drawn by.
+#[test]
+fn every_scene_is_tracked_body_by_body_at_100_hz() {
+    use haptloop::scenes::BUILTIN;
+    use haptloop::view::SceneInfo;
+    for b in BUILTIN {
+        let scene = resolve(b.name).unwrap();
+        let seconds = 0.2;
+        let o = session::run(
+            &scene,
+            Plan::new(&scene, &deterministic(seconds)).unwrap(),
+            &StopFlag::new(),
+            &mut |_| {},
+        )
+        .unwrap();
+        let model = &scene.compiled.model;
+        let moving = model.bodies().iter().filter(|b| !b.fixed).count();
+        assert_eq!(o.track.bodies.len(), moving, "{}", b.name);
+        assert_eq!(
+            o.track.fixed.len(),
+            model.bodies().len() - moving,
+            "{}",
+            b.name
+        );
+        for (what, times) in [
+            (
+                "bodies",
+                o.track.samples.iter().map(|s| s.0).collect::<Vec<f64>>(),
+            ),
+            (
+                "fingers",
+                o.recorder.fingers.samples.iter().map(|s| s.0).collect(),
+            ),
+        ] {
+            assert!(times[0] <= 0.01, "{}: {what} start at {}", b.name, times[0]);
+            // One sample in every 10 ms slot (the first snapshot at or
+            // after it: the slow loop looks every 5 ms, 6 ms at 500 Hz).
+            let gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+            let slots: std::collections::BTreeSet<i64> = times
+                .iter()
+                .map(|t| (t / 0.01 + 1e-9).floor() as i64)
+                .collect();
+            assert!(
+                gaps.iter().all(|g| *g < 0.02)
+                    && slots.len() == times.len()
+                    && times.len() as f64 >= seconds / 0.01,
+                "{}: {what} at {} samples, gaps up to {:?}",
+                b.name,
+                times.len(),
+                gaps.iter().cloned().fold(0.0, f64::max)
+            );
+        }
+        let info = SceneInfo::of(&scene);
+        for body in &info.bodies {
+            assert!(
+                body.shape.is_some() || !body.links.is_empty(),
+                "{}: `{}` has nothing to be drawn by",
+                b.name,
+                body.name
+            );
+        }
+    }
+}
+
+fn haptloop(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// `haptloop view` on a folder that is not a whole run says what is
+/// missing or wrong, where, with exit status 1; never a panic.
+#[test]
+fn view_refuses_an_incomplete_or_damaged_run_folder_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = haptloop(&[
+        "run",
+        "four-bar",
+        "--deterministic",
+        "--seconds",
+        "0.2",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(out.join("view.html").is_file(), "run writes view.html");
+    let again = haptloop(&["view", out.to_str().unwrap()]);
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    let bodies = std::fs::read_to_string(out.join("bodies.csv")).unwrap();
+    // Damaged: a number that is not one, on line 3.
+    let mut lines: Vec<String> = bodies.lines().map(str::to_owned).collect();
+    lines[2] = lines[2].replacen(",", ",x", 2).replacen(",x", ",", 1);
+    std::fs::write(out.join("bodies.csv"), lines.join("\n")).unwrap();
+    let bad = haptloop(&["view", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("bodies.csv:3:") && err.contains("not a number"),
+        "{err}"
+    );
+    // Missing files: every one named.
+    std::fs::remove_file(out.join("fingers.csv")).unwrap();
+    std::fs::remove_file(out.join("scene.json")).unwrap();
+    let missing = haptloop(&["view", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert_eq!(missing.status.code(), Some(1), "{err}");
+    assert!(err.contains("missing scene.json, fingers.csv"), "{err}");
+    let nowhere = haptloop(&["view", dir.path().join("nowhere").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&nowhere.stderr);
+    assert_eq!(nowhere.status.code(), Some(1));
+    assert!(err.contains("nowhere: not a directory"), "{err}");
+}
+
+/// The live flags refuse what cannot work, before anything runs: a port
+/// in use (exit 1, naming it), `--live` with `--deterministic` and an
+/// unknown `--device` model (usage errors, exit 2); a scene file's virtual
+/// device with a scripted hand is an error at its place.
+#[test]
+fn the_live_flags_refuse_a_port_in_use_and_what_cannot_work() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    let o = haptloop(&["run", "four-bar", "--live", "--port", &port, "--no-files"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!("127.0.0.1:{port} is already in use")),
+        "{err}"
+    );
+    let o = haptloop(&["run", "four-bar", "--live", "--deterministic", "--no-files"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = haptloop(&[
+        "run",
+        "four-bar",
+        "--device",
+        "phantom-desktop",
+        "--no-files",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("phantom-desktop") && err.contains("virtual"),
+        "{err}"
+    );
+    let base = haptloop::scenes::BUILTIN
+        .iter()
+        .find(|b| b.name == "four-bar")
+        .unwrap()
+        .text;
+    let text = base.replacen("model = \"phantom-premium-1.5\"", "model = \"virtual\"", 1);
+    assert!(text.contains("hand ="), "the four-bar's device has a hand");
+    let err = haptloop_solver::scene::parse("v.toml", &text, None)
+        .map(haptloop::scenes::check_loaded)
+        .unwrap()
+        .err()
+        .expect("a virtual device with a scripted hand is refused")
+        .to_string();
+    assert!(
+        err.starts_with("v.toml:") && err.contains("is virtual"),
+        "{err}"
+    );
+}
+
+/// A run on virtual devices (the four-bar's weight pushes the tip, so it
+/// moves) recorded and replayed: the same fingers' figures, bit for bit.
+#[test]
+fn a_virtual_device_is_recorded_and_replayed_bit_for_bit() {
+    let scene = resolve("four-bar")
+        .unwrap()
+        .with_device_model("virtual")
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let go = |options: SessionOptions| {
+        let plan = Plan::new(&scene, &options).unwrap();
+        session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap()
+    };
+    let recorded = go(SessionOptions {
+        record: Some(dir.path().to_path_buf()),
+        ..deterministic(1.0)
+    });
+    let replayed = go(SessionOptions {
+        replay: Some(dir.path().to_path_buf()),
+        ..deterministic(1.0)
+    });
+    let (a, b) = (
+        recorded.recorder.fingers.csv(),
+        replayed.recorder.fingers.csv(),
+    );
+    assert_eq!(a, b);
+    let tips: Vec<[f64; 3]> = recorded
+        .recorder
+        .fingers
+        .samples
+        .iter()
+        .map(|s| s.1[0].device_m)
+        .collect();
+    assert!(
+        tips.first() != tips.last(),
+        "the tip never moved: nothing was compared"
+    );
+    assert_eq!(recorded.virtual_devices.len(), 1);
+}
+
+/// The fast loop allocates nothing with the live exchange on, while the
+/// slow loop publishes frames, a viewer thread reads them and moves the
+/// virtual devices' pointers, and the reporter publishes the fingers:
+/// the four-bar and pinch-lift on virtual devices.
+#[test]
+fn the_fast_loop_tick_allocates_nothing_with_the_live_view_on() {
+    use haptloop::session::{LiveHook, LiveSources, Recorder};
+    use haptloop_rt::alloc::count;
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    use std::sync::{Arc, Mutex};
+    for name in ["four-bar", "pinch-lift"] {
+        let scene = resolve(name).unwrap().with_device_model("virtual").unwrap();
+        let slot: Arc<Mutex<Option<LiveSources>>> = Arc::default();
+        let put = slot.clone();
+        let options = SessionOptions {
+            live: Some(LiveHook(Arc::new(move |s| *put.lock().unwrap() = Some(s)))),
+            ..deterministic(3.0)
+        };
+        let plan = Plan::new(&scene, &options).unwrap();
+        let clock = MockClock::new(Nanos(0));
+        let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
+        let names: Vec<String> = scene
+            .compiled
+            .model
+            .fingers()
+            .iter()
+            .map(|f| f.name.clone())
+            .collect();
+        let mut recorder = Recorder::new(&names, plan.ticks(), None).unwrap();
+        built.start_live(&plan, &mut recorder);
+        let mut sources = slot
+            .lock()
+            .unwrap()
+            .take()
+            .expect("the hook got the viewer's ends");
+        let session::Built {
+            mut fast,
+            mut slow,
+            trace,
+            ..
+        } = built;
+        let done = Arc::new(AtomicBool::new(false));
+        let (frames, moves) = (Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
+        let (flag, seen, moved) = (done.clone(), frames.clone(), moves.clone());
+        let viewer = std::thread::spawn(move || {
+            let mut k = 0u32;
+            while !flag.load(Ordering::Acquire) {
+                if sources.frames.refresh() {
+                    seen.fetch_add(1, Ordering::Relaxed);
+                }
+                sources.fingers.refresh();
+                k += 1;
+                let x = 0.005 * (f64::from(k) * 0.01).sin();
+                for p in &sources.pointers {
+                    p.pointer.set(&Vector3::new(x, 0.0, x));
+                    moved.fetch_add(1, Ordering::Relaxed);
+                }
+                std::thread::yield_now();
+            }
+        });
+        let flag = done.clone();
+        let slow_thread = std::thread::spawn(move || {
+            while !flag.load(Ordering::Acquire) {
+                slow.step();
+                std::thread::yield_now();
+            }
+        });
+        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
+        let stop = StopFlag::new();
+        periodic.run(&mut fast, RunLimit::slots(50), &stop);
+        let chunks = (plan.ticks() - 50) / 50;
+        let mut total = 0;
+        for _ in 0..chunks {
+            let (_, stats) = count(|| periodic.run(&mut fast, RunLimit::slots(50), &stop));
+            total += stats.total();
+            recorder.drain(&trace, &names).unwrap();
+            std::thread::yield_now();
+        }
+        done.store(true, Ordering::Release);
+        viewer.join().unwrap();
+        slow_thread.join().unwrap();
+        assert_eq!(total, 0, "{name}: the fast loop allocated {total} times");
+        assert!(
+            frames.load(Ordering::Relaxed) > 0,
+            "{name}: no live frame was read"
+        );
+        assert!(moves.load(Ordering::Relaxed) > 0, "{name}: no pointer move");
+        let moved = recorder.fingers.samples.iter().any(|(_, f)| {
+            f[0].device_m != recorder.fingers.samples.iter().next().unwrap().1[0].device_m
+        });
+        assert!(moved, "{name}: the pointer never moved the device");
+    }
+}
+
+/// A real-time session with the live exchange on and a viewer reading it:
+/// every tick is accounted for, the viewer saw frames, a stop ends it
+/// cleanly (the real scheduler: structure, not speed).
+#[test]
+fn a_real_time_session_with_the_live_view_on_accounts_for_every_tick() {
+    use haptloop::session::LiveHook;
+    use haptloop_rt::thread::ThreadConfig;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let scene = resolve("four-bar")
+        .unwrap()
+        .with_device_model("virtual")
+        .unwrap();
+    let frames = Arc::new(AtomicU64::new(0));
+    let seen = frames.clone();
+    let options = SessionOptions {
+        seconds: 1.0,
+        thread: ThreadConfig {
+            fifo_priority: None,
+            lock_memory: false,
+            ..ThreadConfig::default()
+        },
+        live: Some(LiveHook(Arc::new(move |mut s| {
+            let seen = seen.clone();
+            std::thread::spawn(move || {
+                for _ in 0..400 {
+                    if s.frames.refresh() {
+                        seen.fetch_add(1, Ordering::Relaxed);
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(2));
+                }
+            });
+        }))),
+        ..SessionOptions::default()
+    };
+    let plan = Plan::new(&scene, &options).unwrap();
+    let o = session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap();
+    assert_eq!(
+        o.stats.ticks, o.report.ticks,
+        "every tick was accounted for"
+    );
+    assert!(o.report.ticks > 500, "{} ticks", o.report.ticks);
+    assert!(
+        frames.load(Ordering::Relaxed) > 10,
+        "{} frames",
+        frames.load(Ordering::Relaxed)
+    );
+}
