@@ -207,7 +207,17 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
         };
         for (name, o, p) in &fixed {
             let h = hull(o.iter().map(|v| project(&p.point(v))).collect());
-            let at = centre(&h);
+            // A fixed body's name at the upper left of the part of it in
+            // view, clear of the moving bodies at the centre.
+            let (x0, y1) = h
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.0), b.max(p.1))
+                });
+            let at = (
+                x0.max(cx - half * 0.95),
+                y1.min(cy + half * 0.95) - half * 0.06,
+            );
             chart
                 .draw_series(std::iter::once(Polygon::new(
                     h,
@@ -239,7 +249,7 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
                 // Names at the last instant, where the bodies ended up.
                 if step + 1 == picks.len() {
                     chart
-                        .draw_series(std::iter::once(label(&t.bodies[*b].name, at, c)))
+                        .draw_series(std::iter::once(label(&t.bodies[*b].name, at, BLACK)))
                         .map_err(err)?;
                 }
             }

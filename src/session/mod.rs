@@ -352,8 +352,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     if let Some(c) = &slow.contact {
         c.contacts(&mut slow.contact_points);
     }
+    let at_rest = vec![[0.0; 3]; n_fingers];
     slow.track
-        .offer(0.0, &slow.poses, &slow.contact_points, 0.0);
+        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
     Ok(Built {
         fast,
         slow,

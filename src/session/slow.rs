@@ -169,8 +169,14 @@ impl SlowLoop {
         if let Some(c) = &self.contact {
             c.contacts(&mut self.contact_points);
         }
-        self.track
-            .offer(t_s, &self.poses, &self.contact_points, violation);
+        let snap = self.snapshots.latest();
+        self.track.offer(
+            t_s,
+            &self.poses,
+            &self.contact_points,
+            violation,
+            &snap.finger_force_n,
+        );
         if let Some(live) = &mut self.live {
             let sample = self
                 .track

@@ -195,13 +195,44 @@ impl SceneInfo {
             scene: c.name.clone(),
             description: c.description.clone(),
             gravity_m_s2: model.gravity_m_s2().into(),
-            size_m: model.characteristic_length_m(),
+            size_m: model.characteristic_length_m().max(moving_extent_m(model)),
             joints: scene.loaded.spec.joints.len(),
             bodies,
             fingers,
             devices,
         }
     }
+}
+
+/// Half the diagonal of the box around the moving bodies (their initial
+/// positions and shapes), m: a scene without joints has no mechanism
+/// length, but its bodies still need framing.
+fn moving_extent_m(model: &haptloop_solver::Model) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for b in model.bodies().iter().filter(|b| !b.fixed) {
+        let r = match &b.shape {
+            Some(Shape::Box { half_extents_m: h }) => {
+                (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt()
+            }
+            Some(Shape::Sphere { radius_m }) => *radius_m,
+            Some(Shape::Capsule {
+                half_height_m,
+                radius_m,
+            }) => half_height_m + radius_m,
+            Some(Shape::Convex { points_m }) => points_m
+                .iter()
+                .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
+                .fold(0.0, f64::max),
+            None => 0.0,
+        };
+        for k in 0..3 {
+            lo[k] = lo[k].min(b.position_m[k] - r);
+            hi[k] = hi[k].max(b.position_m[k] + r);
+        }
+    }
+    let d2: f64 = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum();
+    if d2.is_finite() { d2.sqrt() / 2.0 } else { 0.0 }
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 use haptloop::scenes::resolve;
 use haptloop::session::{self, Plan, SessionOptions};
 use haptloop_rt::clock::{MockClock, Nanos};
-use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag, Tick, TickBody};
+use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag};
 use nalgebra::Vector3;
 
 fn deterministic(seconds: f64) -> SessionOptions {

@@ -43,6 +43,9 @@ pub struct TrackSample {
     /// Largest length-row violation of the ticks since the slow loop's last
     /// look, m (NaN: the snapshot's solve failed).
     pub violation_m: f64,
+    /// Each finger's force as the solver asked for it (before the safety
+    /// layer and the device's limits), N, model order.
+    pub asked_n: Vec<[f64; 3]>,
 }
 
 impl TrackSample {
@@ -50,6 +53,7 @@ impl TrackSample {
         std::mem::size_of::<Self>()
             + self.poses.len() * std::mem::size_of::<([f64; 3], [f64; 4])>()
             + self.contacts.len() * std::mem::size_of::<ContactPoint>()
+            + self.asked_n.len() * std::mem::size_of::<[f64; 3]>()
     }
 }
 
@@ -119,19 +123,21 @@ impl BodyTrack {
         self.samples.wants(t_s)
     }
 
-    /// Offers the poses of every model body (model order), the contacts
-    /// and the violation at `t_s`.
+    /// Offers the poses of every model body (model order), the contacts,
+    /// the violation and the fingers' asked forces at `t_s`.
     pub fn offer(
         &mut self,
         t_s: f64,
         poses: &[Pose3],
         contacts: &[ContactPoint],
         violation_m: f64,
+        asked_n: &[[f64; 3]],
     ) {
         if !self.wants(t_s) {
             return;
         }
-        let sample = self.sample(poses, contacts, violation_m);
+        let mut sample = self.sample(poses, contacts, violation_m);
+        sample.asked_n = asked_n.to_vec();
         self.samples.offer(t_s, sample.bytes(), || sample);
     }
 
@@ -150,6 +156,7 @@ impl BodyTrack {
                 .collect(),
             contacts: contacts.to_vec(),
             violation_m,
+            asked_n: Vec::new(),
         }
     }
 
@@ -217,7 +224,7 @@ mod tests {
         let mut poses = Vec::new();
         poses_at(model, model.q0(), &mut poses);
         for k in 0..10 {
-            t.offer(k as f64 * 0.005, &poses, &[], 0.0);
+            t.offer(k as f64 * 0.005, &poses, &[], 0.0, &[]);
         }
         assert_eq!(t.samples.len(), 5, "10 offers every 5 ms, kept every 10 ms");
         let csv = t.csv();

@@ -63,6 +63,11 @@
   camera.up.copy(up);
   const controls = new THREE.OrbitControls(camera, renderer.domElement);
   controls.enableDamping = false;
+  // Drawn on demand (a change of time, a frame, the camera), not at every
+  // display refresh: a software-rendered page must not eat the machine the
+  // session runs on.
+  let dirty = true;
+  controls.addEventListener('change', () => (dirty = true));
   scene.add(new THREE.HemisphereLight(0xffffff, 0x888888, 2.0));
   const sun = new THREE.DirectionalLight(0xffffff, 1.6);
   sun.position.copy(up).multiplyScalar(3 * size).add(new THREE.Vector3(size, size, 0));
@@ -72,7 +77,7 @@
   const bodies = S.bodies.map((b, k) => {
     const group = new THREE.Group();
     group.name = b.name;
-    const colour = b.fixed ? 0x9a9a9a : b.fingertip ? 0xff9f40 : COLOURS[k % COLOURS.length];
+    const colour = b.fixed ? 0x9a9a9a : b.fingertip ? 0x5a5a5a : COLOURS[k % COLOURS.length];
     const mat = new THREE.MeshStandardMaterial({ color: colour, roughness: 0.6, metalness: 0.1,
       transparent: !!b.fixed && !!b.shape, opacity: b.fixed && b.shape ? 0.55 : 1 });
     const add = (geom, at) => {
@@ -114,7 +119,8 @@
   // coupling), the rendered force as an arrow. Virtual devices also show the
   // mouse's target.
   const peak = Math.max(1e-3, ...S.devices.map((d) => d.peak_force_n || 0));
-  const arrowPerN = (size * 0.6) / peak;
+  // Arrows: half the mechanism's size for 5 N (or the peak, if lower).
+  const arrowPerN = (size * 0.5) / Math.min(peak, 5);
   const virtualDevices = S.devices.filter((d) => d.model === 'virtual').map((d) => d.name);
   const fingers = S.fingers.map((f, k) => {
     const c = FINGER[k % FINGER.length];
@@ -187,8 +193,11 @@
     const span = Math.max(box.getSize(new THREE.Vector3()).length(), size);
     const side = new THREE.Vector3(1, -1.6, 0).normalize();
     if (Math.abs(side.dot(up)) > 0.9) side.set(1, 0, 0);
-    camera.position.copy(c).add(side.multiplyScalar(1.6 * span)).add(up.clone().multiplyScalar(0.8 * span));
+    camera.position.copy(c).add(side.multiplyScalar(2.2 * span)).add(up.clone().multiplyScalar(1.1 * span));
     controls.target.copy(c);
+    camera.near = Math.min(size, span) / 100;
+    camera.far = Math.max(size, span) * 200;
+    camera.updateProjectionMatrix();
     controls.update();
   })();
 
@@ -410,7 +419,7 @@
       drawPlot(plots.violation, [{ t: st, v: D.series.violation, colour: '#1f77b4' }], ui.tMax, t);
       drawPlot(plots.penetration, [{ t: D.series.penetration.map((p) => p[0]), v: D.series.penetration.map((p) => p[1] * 1e3), colour: '#8c564b' }], ui.tMax, t);
     }
-    slider.addEventListener('input', () => { show(parseFloat(slider.value)); render(); });
+    slider.addEventListener('input', () => { show(parseFloat(slider.value)); dirty = true; });
     const toggle = () => { ui.playing = !ui.playing; if (ui.playing && ui.t >= ui.tMax) ui.t = 0; $('play').textContent = ui.playing ? '❚❚' : '▶'; };
     $('play').addEventListener('click', toggle);
     window.addEventListener('keydown', (e) => { if (e.code === 'Space') { e.preventDefault(); toggle(); } });
@@ -422,8 +431,9 @@
         let t = ui.t + dt * ui.speed;
         if (t >= ui.tMax) { t = ui.tMax; toggle(); }
         show(t);
+        dirty = true;
       }
-      render();
+      if (dirty) render();
       requestAnimationFrame(loop);
     }
     show(0);
@@ -431,11 +441,12 @@
   }
 
   function render() {
-    controls.update();
+    dirty = false;
     renderer.render(scene, camera);
     api.frames += 1;
     api.ready = true;
   }
+  window.addEventListener('resize', () => (dirty = true));
 
   // ---------------- live: a running session over a WebSocket ----------------
   function live() {
@@ -460,6 +471,7 @@
       targets[k] = p.clone();
       fingers[k].target.position.copy(p);
       fingers[k].target.visible = true;
+      dirty = true;
       if (ws && ws.readyState === 1) {
         ws.send(JSON.stringify({ type: 'pointer', device: fingers[k].info.device, target: p.toArray() }));
         api.sent = (api.sent || 0) + 1;
@@ -497,17 +509,32 @@
       drawPlot(plots.penetration, [{ t: rel, v: hist.pen, colour: '#8c564b' }], Math.max(m.t - t0, 1e-3), m.t - t0);
       api.time = m.t;
       api.lastFrame = m;
+      dirty = true;
     }
     // Dragging a virtual device's ball: the plane through it facing the
     // camera; the wheel moves the target along the view direction.
     const plane = new THREE.Plane();
     const el = renderer.domElement;
+    // The virtual device's ball nearest the pointer, within 14 px of its
+    // drawn centre (small balls are hard to hit exactly).
+    function grab(ev) {
+      let best = -1, bestD = 14;
+      fingers.forEach((F, k) => {
+        if (!F.isVirtual) return;
+        const [x, y] = api.screenOf(F.dev.position.toArray());
+        const d = Math.hypot(x - ev.clientX, y - ev.clientY);
+        if (d < bestD) { best = k; bestD = d; }
+      });
+      return best;
+    }
     el.addEventListener('pointerdown', (ev) => {
-      const hit = pick(ev, fingers.filter((f) => f.isVirtual).map((f) => f.dev));
-      if (!hit) return;
-      const k = hit.object.userData.finger;
+      const k = grab(ev);
+      if (k < 0) return;
+      pick(ev, []);
       selected = k;
+      $('tip').hidden = true;
       const start = (targets[k] || fingers[k].dev.position).clone();
+      api.dragStart = start.toArray();
       plane.setFromNormalAndCoplanarPoint(camera.getWorldDirection(new THREE.Vector3()), start);
       const at = new THREE.Vector3();
       ray.ray.intersectPlane(plane, at);
@@ -557,6 +584,6 @@
       ev.preventDefault();
       send(selected, (targets[selected] || fingers[selected].dev.position).clone().add(d.multiplyScalar(step)));
     });
-    (function loop() { render(); requestAnimationFrame(loop); })();
+    (function loop() { if (dirty) render(); requestAnimationFrame(loop); })();
   }
 })();
