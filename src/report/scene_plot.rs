@@ -233,7 +233,7 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
         for (step, &k) in picks.iter().enumerate() {
             let alpha = 0.15 + 0.6 * step as f64 / (INSTANTS - 1).max(1) as f64;
             for (b, o) in &shaped {
-                let h = hull(world(k, *b, o).iter().map(|v| project(v)).collect());
+                let h = hull(world(k, *b, o).iter().map(&project).collect());
                 let c = COLOURS[b % COLOURS.len()];
                 let mut closed = h.clone();
                 if let Some(f) = h.first() {

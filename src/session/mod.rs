@@ -377,7 +377,7 @@ fn fast_pointers(rig: &Rig, scene: &Scene) -> Vec<LivePointer> {
             p.as_ref().map(|p| LivePointer {
                 device: decl.name.clone(),
                 pointer: p.clone(),
-                mount: d.mount.clone(),
+                mount: d.mount,
             })
         })
         .collect()

@@ -30,7 +30,7 @@ fn a_virtual_device_comes_to_rest_where_its_pointer_spring_balances_the_force() 
     let clock = MockClock::new(Nanos(0));
     let mut b = session::build(&scene, &plan, clock.clone()).unwrap();
     let pointer = b.fast.rig().pointers[0].clone().unwrap();
-    let mount = b.fast.rig().devices[0].mount.clone();
+    let mount = b.fast.rig().devices[0].mount;
     let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
     let stop = StopFlag::new();
     let (mut worst_late, mut force_late) = (0.0f64, f64::INFINITY);

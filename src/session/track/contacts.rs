@@ -41,7 +41,7 @@ pub fn contact_points(manager: &ContactManager, out: &mut Vec<ContactPoint>) {
         };
         for w in set.witnesses(pair.bodies).iter().filter(|w| w.is_on()) {
             let (gap, point) = value_at(w, pa, pb);
-            if !(gap <= ACTIVE_GAP_M) {
+            if gap.is_nan() || gap > ACTIVE_GAP_M {
                 continue;
             }
             let Some(n) = normal(w, pa, pb) else { continue };
