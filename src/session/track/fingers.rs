@@ -106,13 +106,15 @@ mod tests {
                 });
             }
         }
-        assert_eq!(t.samples.len(), 10);
+        // Ticks at 1, 2, … 100 ms: the first at or after each 10 ms slot
+        // (1 ms, 10 ms, … 100 ms).
+        assert_eq!(t.samples.len(), 11);
         for (time, row) in t.samples.iter() {
             assert_eq!(row.len(), 2);
             let k = (time * 1e3).round() - 1.0;
             assert_eq!(row[1].device_m, [k, 1.0, 0.0]);
             assert_eq!(row[0].force_n[2], k * 0.1);
         }
-        assert_eq!(t.csv().lines().count(), 1 + 20);
+        assert_eq!(t.csv().lines().count(), 1 + 22);
     }
 }
