@@ -9,8 +9,11 @@
 //!  report ─► text reports, summary.json, percentile distributions, SVG plots
 //! ```
 //!
-//! Exit codes of the binary: 0 success; 1 a runtime error or an invalid scene
-//! (printed with file:line:column or the cause chain); 2 a usage error.
+//! Exit codes of the binary (README, "Exit status"): 0 success; 1 a runtime
+//! error or an invalid scene (printed with file:line:column or the cause
+//! chain); 2 a usage error; 3 a run that finished with failed ticks or a
+//! replay that diverged (or a `check` whose preflight warns); 130 stopped by
+//! a signal.
 
 pub mod cli;
 pub mod report;

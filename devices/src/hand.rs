@@ -139,6 +139,44 @@ impl Trajectory {
         }
     }
 
+    /// The smallest and largest offset, per axis, the target reaches over
+    /// the first `duration` of a session: exact at the samples of a trace and
+    /// the ends of a line, within 1e-5 of the radius for a circle (sampled
+    /// every half degree). Not for the real-time thread.
+    pub fn extent(&self, duration: Duration) -> (Vector3<f64>, Vector3<f64>) {
+        let t_end = duration.as_secs_f64();
+        let mut lo = Vector3::zeros();
+        let mut hi = Vector3::zeros();
+        let mut take = |o: Vector3<f64>| {
+            lo = lo.inf(&o);
+            hi = hi.sup(&o);
+        };
+        match self {
+            Trajectory::Still => {}
+            Trajectory::Line { .. } => take(self.sample_s(t_end).offset_m),
+            Trajectory::Circle { frequency_hz, .. } => {
+                let span = if *frequency_hz > 0.0 {
+                    t_end.min(1.0 / frequency_hz)
+                } else {
+                    0.0
+                };
+                for k in 0..=720 {
+                    take(self.sample_s(span * f64::from(k) / 720.0).offset_m);
+                }
+            }
+            Trajectory::Trace(trace) => {
+                for (t, o) in trace.points() {
+                    if t > t_end {
+                        break;
+                    }
+                    take(o);
+                }
+                take(trace.sample_s(t_end).offset_m);
+            }
+        }
+        (lo, hi)
+    }
+
     /// The same path with every offset mapped by the linear map `f` (used to
     /// change frame and scale).
     pub fn map_offsets(&self, f: impl Fn(Vector3<f64>) -> Vector3<f64>) -> Trajectory {

@@ -10,12 +10,13 @@
 //! Blank lines and lines starting with `#` are ignored. Times must be finite,
 //! ≥ 0 and strictly increasing; every error names the file and the line.
 
+use std::io::BufRead;
 use std::path::Path;
 use std::time::Duration;
 
 use nalgebra::Vector3;
 
-use crate::error::TraceError;
+use crate::error::{TraceError, check_not_truncated, next_line, open_limited, quote};
 use crate::hand::TargetSample;
 
 /// A recorded hand path (offsets from the anchor). Setup-time type: parsing
@@ -39,11 +40,22 @@ impl HandTrace {
 
     /// Parses CSV text; `source_name` (usually the file path) labels errors.
     pub fn parse(text: &str, source_name: &str) -> Result<Self, TraceError> {
+        Self::parse_from(&mut text.as_bytes(), source_name)
+    }
+
+    /// Parses CSV line by line from `reader` (at most
+    /// [`MAX_HAND_SAMPLES`] samples); `source_name` labels errors.
+    pub fn parse_from(reader: &mut impl BufRead, source_name: &str) -> Result<Self, TraceError> {
         let mut times_s = Vec::new();
         let mut offsets_m = Vec::new();
         let mut header_seen = false;
-        for (i, raw) in text.lines().enumerate() {
-            let line_no = i + 1;
+        let (mut bytes, mut raw) = (Vec::new(), String::new());
+        let mut line_no = 0;
+        loop {
+            line_no += 1;
+            if !next_line(reader, &mut bytes, &mut raw, source_name, line_no)? {
+                break;
+            }
             let line = raw.trim();
             if line.is_empty() || line.starts_with('#') {
                 continue;
@@ -54,50 +66,23 @@ impl HandTrace {
                     return Err(TraceError::parse(
                         source_name,
                         line_no,
-                        format!("expected header `t,dx,dy,dz`, found `{line}`"),
+                        format!("expected header `t,dx,dy,dz`, found `{}`", quote(line)),
                     ));
                 }
                 header_seen = true;
                 continue;
             }
-            let mut vals = [0.0f64; 4];
-            let mut n = 0;
-            for (k, field) in line.split(',').enumerate() {
-                if k >= 4 {
-                    return Err(TraceError::parse(
-                        source_name,
-                        line_no,
-                        format!("expected 4 columns, found more in `{line}`"),
-                    ));
-                }
-                let f = field.trim();
-                vals[k] = f.parse::<f64>().map_err(|_| {
-                    TraceError::parse(
-                        source_name,
-                        line_no,
-                        format!(
-                            "column {} (`{}`): `{f}` is not a number",
-                            k + 1,
-                            ["t", "dx", "dy", "dz"][k]
-                        ),
-                    )
-                })?;
-                if !vals[k].is_finite() {
-                    return Err(TraceError::parse(
-                        source_name,
-                        line_no,
-                        format!("column {}: `{f}` is not finite", k + 1),
-                    ));
-                }
-                n += 1;
-            }
-            if n != 4 {
+            if times_s.len() >= MAX_HAND_SAMPLES {
                 return Err(TraceError::parse(
                     source_name,
                     line_no,
-                    format!("expected 4 columns, found {n} in `{line}`"),
+                    format!(
+                        "more than {MAX_HAND_SAMPLES} samples: a hand trace holds at most that many"
+                    ),
                 ));
             }
+            let vals =
+                parse_sample(line).map_err(|m| TraceError::parse(source_name, line_no, m))?;
             if vals[0] < 0.0 {
                 return Err(TraceError::parse(
                     source_name,
@@ -127,16 +112,21 @@ impl HandTrace {
         if times_s.is_empty() {
             return Err(TraceError::parse(
                 source_name,
-                text.lines().count().max(1),
+                (line_no - 1).max(1),
                 "hand trace has a header but no samples",
             ));
         }
         Ok(Self { times_s, offsets_m })
     }
 
-    /// Reads and parses a CSV file.
+    /// Reads and parses a CSV file of at most [`MAX_HAND_TRACE_BYTES`],
+    /// streaming.
     pub fn load(path: &Path) -> Result<Self, TraceError> {
-        Self::parse(&TraceError::read(path)?, &path.display().to_string())
+        const WHAT: &str = "a hand trace";
+        let mut reader = open_limited(path, WHAT, MAX_HAND_TRACE_BYTES)?;
+        let parsed = Self::parse_from(&mut reader, &path.display().to_string());
+        check_not_truncated(path, WHAT, MAX_HAND_TRACE_BYTES, reader.limit())?;
+        parsed
     }
 
     /// Number of samples.
@@ -147,6 +137,14 @@ impl HandTrace {
     /// Always false: a parsed trace has at least one sample.
     pub fn is_empty(&self) -> bool {
         self.times_s.is_empty()
+    }
+
+    /// The samples, (time s, offset m), in time order.
+    pub fn points(&self) -> impl Iterator<Item = (f64, Vector3<f64>)> + '_ {
+        self.times_s
+            .iter()
+            .copied()
+            .zip(self.offsets_m.iter().copied())
     }
 
     /// Offset and velocity at session time `t`.
@@ -189,6 +187,46 @@ impl HandTrace {
             offsets_m: self.offsets_m.iter().map(|o| f(*o)).collect(),
         }
     }
+}
+
+/// Largest hand-trace file [`HandTrace::load`] reads: 64 MiB.
+pub const MAX_HAND_TRACE_BYTES: u64 = 64 << 20;
+/// Most samples a hand trace may hold: 2²⁰ = 1 048 576 (17 minutes at
+/// 1 kHz; 32 bytes each in memory).
+pub const MAX_HAND_SAMPLES: usize = 1 << 20;
+
+/// One `t,dx,dy,dz` line: four finite numbers.
+fn parse_sample(line: &str) -> Result<[f64; 4], String> {
+    let mut vals = [0.0f64; 4];
+    let mut n = 0;
+    for (k, field) in line.split(',').enumerate() {
+        if k >= 4 {
+            return Err(format!(
+                "expected 4 columns, found more in `{}`",
+                quote(line)
+            ));
+        }
+        let f = field.trim();
+        vals[k] = f.parse::<f64>().map_err(|_| {
+            format!(
+                "column {} (`{}`): `{}` is not a number",
+                k + 1,
+                ["t", "dx", "dy", "dz"][k],
+                quote(f)
+            )
+        })?;
+        if !vals[k].is_finite() {
+            return Err(format!("column {}: `{}` is not finite", k + 1, quote(f)));
+        }
+        n += 1;
+    }
+    if n != 4 {
+        return Err(format!(
+            "expected 4 columns, found {n} in `{}`",
+            quote(line)
+        ));
+    }
+    Ok(vals)
 }
 
 #[cfg(test)]

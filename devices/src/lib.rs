@@ -43,6 +43,7 @@ pub mod replay;
 pub mod rig;
 pub mod safety;
 pub mod trace;
+mod trace_read;
 pub mod virtual_device;
 
 pub use device::{
@@ -52,15 +53,20 @@ pub use device::{
 pub use error::{DeviceError, TraceError};
 pub use fault::{FaultKind, FaultSchedule, InjectedFault};
 pub use hand::{Grip, Hand, TargetSample, Trajectory};
-pub use hand_trace::HandTrace;
+pub use hand_trace::{HandTrace, MAX_HAND_SAMPLES, MAX_HAND_TRACE_BYTES};
 pub use mount::Mount;
-pub use phantom::{KNOWN_MODELS, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom};
+pub use phantom::{
+    KNOWN_MODELS, MotorDrive, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom,
+};
 pub use pointer::{POINTER_RANGE_M, POINTER_RESOLUTION_M, Pointer};
-pub use replay::ReplayDevice;
+pub use replay::{ReplayCheck, ReplayDevice};
 pub use rig::{DynDevice, MountedDevice, SceneReading};
 pub use safety::{
     CutReason, CutRecord, FaultRecord, Health, SafeDevice, SafetyConfig, SafetyCounters,
     SafetyEvent, WriteOutcome,
 };
-pub use trace::{Trace, TraceHeader, TraceRecorder, TraceRow, TraceStream};
+pub use trace::{
+    MAX_COMMAND_N, MAX_TRACE_BYTES, MAX_TRACE_ROWS, Trace, TraceHeader, TraceRecorder, TraceRow,
+    TraceStream,
+};
 pub use virtual_device::{VIRTUAL_MODEL, VirtualDevice, VirtualParams};

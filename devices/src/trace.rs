@@ -27,9 +27,12 @@
 //!
 //! The row at t = 0 is the reading the device was registered with. Floats are
 //! written with Rust's shortest round-trip formatting, so parsing a file gives
-//! back the recorded `f64` values bit for bit (NaN is written `NaN`). Lines
-//! `# key: value` may appear anywhere; `scene`, `model` and `rate_hz` are
-//! required, times must increase strictly.
+//! back the recorded `f64` values bit for bit. Lines `# key: value` may appear
+//! anywhere; `scene`, `model` and `rate_hz` are required, `model` and
+//! `rate_hz` before the column names. Reading back checks every value
+//! ([`Trace::parse_from`]): times are whole periods and increase strictly,
+//! every number is finite and in range; a file is read streaming, at most
+//! [`MAX_TRACE_BYTES`] and [`MAX_TRACE_ROWS`] rows (`trace_read.rs`).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -44,12 +47,13 @@ use nalgebra::Vector3;
 
 use crate::device::ARM_JOINTS;
 use crate::error::TraceError;
+pub use crate::trace_read::{MAX_COMMAND_N, MAX_TRACE_BYTES, MAX_TRACE_ROWS};
 
-const MAGIC: &str = "# haptloop-trace v2";
-const COLUMNS: &str =
+pub(crate) const MAGIC: &str = "# haptloop-trace v2";
+pub(crate) const COLUMNS: &str =
     "t_ns,c0,c1,c2,cmd_x,cmd_y,cmd_z,out_x,out_y,out_z,hand_x,hand_y,hand_z,qw,qx,qy,qz";
 /// Fields per row.
-const FIELDS: usize = 17;
+pub(crate) const FIELDS: usize = 17;
 
 /// Header of a trace.
 #[derive(Debug, Clone, PartialEq)]
@@ -213,10 +217,7 @@ impl TraceStream {
         let mut name = path.file_name().unwrap_or_default().to_os_string();
         name.push(".partial");
         let partial = path.with_file_name(name);
-        let io = |source| TraceError::Io {
-            path: partial.clone(),
-            source,
-        };
+        let io = |source| TraceError::io(&partial, "write", source);
         let mut w = BufWriter::new(File::create(&partial).map_err(io)?);
         write_header(&mut w, &self.header).map_err(io)?;
         self.file = Some((w, partial, path.to_owned()));
@@ -228,10 +229,7 @@ impl TraceStream {
         let mut n = 0;
         while let Some(row) = self.queue.rows.pop() {
             if let Some((w, partial, _)) = &mut self.file {
-                write_row(w, &row).map_err(|source| TraceError::Io {
-                    path: partial.clone(),
-                    source,
-                })?;
+                write_row(w, &row).map_err(|source| TraceError::io(partial, "write", source))?;
             }
             n += 1;
         }
@@ -255,17 +253,12 @@ impl TraceStream {
         self.drain()?;
         let dropped = self.dropped();
         if let Some((mut w, partial, path)) = self.file.take() {
-            let io = |source| TraceError::Io {
-                path: partial.clone(),
-                source,
-            };
+            let io = |source| TraceError::io(&partial, "write", source);
             writeln!(w, "# dropped_rows: {dropped}").map_err(io)?;
             w.flush().map_err(io)?;
             drop(w);
-            std::fs::rename(&partial, &path).map_err(|source| TraceError::Io {
-                path: path.clone(),
-                source,
-            })?;
+            std::fs::rename(&partial, &path)
+                .map_err(|source| TraceError::io(&path, "write", source))?;
         }
         Ok(dropped)
     }
@@ -354,128 +347,12 @@ impl Trace {
 
     /// Writes the trace to `path`.
     pub fn save(&self, path: &Path) -> Result<(), TraceError> {
-        let io = |source| TraceError::Io {
-            path: path.to_owned(),
-            source,
-        };
+        let io = |source| TraceError::io(path, "write", source);
         let file = std::fs::File::create(path).map_err(io)?;
         let mut w = std::io::BufWriter::new(file);
         self.write_to(&mut w)?;
         w.flush().map_err(io)
     }
-
-    /// Reads a trace file.
-    pub fn load(path: &Path) -> Result<Self, TraceError> {
-        Self::parse(&TraceError::read(path)?, &path.display().to_string())
-    }
-
-    /// Parses the text format; `source_name` labels errors.
-    pub fn parse(text: &str, source_name: &str) -> Result<Self, TraceError> {
-        let err = |line: usize, msg: String| TraceError::parse(source_name, line, msg);
-        let mut lines = text.lines().enumerate();
-        match lines.next() {
-            Some((_, l)) if l.trim() == MAGIC => {}
-            Some((_, l)) => return Err(err(1, format!("expected `{MAGIC}`, found `{l}`"))),
-            None => return Err(err(1, "empty file".into())),
-        }
-        let (mut scene, mut model, mut rate_hz, mut dropped) = (None, None, None, 0u64);
-        let mut rows = Vec::new();
-        let mut columns_seen = false;
-        for (i, raw) in lines {
-            let (n, line) = (i + 1, raw.trim());
-            if line.is_empty() {
-                continue;
-            }
-            if let Some(meta) = line.strip_prefix('#') {
-                if let Some((k, v)) = meta.split_once(':') {
-                    let v = v.trim();
-                    match k.trim() {
-                        "scene" => scene = Some(v.to_owned()),
-                        "model" => model = Some(v.to_owned()),
-                        "rate_hz" => {
-                            rate_hz = Some(v.parse::<u32>().map_err(|_| {
-                                err(n, format!("rate_hz `{v}` is not a positive integer"))
-                            })?)
-                        }
-                        "dropped_rows" => {
-                            dropped = v.parse().map_err(|_| {
-                                err(n, format!("dropped_rows `{v}` is not an integer"))
-                            })?
-                        }
-                        _ => {}
-                    }
-                }
-                continue;
-            }
-            if !columns_seen {
-                if line != COLUMNS {
-                    return Err(err(n, format!("expected column header `{COLUMNS}`")));
-                }
-                columns_seen = true;
-                continue;
-            }
-            let row = parse_row(line).map_err(|m| err(n, m))?;
-            if let Some(last) = rows.last().map(|r: &TraceRow| r.time)
-                && row.time <= last
-            {
-                return Err(err(
-                    n,
-                    format!(
-                        "t_ns {} does not follow the previous row's {}: times must increase",
-                        row.time.as_nanos(),
-                        last.as_nanos()
-                    ),
-                ));
-            }
-            rows.push(row);
-        }
-        let scene = scene.ok_or_else(|| err(1, "header has no `# scene:` line".into()))?;
-        let model = model.ok_or_else(|| err(1, "header has no `# model:` line".into()))?;
-        let rate_hz = rate_hz.ok_or_else(|| err(1, "header has no `# rate_hz:` line".into()))?;
-        Ok(Self {
-            header: TraceHeader {
-                scene,
-                model,
-                rate_hz,
-            },
-            rows,
-            dropped,
-        })
-    }
-}
-
-fn parse_row(line: &str) -> Result<TraceRow, String> {
-    let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-    if fields.len() != FIELDS {
-        return Err(format!("expected {FIELDS} columns, found {}", fields.len()));
-    }
-    let int = |k: usize| {
-        fields[k]
-            .parse::<i64>()
-            .map_err(|_| format!("column {} `{}` is not an integer", k + 1, fields[k]))
-    };
-    let float = |k: usize| {
-        fields[k]
-            .parse::<f64>()
-            .map_err(|_| format!("column {} `{}` is not a number", k + 1, fields[k]))
-    };
-    let t_ns = fields[0]
-        .parse::<u64>()
-        .map_err(|_| format!("t_ns `{}` is not a non-negative integer", fields[0]))?;
-    let count = |k: usize| {
-        int(k).and_then(|v| i32::try_from(v).map_err(|_| format!("count `{v}` out of range")))
-    };
-    let vec3 = |k: usize| -> Result<Vector3<f64>, String> {
-        Ok(Vector3::new(float(k)?, float(k + 1)?, float(k + 2)?))
-    };
-    Ok(TraceRow {
-        time: Duration::from_nanos(t_ns),
-        counts: [count(1)?, count(2)?, count(3)?],
-        command_n_device: vec3(4)?,
-        output_n_device: vec3(7)?,
-        hand_offset_m_device: vec3(10)?,
-        orientation_wxyz: [float(13)?, float(14)?, float(15)?, float(16)?],
-    })
 }
 
 #[cfg(test)]
@@ -486,10 +363,10 @@ mod tests {
         TraceRow {
             time: Duration::from_millis(k),
             counts: [k as i32, -(k as i32), 7],
-            command_n_device: Vector3::new(0.1 * k as f64, 1.0 / 3.0, f64::NAN),
+            command_n_device: Vector3::new(0.1 * k as f64, 1.0 / 3.0, -7.25e4),
             output_n_device: Vector3::new(-1e-300, 2.5, 0.0),
             hand_offset_m_device: Vector3::new(std::f64::consts::PI * 1e-3, 0.0, -0.0),
-            orientation_wxyz: [0.5, -0.5, 0.5, 1.0 / 3.0],
+            orientation_wxyz: [0.5, -0.5, 0.5, -0.5],
         }
     }
 
@@ -546,14 +423,65 @@ mod tests {
             e.starts_with("x.trace:1: expected `# haptloop-trace v2`"),
             "{e}"
         );
-        let e = Trace::parse(&format!("{MAGIC}\n# rate_hz: 1000\n{COLUMNS}\n"), "x.trace")
-            .unwrap_err()
-            .to_string();
+        let e = Trace::parse(
+            &format!("{MAGIC}\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n"),
+            "x.trace",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("no `# scene:`"), "{e}");
         let row = |t: u64| format!("{t},0,0,0,0,0,0,0,0,0,0,0,0,1,0,0,0\n");
-        let e = Trace::parse(&format!("{head}{}{}{}", row(0), row(2), row(1)), "x.trace")
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("x.trace:8: t_ns 1 does not follow"), "{e}");
+        let e = Trace::parse(
+            &format!("{head}{}{}{}", row(0), row(2_000_000), row(1_000_000)),
+            "x.trace",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("x.trace:8: t_ns 1000000 does not follow"),
+            "{e}"
+        );
+    }
+
+    /// Every value read back is checked, each refusal names the line and
+    /// what is wrong; a binary line is quoted clipped, never whole.
+    #[test]
+    fn every_value_read_back_is_checked() {
+        let head =
+            format!("{MAGIC}\n# scene: s\n# model: phantom-omni\n# rate_hz: 1000\n{COLUMNS}\n");
+        let good = "1000000,0,-3,2,0,-1.25,0,0,-0.5,0,0,-0.005,0,1,0,0,0";
+        assert!(Trace::parse(&format!("{head}{good}\n"), "x.trace").is_ok());
+        let field = |k: usize, v: &str| {
+            let mut f: Vec<&str> = good.split(',').collect();
+            f[k] = v;
+            f.join(",")
+        };
+        let cases = [
+            (field(4, "NaN"), "column 5 (`cmd_x`) is NaN"),
+            (field(5, "inf"), "column 6 (`cmd_y`) is inf"),
+            (field(6, "1e308"), "above 1e6 N"),
+            (field(8, "5.0"), "above the phantom-omni's peak of 3.3 N"),
+            (field(9, "-inf"), "column 10 (`out_z`) is -inf"),
+            (field(11, "NaN"), "column 12 (`hand_y`) is NaN"),
+            (field(13, "2"), "norm 2, not 1"),
+            (field(2, "9000"), "more than half a turn"),
+            (field(0, "1000001"), "not a whole number of periods"),
+        ];
+        for (row, want) in cases {
+            let e = Trace::parse(&format!("{head}{row}\n"), "x.trace")
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("x.trace:6: ") && e.contains(want), "{e}");
+        }
+        let binary = format!("{MAGIC}\n{}\n", "\u{1}x".repeat(100_000));
+        let e = Trace::parse(&binary, "b.trace").unwrap_err().to_string();
+        assert!(
+            e.starts_with("b.trace:2: the line is longer than 4096 bytes"),
+            "{e}"
+        );
+        assert!(e.len() < 400, "{} characters", e.len());
+        let late = format!("{MAGIC}\n# scene: s\n{COLUMNS}\n# model: phantom-omni\n");
+        let e = Trace::parse(&late, "x.trace").unwrap_err().to_string();
+        assert!(e.starts_with("x.trace:3: the header must give"), "{e}");
     }
 }

@@ -138,6 +138,27 @@ impl VirtualParams {
         }
     }
 
+    /// What the device applies for a commanded force: the force clamped to
+    /// the peak (direction kept), nothing for a non-finite one. A replay of
+    /// a virtual device's trace applies the same.
+    pub fn applied(&self, force_n_device: Vector3<f64>) -> MotorReport {
+        if !force_n_device.iter().all(|v| v.is_finite()) {
+            return MotorReport::off();
+        }
+        let norm = force_n_device.norm();
+        let saturated = norm > self.peak_force_n;
+        MotorReport {
+            force_n_device: if saturated {
+                force_n_device * (self.peak_force_n / norm)
+            } else {
+                force_n_device
+            },
+            torque_nm: Vector3::zeros(),
+            thermal_limited: false,
+            saturated,
+        }
+    }
+
     fn validate(&self) -> Result<(), DeviceError> {
         let positive = [
             ("mass_kg", self.mass_kg),
@@ -313,24 +334,9 @@ impl Device for VirtualDevice {
         now: Duration,
     ) -> Result<MotorReport, DeviceFault> {
         self.advance_to(now);
-        if !force_n_device.iter().all(|v| v.is_finite()) {
-            self.force = Vector3::zeros();
-            return Ok(MotorReport::off());
-        }
-        let peak = self.params.peak_force_n;
-        let norm = force_n_device.norm();
-        let saturated = norm > peak;
-        self.force = if saturated {
-            force_n_device * (peak / norm)
-        } else {
-            force_n_device
-        };
-        Ok(MotorReport {
-            force_n_device: self.force,
-            torque_nm: Vector3::zeros(),
-            thermal_limited: false,
-            saturated,
-        })
+        let r = self.params.applied(force_n_device);
+        self.force = r.force_n_device;
+        Ok(r)
     }
 
     fn motors_off(&mut self, now: Duration) {

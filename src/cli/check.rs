@@ -10,11 +10,21 @@ use haptloop_solver::{Grasp, RowUnit, Sense};
 use std::collections::BTreeMap;
 use std::process::ExitCode;
 
-/// Validates `arg` (a file or built-in name) and builds everything `run`
+pub use super::preflight::DEFAULT_TRIAL_SECONDS;
+
+/// Exit status of a scene that is valid but whose preflight found what
+/// `run` will meet (warnings printed, each at the field to change; notes
+/// alone leave the status 0).
+pub const EXIT_FINDINGS: u8 = 3;
+
+/// Validates `arg` (a file or built-in name), builds everything `run`
 /// builds before its clock starts (fast-loop program with its gain check and
-/// symbolic factorisation, placement analysis, assembly, devices). Prints the
-/// compiled summary and exits 0, or prints the located error and exits 1.
-pub fn run(arg: &str) -> Result<ExitCode> {
+/// symbolic factorisation, placement analysis, assembly, devices) and runs
+/// the preflight (`super::preflight`: the assembly, the hand's path against
+/// the workspace, a `trial_seconds` deterministic trial). Prints the
+/// compiled summary and the findings: exit 0 without a warning, 3 with
+/// one; the located error and exit 1 when the scene cannot run.
+pub fn run(arg: &str, trial_seconds: f64) -> Result<ExitCode> {
     let scene = match resolve(arg) {
         Ok(scene) => scene,
         Err(e) => {
@@ -27,7 +37,40 @@ pub fn run(arg: &str) -> Result<ExitCode> {
         return Ok(ExitCode::from(1));
     }
     super::emit(summary(&scene).trim_end_matches('\n'));
-    Ok(ExitCode::SUCCESS)
+    let findings = match super::preflight::findings(&scene, trial_seconds) {
+        Ok(f) => f,
+        Err(e) => {
+            let l = &scene.loaded;
+            eprintln!(
+                "{}",
+                l.error_at(
+                    l.spec.scene.name.span(),
+                    format!("the scene loads but its trial run failed: {e:#}")
+                )
+            );
+            return Ok(ExitCode::from(1));
+        }
+    };
+    let warnings = findings.iter().filter(|f| f.warning).count();
+    let notes = findings.len() - warnings;
+    if findings.is_empty() {
+        super::emit(&format!(
+            "  preflight    assembly, hand paths within the workspace, a {trial_seconds} s trial: nothing found"
+        ));
+        return Ok(ExitCode::SUCCESS);
+    }
+    super::emit(&format!(
+        "  preflight    {warnings} warning{}, {notes} note{} (assembly, hand paths, a {trial_seconds} s trial):",
+        if warnings == 1 { "" } else { "s" },
+        if notes == 1 { "" } else { "s" }
+    ));
+    for f in &findings {
+        eprintln!("{}", f.error);
+    }
+    if warnings == 0 {
+        return Ok(ExitCode::SUCCESS);
+    }
+    Ok(ExitCode::from(EXIT_FINDINGS))
 }
 
 /// Builds what `run` builds for `scene` at its own settings, and turns a
@@ -43,9 +86,22 @@ pub fn builds(scene: &Scene) -> std::result::Result<(), SceneError> {
         .and_then(|plan| session::build(scene, &plan, MockClock::new(Nanos(0))).map(|_| ()));
     built.map_err(|e| {
         let l = &scene.loaded;
-        let span = match l.text.find("[solver]") {
-            Some(at) => at..at + 1,
-            None => l.spec.scene.name.span(),
+        // Bodies that start inside each other: at the second body's
+        // `position` (else its name).
+        let overlap = e
+            .chain()
+            .find_map(|c| c.downcast_ref::<session::Interpenetration>());
+        let body = overlap.and_then(|o| {
+            l.spec
+                .bodies
+                .iter()
+                .find(|b| *b.name.get_ref() == o.bodies[1])
+                .map(|b| b.position.as_ref().map_or(b.name.span(), |p| p.span()))
+        });
+        let span = match (body, l.text.find("[solver]")) {
+            (Some(span), _) => span,
+            (None, Some(at)) => at..at + 1,
+            (None, None) => l.spec.scene.name.span(),
         };
         l.error_at(span, format!("the scene loads but cannot run: {e:#}"))
     })

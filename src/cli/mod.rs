@@ -4,17 +4,21 @@
 mod bench;
 mod check;
 mod output;
+mod preflight;
 mod probe;
 mod rt_args;
 mod run;
 mod scenes;
+mod signals;
 mod sweep;
 mod values;
 mod view;
 
+pub use run::EXIT_FAILED_TICKS;
+pub use signals::EXIT_SIGNAL;
+
 use anyhow::Result;
 use clap::{CommandFactory, Parser, Subcommand};
-use haptloop_rt::schedule::StopFlag;
 use std::process::ExitCode;
 
 /// Writes `text` and a newline to stdout. A closed stdout (`haptloop run |
@@ -94,10 +98,18 @@ enum Command {
     /// Validate a scene file (or built-in name) and print what it compiles to.
     ///
     /// Errors name the file, line and column and what was expected; the exit
-    /// status is 1 when the scene is invalid.
+    /// status is 1 when the scene is invalid. Then a preflight tries what
+    /// `run` will meet (the assembly, the hand's path against the device's
+    /// workspace, a short deterministic trial: failed ticks, forces above the
+    /// device's peak or continuous rating) and prints each finding at the
+    /// field to change; the exit status is 3 when it found any.
     Check {
         /// A scene file path or a built-in scene name.
         scene: String,
+        /// Length of the preflight's deterministic trial of the session, s,
+        /// (0, 86400].
+        #[arg(long, default_value_t = check::DEFAULT_TRIAL_SECONDS, value_parser = values::seconds)]
+        seconds: f64,
     },
 }
 
@@ -114,11 +126,11 @@ pub fn run() -> Result<ExitCode> {
             .error(clap::error::ErrorKind::InvalidValue, msg)
             .exit();
     }
-    let stop = install_ctrl_c()?;
+    let stop = signals::install()?;
     match cli.command {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
         Some(Command::Scenes) => scenes::run(),
-        Some(Command::Check { scene }) => check::run(&scene),
+        Some(Command::Check { scene, seconds }) => check::run(&scene, seconds),
         Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
@@ -128,25 +140,9 @@ pub fn run() -> Result<ExitCode> {
     }
 }
 
-/// First Ctrl-C, SIGTERM or SIGHUP: ask the fast loop to stop at its next tick
-/// boundary (motors off, reports and files still written). A second one: exit
-/// at once with status 130. While a session is still being built (no loop
-/// runs, no device has been driven) the first one exits at once with status
-/// 130 and gives back the output directory it had claimed.
-fn install_ctrl_c() -> Result<StopFlag> {
-    let stop = StopFlag::new();
-    let flag = stop.clone();
-    ctrlc::set_handler(move || {
-        if !crate::session::loops_running() {
-            eprintln!("\nhaptloop: interrupted before the session started");
-            output::abandon_claim();
-            std::process::exit(130);
-        }
-        if flag.is_requested() {
-            std::process::exit(130);
-        }
-        eprintln!("\nhaptloop: stopping at the next tick boundary (signal again to abort)");
-        flag.request();
-    })?;
-    Ok(stop)
+/// Prints a usage error about a flag (`haptloop: error: …`) and gives the
+/// usage-error exit status, 2.
+pub(crate) fn usage_error(message: &str) -> ExitCode {
+    eprintln!("haptloop: error: {message}");
+    ExitCode::from(2)
 }

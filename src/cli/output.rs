@@ -10,33 +10,46 @@ use std::path::{Path, PathBuf};
 /// Name of the lock file a run keeps in its output directory while it runs.
 pub const LOCK_NAME: &str = ".haptloop-run.lock";
 
-/// The directory this process has claimed and not yet released, so a signal
-/// that ends the process before the run starts can give it back.
-static CLAIMED: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+/// The directory this process has claimed and not yet released, and
+/// whether the claim created it, so a signal that ends the process can give
+/// it back.
+static CLAIMED: std::sync::Mutex<Option<(PathBuf, bool)>> = std::sync::Mutex::new(None);
 
-/// Gives back the claimed directory of a run that never started: removes its
-/// lock and its unfinished `.partial` files, then the directory if nothing
-/// else is in it. For the signal handler.
+/// Gives back the claimed directory of a run that ends without releasing
+/// it: removes its lock and its unfinished `.partial` files, then the
+/// directory if the claim created it and nothing else is in it. For the
+/// signal handler; a [`RunDir`] that is dropped unreleased does the same.
 pub fn abandon_claim() {
-    let dir = CLAIMED.lock().ok().and_then(|mut c| c.take());
-    if let Some(dir) = dir {
-        let _ = fs::remove_file(dir.join(LOCK_NAME));
-        if let Ok(entries) = fs::read_dir(&dir) {
-            for e in entries.flatten() {
-                if e.file_name().to_string_lossy().ends_with(".partial") {
-                    let _ = fs::remove_file(e.path());
-                }
+    let claimed = CLAIMED.lock().ok().and_then(|mut c| c.take());
+    if let Some((dir, created)) = claimed {
+        give_back(&dir, created);
+    }
+}
+
+fn give_back(dir: &Path, created: bool) {
+    if let Ok(entries) = fs::read_dir(dir) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().ends_with(".partial") {
+                let _ = fs::remove_file(e.path());
             }
         }
-        let _ = fs::remove_dir(&dir); // only succeeds when empty
+    }
+    let _ = fs::remove_file(dir.join(LOCK_NAME));
+    if created {
+        let _ = fs::remove_dir(dir); // only succeeds when empty
     }
 }
 
 /// An output directory claimed by this run: it was empty (or new) and holds
-/// this run's lock file until [`RunDir::release`].
+/// this run's lock file until [`RunDir::release`]. Dropped without a release
+/// (an error, an abort), it is given back: lock and unfinished files
+/// removed, the directory too if the claim created it and it is empty, so
+/// the next run can use it.
 #[derive(Debug)]
 pub struct RunDir {
     dir: PathBuf,
+    created: bool,
+    released: bool,
 }
 
 impl RunDir {
@@ -45,6 +58,7 @@ impl RunDir {
     /// lock with an exclusive create, so two runs started together cannot both
     /// claim it.
     pub fn claim(dir: &Path) -> Result<RunDir> {
+        let created = !dir.exists();
         fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let mut entries =
             fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
@@ -62,10 +76,12 @@ impl RunDir {
             .open(dir.join(LOCK_NAME))
             .with_context(|| format!("--out {}: another run claimed it first", dir.display()))?;
         if let Ok(mut c) = CLAIMED.lock() {
-            *c = Some(dir.to_path_buf());
+            *c = Some((dir.to_path_buf(), created));
         }
         Ok(RunDir {
             dir: dir.to_path_buf(),
+            created,
+            released: false,
         })
     }
 
@@ -90,12 +106,24 @@ impl RunDir {
     }
 
     /// Removes the lock: the run is complete.
-    pub fn release(self) -> Result<()> {
+    pub fn release(mut self) -> Result<()> {
         if let Ok(mut c) = CLAIMED.lock() {
             c.take();
         }
+        self.released = true;
         let lock = self.dir.join(LOCK_NAME);
         fs::remove_file(&lock).with_context(|| format!("removing {}", lock.display()))
+    }
+}
+
+impl Drop for RunDir {
+    fn drop(&mut self) {
+        if !self.released {
+            if let Ok(mut c) = CLAIMED.lock() {
+                c.take();
+            }
+            give_back(&self.dir, self.created);
+        }
     }
 }
 
@@ -154,6 +182,33 @@ mod tests {
         assert!(RunDir::claim(&dir).is_err());
         let fresh = RunDir::claim_fresh(&dir).unwrap();
         assert_eq!(fresh.path(), tmp.path().join("run-2"));
+    }
+
+    /// A claim dropped without a release (an error after the claim) gives
+    /// the directory back: no lock, no `.partial` file, and a directory the
+    /// claim created is gone; one that existed stays, empty, and can be
+    /// claimed again.
+    #[test]
+    fn an_unreleased_claim_is_given_back() {
+        let tmp = tempfile::tempdir().unwrap();
+        let new = tmp.path().join("new");
+        {
+            let d = RunDir::claim(&new).unwrap();
+            fs::write(d.path().join("trace.csv.partial"), b"").unwrap();
+        }
+        assert!(!new.exists());
+        let old = tmp.path().join("old");
+        fs::create_dir(&old).unwrap();
+        {
+            let d = RunDir::claim(&old).unwrap();
+            write_atomic(&d.path().join("summary.json"), b"{}").unwrap();
+            fs::write(d.path().join("force.svg.partial"), b"").unwrap();
+        }
+        let left: Vec<_> = fs::read_dir(&old)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, ["summary.json"]);
     }
 
     #[test]

@@ -74,6 +74,9 @@ impl ProbeArgs {
 
 /// Runs the probe and prints (and optionally writes) its report.
 pub fn run(args: &ProbeArgs, stop: &StopFlag) -> Result<ExitCode> {
+    if let Err(msg) = args.rt.check_spin(args.rate) {
+        return Ok(super::usage_error(&msg));
+    }
     let config = args.to_config()?;
     // Fail now, not after the whole probe, if the outputs cannot be written.
     if let Some(path) = &args.json {

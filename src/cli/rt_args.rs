@@ -63,6 +63,20 @@ impl RtArgs {
         }
     }
 
+    /// The spin window must be shorter than the period at `rate_hz` (a
+    /// usage error naming `--spin-us` otherwise).
+    pub fn check_spin(&self, rate_hz: u32) -> Result<(), String> {
+        let period_ns = 1_000_000_000 / u64::from(rate_hz.max(1));
+        if self.spin_us.saturating_mul(1000) >= period_ns {
+            return Err(format!(
+                "--spin-us {}: the spin window must be shorter than the period, {} µs at {rate_hz} Hz",
+                self.spin_us,
+                period_ns as f64 / 1e3
+            ));
+        }
+        Ok(())
+    }
+
     /// The thread requests these flags make (the rest at their defaults).
     pub fn thread(&self) -> ThreadConfig {
         ThreadConfig {

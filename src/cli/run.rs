@@ -150,6 +150,10 @@ pub(super) fn utc_stamp() -> String {
     )
 }
 
+/// Exit status of a run that finished but had failed ticks, or whose replay
+/// did not reproduce its recording (README, "Exit status").
+pub const EXIT_FAILED_TICKS: u8 = 3;
+
 /// Runs a session and prints (and writes) its report.
 pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
     let scene = match resolve(&args.scene) {
@@ -187,18 +191,6 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         Some(s) => Some(s.hook(SceneInfo::of(&scene))?),
         None => None,
     };
-    // Claimed before anything runs: a non-empty --out is refused, and the
-    // lock keeps a second run out while this one writes.
-    let run_dir = match (&args.out, args.no_files) {
-        (_, true) => None,
-        (Some(d), false) => Some(RunDir::claim(d)?),
-        (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
-            "{}-{}",
-            scene.compiled.name,
-            utc_stamp()
-        )))?),
-    };
-    let out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
     let options = SessionOptions {
         seconds: args.seconds,
         rate_hz: args.rate,
@@ -210,7 +202,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             .map(|ms| Duration::from_secs_f64(ms / 1000.0)),
         deterministic: args.deterministic,
         assemble: !args.no_assembly,
-        out_dir: out_dir.clone(),
+        out_dir: None,
         record: args.record.clone(),
         replay: args.replay.clone(),
         spin: args.rt.spin(),
@@ -218,7 +210,28 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         reference_every: None,
         live,
     };
-    let plan = Plan::new(&scene, &options)?;
+    // Everything a flag can get wrong is said before the output directory
+    // is claimed.
+    let mut plan = Plan::new(&scene, &options)?;
+    if let Err(msg) = args.rt.check_spin(plan.rate_hz) {
+        return Ok(super::usage_error(&msg));
+    }
+    if let Err(msg) = check_record(args, &plan) {
+        return Ok(super::usage_error(&msg));
+    }
+    // Claimed before anything runs: a non-empty --out is refused, and the
+    // lock keeps a second run out while this one writes. Every exit from
+    // here on gives it back (RunDir's drop) unless the run completes.
+    let run_dir = match (&args.out, args.no_files) {
+        (_, true) => None,
+        (Some(d), false) => Some(RunDir::claim(d)?),
+        (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
+            "{}-{}",
+            scene.compiled.name,
+            utc_stamp()
+        )))?),
+    };
+    plan.out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
     let virtuals = scene
         .compiled
         .devices
@@ -293,12 +306,95 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         .cloned()
         .zip(outcome.finger_devices.iter().cloned())
         .collect();
-    super::emit(&text::render(&summary, &fingers));
+    if !super::signals::aborting() {
+        super::emit(&text::render(&summary, &fingers));
+    }
     if let Some(dir) = run_dir {
         write_files(dir.path(), &scene, &outcome, &summary)?;
         dir.release()?;
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(exit_status(&summary))
+}
+
+/// 0 when every planned tick ran and succeeded; [`EXIT_FAILED_TICKS`] when
+/// ticks failed or a replay diverged from its recording; 130 when a signal
+/// stopped the run (its files are written all the same).
+fn exit_status(s: &Summary) -> ExitCode {
+    if s.stopped_early || super::signals::aborting() {
+        eprintln!(
+            "haptloop: stopped by a signal after {} ticks (exit status {})",
+            s.ticks,
+            super::signals::EXIT_SIGNAL
+        );
+        return ExitCode::from(super::signals::EXIT_SIGNAL);
+    }
+    let diverged = s.replay.as_ref().is_some_and(|r| r.diverged());
+    if s.safety.solver_failures > 0 || diverged {
+        let mut why = Vec::new();
+        if s.safety.solver_failures > 0 {
+            why.push(format!("{} ticks failed", s.safety.solver_failures));
+        }
+        if diverged {
+            why.push("the replay diverged from its recording".to_string());
+        }
+        eprintln!(
+            "haptloop: {} (exit status {EXIT_FAILED_TICKS})",
+            why.join("; ")
+        );
+        return ExitCode::from(EXIT_FAILED_TICKS);
+    }
+    ExitCode::SUCCESS
+}
+
+/// `--record` must not write over the traces `--replay` reads, and must fit
+/// what a replay can read back.
+fn check_record(args: &RunArgs, plan: &Plan) -> Result<(), String> {
+    let Some(record) = &args.record else {
+        return Ok(());
+    };
+    if let Some(replay) = &args.replay
+        && same_directory(record, replay)
+    {
+        return Err(format!(
+            "--record {}: that is the --replay directory; recording there would overwrite the \
+             traces being replayed (record into another directory)",
+            record.display()
+        ));
+    }
+    let rows = plan.ticks() + 1;
+    let most = haptloop_devices::MAX_TRACE_ROWS as u64;
+    if rows > most {
+        return Err(format!(
+            "--record: this run would record {rows} rows per device; a replay reads at most {most} \
+             (pass --seconds {} or less at {} Hz)",
+            (most - 1) / u64::from(plan.rate_hz),
+            plan.rate_hz
+        ));
+    }
+    Ok(())
+}
+
+/// True when `a` and `b` name the same directory (either may not exist yet).
+fn same_directory(a: &Path, b: &Path) -> bool {
+    let resolve = |p: &Path| -> PathBuf {
+        if let Ok(c) = p.canonicalize() {
+            return c;
+        }
+        match (p.parent(), p.file_name()) {
+            (Some(parent), Some(name)) => {
+                let parent = if parent.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    parent
+                };
+                parent
+                    .canonicalize()
+                    .map_or_else(|_| p.to_path_buf(), |c| c.join(name))
+            }
+            _ => p.to_path_buf(),
+        }
+    };
+    resolve(a) == resolve(b)
 }
 
 /// The scene with `--free` and `--objective` applied (unchanged without
@@ -326,6 +422,13 @@ fn write_files(
         "summary.json",
         serde_json::to_string_pretty(summary)? + "\n",
     )?;
+    if super::signals::aborting() {
+        super::emit(&format!(
+            "wrote {}/: summary.json, trace.csv (aborted: nothing else)",
+            dir.display()
+        ));
+        return Ok(());
+    }
     // On the mock clock (deterministic mode) there is no lateness and no
     // device-to-motor time to record: those files are not written, and
     // compute.hgrm holds the monotonic clock's whole tick instead.

@@ -182,14 +182,24 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    println!("{}", report::table(&result));
+    super::emit(&report::table(&result));
     if let Some(dir) = run_dir {
         let d = dir.path();
         write_atomic(&d.join("sweep.json"), report::json(&result)?.as_bytes())?;
         write_atomic(&d.join("sweep.csv"), report::csv(&result).as_bytes())?;
         produce_atomic(&d.join("front.svg"), |p| report::front_svg(p, &result))?;
-        println!("wrote {}/: sweep.json, sweep.csv, front.svg", d.display());
+        super::emit(&format!(
+            "wrote {}/: sweep.json, sweep.csv, front.svg",
+            d.display()
+        ));
         dir.release()?;
+    }
+    if result.stopped_early {
+        eprintln!(
+            "haptloop: the sweep was stopped by a signal (exit status {})",
+            super::signals::EXIT_SIGNAL
+        );
+        return Ok(ExitCode::from(super::signals::EXIT_SIGNAL));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,7 @@
 //! SVG plots, and the sweep's table and files.
 
 pub mod figure;
+pub mod limits;
 pub mod plots;
 pub mod probe;
 pub mod scene_plot;
@@ -9,3 +10,5 @@ pub mod semantic;
 pub mod session;
 pub mod summary;
 pub mod sweep;
+pub mod units;
+pub mod warnings;

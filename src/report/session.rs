@@ -2,6 +2,7 @@
 
 use super::probe::granted_lines;
 use super::summary::Summary;
+use super::units;
 use crate::session::Stage;
 use haptloop_rt::probe::Percentiles;
 use std::fmt::Write as _;
@@ -72,8 +73,8 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         row(&mut out, "lateness", lateness);
     }
     row(&mut out, "compute", &s.compute_ns);
-    if !s.deterministic {
-        row(&mut out, "read → write", &s.read_to_write_ns);
+    if let Some(r2w) = &s.read_to_write_ns {
+        row(&mut out, "read → write", r2w);
     }
     for stage in Stage::ALL {
         row(
@@ -106,17 +107,22 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         });
         let _ = writeln!(
             out,
-            "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m ({tol}{})",
-            v.max, v.max_rad, v.rms, v.verdict
+            "constraint violation: max {}, {}; RMS {} ({tol}{})",
+            units::sci(v.max, "m"),
+            units::sci(v.max_rad, "rad"),
+            units::sci(v.rms, "m"),
+            v.verdict
         );
     }
     if s.tracking_m.max.is_nan() {
-        let why = if s.ticks == 0 {
-            "no tick ran"
+        let why = if s.force_n.is_empty() {
+            "none: the scene has no fingers"
+        } else if s.ticks == 0 {
+            "not measured (no tick ran)"
         } else {
-            "no tick succeeded"
+            "not measured (no tick succeeded)"
         };
-        let _ = writeln!(out, "finger tracking error: not measured ({why})");
+        let _ = writeln!(out, "finger tracking error: {why}");
     } else {
         let _ = writeln!(
             out,
@@ -149,21 +155,27 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     };
     let _ = writeln!(
         out,
-        "safety: {} force cuts, {} miss streaks, {} solver failures{kinds}; faults: {}",
+        "safety: {} force cuts by the session, {} miss streaks, {} solver failures{kinds}; faults: {}",
         s.safety.force_cuts, s.safety.miss_streaks, s.safety.solver_failures, s.faults
     );
     for e in &s.safety.device_events {
         let _ = writeln!(out, "  {}: {} × {}", e.device, e.event, e.count);
     }
+    for w in &s.warnings {
+        let _ = writeln!(out, "WARNING: {w}");
+    }
+    if let Some(r) = &s.replay {
+        let _ = writeln!(out, "replay: {}", r.verdict);
+    }
     if let Some(c) = &s.contact {
         let _ = writeln!(
             out,
-            "contact: max penetration {:.3} mm (exact, per slow-loop snapshot: {:.3} mm; witness rows, per tick: {:.3} mm; \
-             scene tolerance {:.3} mm: {}); up to {} rows active, {} pairs tracked",
-            c.max_penetration_m * 1e3,
-            c.max_penetration_exact_m * 1e3,
-            c.max_penetration_rows_m * 1e3,
-            c.tolerance_m * 1e3,
+            "contact: max penetration {} (exact, per slow-loop snapshot: {}; witness rows, per tick: {}; \
+             scene tolerance {}: {}); up to {} rows active, {} pairs tracked",
+            units::mm(c.max_penetration_m),
+            units::mm(c.max_penetration_exact_m),
+            units::mm(c.max_penetration_rows_m),
+            units::mm(c.tolerance_m),
             c.verdict,
             c.max_active,
             c.max_tracked_pairs
@@ -191,10 +203,20 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             c.activations,
             c.activation_limit_ticks
         );
+        let latency = if c.updates == 0 {
+            "no latency to measure".to_string()
+        } else {
+            format!(
+                "latency mean {:.1} ticks, max {} ticks",
+                c.latency_ticks_mean, c.latency_ticks_max
+            )
+        };
         let _ = writeln!(
             out,
-            "  witness → fast loop: {} updates, latency mean {:.1} ticks, max {} ticks; slow-loop contact cycle mean {:.0} µs, max {:.0} µs",
-            c.updates, c.latency_ticks_mean, c.latency_ticks_max, c.cycle_us_mean, c.cycle_us_max
+            "  witness → fast loop: {} updates, {latency}; slow-loop contact cycle mean {}, max {}",
+            c.updates,
+            units::or_not_measured(c.cycle_us_mean, 0, "µs"),
+            units::or_not_measured(c.cycle_us_max, 0, "µs")
         );
     }
     if let Some(sem) = &s.semantic {
@@ -232,18 +254,24 @@ fn reference_line(out: &mut String, s: &Summary) {
             .collect();
         format!("; not compared: {}", k.join(", "))
     };
+    let relative = if r.force_error_relative.max.is_finite() {
+        format!(
+            "{:.1e} and {:.1e} of the force",
+            r.force_error_relative.max, r.force_error_relative.rms
+        )
+    } else {
+        format!("the reference force is {:.2e} N", r.force_n.max)
+    };
     let _ = writeln!(
         out,
         "force error against the converged reference ({} of {} sampled ticks, one in {}): \
-         max {:.2e} N, RMS {:.2e} N ({:.1e} and {:.1e} of the force); configuration within {:.2e} m{skipped}",
+         max {}, RMS {} ({relative}); configuration within {}{skipped}",
         r.compared,
         r.samples,
         r.every_ticks,
-        r.force_error_n.max,
-        r.force_error_n.rms,
-        r.force_error_relative.max,
-        r.force_error_relative.rms,
-        r.configuration_error_m.max,
+        units::sci(r.force_error_n.max, "N"),
+        units::sci(r.force_error_n.rms, "N"),
+        units::sci(r.configuration_error_m.max, "m"),
     );
 }
 

@@ -6,6 +6,7 @@
 //! see `session::timing`); the scheduler's own timing fields follow the mock
 //! clock and are functions of the tick count.
 
+pub use super::limits::{DeviceLimits, Replay, ReplayDevice};
 use crate::session::{SessionOutcome, Stage, StageTimes};
 use haptloop_rt::probe::Percentiles;
 use haptloop_rt::schedule::MissCounts;
@@ -206,6 +207,8 @@ impl Reference {
         };
         let missing = if let Some(why) = o.slow.reference_unsupported {
             Some(format!("not measured: {why}"))
+        } else if o.fingers.is_empty() {
+            Some("not measured: the scene has no fingers, so no force to compare".to_string())
         } else if r.compared > 0 {
             None
         } else if r.captured == 0 {
@@ -434,7 +437,7 @@ pub struct Summary {
     /// Missed deadlines by kind.
     pub misses: MissCounts,
     /// Wake-up lateness; `null` in deterministic mode, whose mock clock
-    /// has none to measure.
+    /// has none to measure (`clock_note` says so).
     pub lateness_ns: Option<Percentiles>,
     /// Tick compute time: the scheduler's in real time; in deterministic mode
     /// (whose scheduler runs on the mock clock) the monotonic clock's whole
@@ -444,8 +447,12 @@ pub struct Summary {
     pub stages_ns: Stages,
     /// Start-to-start period.
     pub period_ns: Percentiles,
-    /// First device read → last force write, per tick.
-    pub read_to_write_ns: Percentiles,
+    /// First device read → last force write, per tick; `null` in
+    /// deterministic mode (`clock_note` says why).
+    pub read_to_write_ns: Option<Percentiles>,
+    /// Which clock the timing figures come from, and why any is `null`.
+    #[serde(default)]
+    pub clock_note: String,
     /// Constraint violation.
     pub violation: Violation,
     /// Finger tracking error (attachment point vs device tip), m, all fingers.
@@ -480,6 +487,18 @@ pub struct Summary {
     pub granted: Option<Granted>,
     /// True if stopped early (Ctrl-C).
     pub stopped_early: bool,
+    /// Per device: the ticks its own limits acted (workspace stops, peak
+    /// clamp, motor saturation, thermal cut).
+    #[serde(default)]
+    pub device_limits: Vec<DeviceLimits>,
+    /// A replay's comparison with its recording (absent when not
+    /// replaying).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<Replay>,
+    /// What the user should know before trusting the figures: forces the
+    /// device could not render, a replay that diverged. Empty when none.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Wall-clock seconds (not deterministic).
     pub wall_clock_s: f64,
     /// How each design-variable component moved, m: `"<joint>.<var>"` or
@@ -529,7 +548,16 @@ impl Summary {
             },
             stages_ns: Stages::of(&s.stages),
             period_ns: o.report.period_ns.into(),
-            read_to_write_ns: s.read_to_write.summary().into(),
+            read_to_write_ns: (!o.plan.deterministic).then(|| s.read_to_write.summary().into()),
+            clock_note: if o.plan.deterministic {
+                "deterministic: the scheduler ran on a mock clock, which never wakes late and \
+                 takes no time between a device read and a force write, so lateness_ns and \
+                 read_to_write_ns are null and period_ns is exactly the period; compute_ns, \
+                 stages_ns, slow_loop.step_ns and wall_clock_s are measured on the monotonic clock"
+                    .into()
+            } else {
+                "real time: every timing figure is measured on the monotonic clock".into()
+            },
             violation: Violation {
                 max: v_max,
                 rms: if o.joint_rows == 0 {
@@ -661,6 +689,9 @@ impl Summary {
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,
+            device_limits: o.device_limits.iter().map(DeviceLimits::from).collect(),
+            replay: Replay::of(&o.device_limits),
+            warnings: super::warnings::of(o),
             wall_clock_s: o.wall_clock_s,
             design: o
                 .design

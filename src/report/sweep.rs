@@ -88,6 +88,11 @@ struct JsonSweep<'a> {
     axis: &'static str,
     points: Vec<JsonPoint>,
     recommended: Option<usize>,
+    /// Stopped by a signal before every point was measured and timed.
+    stopped_early: bool,
+    /// Per point that is not recommendable, why (the first criterion it
+    /// misses), as the table's last column says.
+    not_recommended: Vec<String>,
 }
 
 fn json_point(p: &Point) -> JsonPoint {
@@ -143,6 +148,8 @@ pub fn json(s: &Sweep) -> Result<String> {
         axis: s.axis.as_str(),
         points: s.points.iter().map(json_point).collect(),
         recommended: s.recommended,
+        stopped_early: s.stopped_early,
+        not_recommended: reasons(s),
     };
     Ok(serde_json::to_string_pretty(&j)? + "\n")
 }
@@ -202,7 +209,7 @@ pub fn table(s: &Sweep) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "haptloop sweep {}: {} points, {} s each (deterministic); reference every {}",
+        "haptloop sweep {}: {} points, {} s each (deterministic); reference every {}{}",
         s.scene,
         s.points.len(),
         s.seconds,
@@ -210,6 +217,11 @@ pub fn table(s: &Sweep) -> String {
             "tick".to_string()
         } else {
             format!("{:.0} ms", s.reference_every.as_secs_f64() * 1e3)
+        },
+        if s.stopped_early {
+            " — STOPPED EARLY: points not measured or not timed say so"
+        } else {
+            ""
         }
     );
     let _ = writeln!(
@@ -354,10 +366,40 @@ pub fn table(s: &Sweep) -> String {
             );
         }
         None => {
-            let _ = writeln!(out, "recommended: none: no point has {crit}");
+            let _ = writeln!(
+                out,
+                "recommended: none: a recommended point needs {crit}; each point misses one:"
+            );
+            for line in reasons(s) {
+                let _ = writeln!(out, "  {line}");
+            }
         }
     }
     out
+}
+
+/// Why the points are not recommendable, one line per reason with the
+/// points it stops (`coupling not passive: #0, #3`), in the order the
+/// criteria are checked.
+fn reasons(s: &Sweep) -> Vec<String> {
+    let mut by: Vec<(String, Vec<usize>)> = Vec::new();
+    for (i, p) in s.points.iter().enumerate() {
+        let why = match (&p.accuracy, p.verdict) {
+            (_, Verdict::Recommendable) => continue,
+            (Err(e), _) => format!("not run ({e})"),
+            (_, v) => v.as_str().to_string(),
+        };
+        match by.iter_mut().find(|(w, _)| *w == why) {
+            Some((_, pts)) => pts.push(i),
+            None => by.push((why, vec![i])),
+        }
+    }
+    by.into_iter()
+        .map(|(why, pts)| {
+            let list: Vec<String> = pts.iter().map(|i| format!("#{i}")).collect();
+            format!("{why}: {}", list.join(", "))
+        })
+        .collect()
 }
 
 fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {

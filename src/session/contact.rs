@@ -82,10 +82,38 @@ pub struct ContactSlowStats {
     pub cycle_ns_sum: u64,
 }
 
+/// Two shaped bodies overlap deeper than the penetration tolerance where the
+/// session would start: the session refuses to start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interpenetration {
+    /// The two bodies.
+    pub bodies: [String; 2],
+    /// How deep, m (the deepest pair of the first cycle).
+    pub depth_m: f64,
+    /// `[solver] penetration_tolerance`, m.
+    pub tolerance_m: f64,
+}
+
+impl std::fmt::Display for Interpenetration {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "bodies `{}` and `{}` interpenetrate by {:.3e} m where the session starts (after \
+             the assembly), deeper than the penetration tolerance {:.3e} m: move one of them \
+             (its `position`), or change its shape",
+            self.bodies[0], self.bodies[1], self.depth_m, self.tolerance_m
+        )
+    }
+}
+
+impl std::error::Error for Interpenetration {}
+
 /// The slow loop's contact state: the solver's [`ContactManager`] plus the
 /// exchange with the fast loop and timing.
 pub struct ContactLoop {
     manager: ContactManager,
+    /// The scene's penetration tolerance, m.
+    tolerance_m: f64,
     frames: MailboxWriter<WitnessFrame>,
     generation: u64,
     stats: ContactSlowStats,
@@ -103,6 +131,7 @@ impl ContactLoop {
         let manager = ContactManager::new(base, settings, contact)?;
         Some(Self {
             manager,
+            tolerance_m: contact.penetration_tolerance_m,
             frames,
             generation: 0,
             stats: ContactSlowStats::default(),
@@ -115,6 +144,22 @@ impl ContactLoop {
         let clock = MonotonicClock::new();
         let start = clock.now();
         let (cycle, program) = self.manager.initial(q)?;
+        if let Some(&[a, b]) = cycle.backups.first() {
+            // Starting inside each other, the pair would be backed up to
+            // this very configuration on every cycle: refused, as a scene
+            // with semantic areas refuses it when it loads.
+            let body = |i: u32| {
+                self.manager.current_model().bodies()[i as usize]
+                    .name
+                    .clone()
+            };
+            return Err(Interpenetration {
+                bodies: [body(a), body(b)],
+                depth_m: cycle.max_penetration_m,
+                tolerance_m: self.tolerance_m,
+            }
+            .into());
+        }
         self.note(&cycle, (clock.now() - start).0);
         Ok(program)
     }

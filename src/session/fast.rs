@@ -72,6 +72,9 @@ pub struct TraceSample {
     pub force_n: [f64; 3],
     /// Largest length-row violation this tick, m.
     pub violation_m: f64,
+    /// The tick's solve failed (zero force commanded): its position and
+    /// violation are not measurements.
+    pub failed: bool,
 }
 
 /// Heap-free faults the tick reports to the scheduler's safety hook.
@@ -303,6 +306,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 position_m: out.attachment_m.into(),
                 force_n: self.rendered[i].into(),
                 violation_m: report.max_violation_m,
+                failed: !solved,
             });
         }
         self.stats.record_tick(&report, solved);

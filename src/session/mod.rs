@@ -13,6 +13,7 @@
 
 mod contact;
 mod design;
+mod device_limits;
 mod fast;
 mod live;
 mod plan;
@@ -25,8 +26,9 @@ mod stats;
 pub mod timing;
 pub mod track;
 
-pub use contact::{ContactLoop, ContactSlowStats, WitnessFrame, WitnessInbox};
+pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
+pub use device_limits::DeviceLimitTicks;
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
 pub use live::{FingerFrame, LiveFrame, LiveHook, LivePointer, LiveSources};
 pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
@@ -35,7 +37,7 @@ pub use reference::{
     REFERENCE_GAIN, REFERENCE_MAX_ITERATIONS, REFERENCE_TOLERANCE_M, ReferenceCapture,
     ReferenceCheck, ReferenceSample, ReferenceStats,
 };
-pub use rig::{Rig, SessionDevice, VirtualOutcome};
+pub use rig::{Rig, SessionDevice, VirtualOutcome, device_trajectory};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
 pub use slow::{Correction, Handover, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
@@ -120,6 +122,9 @@ pub struct SessionOutcome {
     pub semantic: Option<SemanticReport>,
     /// What each virtual device did (scenes with any).
     pub virtual_devices: Vec<VirtualOutcome>,
+    /// Per device: its workspace stops, clamps, saturations and thermal cuts
+    /// (and a replay's comparison with its recording).
+    pub device_limits: Vec<DeviceLimitTicks>,
 }
 
 /// Everything the loops need, built before the clock starts.
@@ -417,12 +422,23 @@ pub fn loops_running() -> bool {
     LOOPS_RUNNING.load(Ordering::Acquire) > 0
 }
 
+/// Set when a session's loops start, and never cleared: from then on a
+/// signal has ticks whose figures are worth writing.
+static STARTED: AtomicBool = AtomicBool::new(false);
+
+/// True once some session's loops have started in this process (a signal
+/// before that has nothing to stop at a tick boundary and nothing to report).
+pub fn started() -> bool {
+    STARTED.load(Ordering::Acquire)
+}
+
 /// Counts a session's loops as running while alive.
 struct LoopsRunning;
 
 impl LoopsRunning {
     fn start() -> Self {
         LOOPS_RUNNING.fetch_add(1, Ordering::AcqRel);
+        STARTED.store(true, Ordering::Release);
         LoopsRunning
     }
 }
@@ -527,6 +543,7 @@ fn finish<C: Clock>(
         design: fast.design_stats(),
         semantic,
         virtual_devices,
+        device_limits: DeviceLimitTicks::of(fast.rig()),
     })
 }
 

@@ -45,8 +45,11 @@ impl Series {
     }
 }
 
-/// The columns every `trace.csv` has.
-const TRACE_HEADER: &str = "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m";
+/// The columns every `trace.csv` has. A failed tick (its solve failed and
+/// zero force was commanded) has `failed` 1 and its position and violation
+/// fields empty: they are not measurements. Target and force are (the
+/// device's reading, and what its motors produced).
+const TRACE_HEADER: &str = "t_s,finger,target_x_m,target_y_m,target_z_m,position_x_m,position_y_m,position_z_m,force_x_n,force_y_n,force_z_n,violation_m,failed";
 
 /// Drains trace samples into a CSV file and plot series.
 pub struct Recorder {
@@ -177,11 +180,16 @@ impl Recorder {
                 let [tx, ty, tz] = s.target_m;
                 let [px, py, pz] = s.position_m;
                 let [fx, fy, fz] = s.force_n;
-                write!(
-                    w,
-                    "{:.6},{},{tx:e},{ty:e},{tz:e},{px:e},{py:e},{pz:e},{fx:e},{fy:e},{fz:e},{:e}",
-                    s.t_s, names[i], s.violation_m
-                )?;
+                write!(w, "{:.6},{},{tx:e},{ty:e},{tz:e},", s.t_s, names[i])?;
+                if s.failed {
+                    write!(w, ",,,{fx:e},{fy:e},{fz:e},,1")?;
+                } else {
+                    write!(
+                        w,
+                        "{px:e},{py:e},{pz:e},{fx:e},{fy:e},{fz:e},{:e},0",
+                        s.violation_m
+                    )?;
+                }
                 match group {
                     Some(g) => {
                         for v in g {
@@ -205,7 +213,7 @@ impl Recorder {
             }
             let f = s.force_n;
             self.force[i].push(s.t_s, (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt());
-            if i == 0 {
+            if i == 0 && !s.failed {
                 self.violation.push(s.t_s, s.violation_m);
             }
             self.fingers.push(&s);

@@ -109,7 +109,9 @@ pub struct Rig {
     pub pointers: Vec<Option<Pointer>>,
 }
 
-fn scene_to_device_trajectory(
+/// The hand's trajectory in the device frame (offsets from the home pose),
+/// as the simulated hand follows it: the scene's path through the mount.
+pub fn device_trajectory(
     path: &HandPath,
     trace: Option<&haptloop_devices::HandTrace>,
     mount: &Mount,
@@ -181,14 +183,30 @@ fn check_replay(
     }
     let end = trace.rows.last().map_or(Duration::ZERO, |r| r.time);
     if end < duration {
+        let fix = if end.is_zero() {
+            "it holds no tick after the registration row".to_string()
+        } else {
+            format!("pass --seconds {} or less", exact_seconds(end))
+        };
         bail!(
-            "{at}: the trace covers {:.3} s; this run needs {:.3} s (pass --seconds {:.3} or less)",
-            end.as_secs_f64(),
-            duration.as_secs_f64(),
-            end.as_secs_f64()
+            "{at}: the trace covers {} s; this run needs {} s ({fix})",
+            exact_seconds(end),
+            exact_seconds(duration)
         );
     }
     Ok(())
+}
+
+/// A duration in seconds, exactly, without trailing zeros: `0.0005`, `2`,
+/// `0.2` (never a rounded `0.000`).
+pub fn exact_seconds(d: Duration) -> String {
+    let frac = format!("{:09}", d.subsec_nanos());
+    let frac = frac.trim_end_matches('0');
+    if frac.is_empty() {
+        format!("{}", d.as_secs())
+    } else {
+        format!("{}.{frac}", d.as_secs())
+    }
 }
 
 impl Rig {
@@ -240,7 +258,7 @@ impl Rig {
                         grip.damping_n_s_per_m = b;
                     }
                     let trajectory =
-                        scene_to_device_trajectory(&d.hand.path, scene.traces[k].as_ref(), &mount);
+                        device_trajectory(&d.hand.path, scene.traces[k].as_ref(), &mount);
                     let hand = Hand::new(trajectory).with_grip(grip);
                     let sim = SimPhantom::by_name(&d.model, SimOptions::for_rate_hz(rate_hz), hand)
                         .with_context(|| format!("device `{}`", d.name))?;

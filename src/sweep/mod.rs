@@ -157,6 +157,9 @@ impl Accuracy {
         let r = &o.slow.reference;
         let reference_missing = match o.slow.reference_unsupported {
             Some(why) => Some(why.to_string()),
+            None if o.fingers.is_empty() => {
+                Some("the scene has no fingers, so no force to compare".to_string())
+            }
             None if r.compared == 0 => Some(format!(
                 "none of the {} sampled ticks could be compared",
                 r.captured
@@ -243,6 +246,9 @@ pub struct Sweep {
     pub points: Vec<Point>,
     /// Index of the cheapest point meeting every criterion.
     pub recommended: Option<usize>,
+    /// The sweep was stopped (a signal) before every point was measured and
+    /// timed.
+    pub stopped_early: bool,
 }
 
 /// How a sweep runs.
@@ -394,5 +400,6 @@ pub fn run(
         axis,
         points,
         recommended,
+        stopped_early: stop.is_requested(),
     })
 }

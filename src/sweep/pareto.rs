@@ -79,8 +79,11 @@ pub struct Criteria {
 pub enum Verdict {
     /// Meets every criterion.
     Recommendable,
-    /// Its session could not run (or the sweep was stopped).
+    /// Its session could not run (or the sweep was stopped before it ran).
     NotRun,
+    /// Its accuracy was measured, but the sweep was stopped before it was
+    /// timed.
+    NotTimed,
     /// Some ticks failed.
     FailedTicks,
     /// Violation above the scene's tolerance.
@@ -101,6 +104,7 @@ impl Verdict {
         match self {
             Verdict::Recommendable => "ok",
             Verdict::NotRun => "not run",
+            Verdict::NotTimed => "not timed (the sweep was stopped)",
             Verdict::FailedTicks => "failed ticks",
             Verdict::Violation => "violation > tolerance",
             Verdict::ForceError => "force error > tolerance",
@@ -126,8 +130,11 @@ pub fn axis(points: &[Point]) -> Axis {
 }
 
 fn verdict(p: &Point, c: &Criteria) -> Verdict {
-    let (Ok(a), Some(t)) = (&p.accuracy, &p.timing) else {
+    let Ok(a) = &p.accuracy else {
         return Verdict::NotRun;
+    };
+    let Some(t) = &p.timing else {
+        return Verdict::NotTimed;
     };
     if a.failed_ticks > 0 {
         return Verdict::FailedTicks;

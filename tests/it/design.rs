@@ -325,7 +325,7 @@ fn design_flags_add_variables_and_objectives_to_any_scene() {
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let header = trace.lines().next().unwrap();
     assert!(
-        header.ends_with(",ground.position.x_m,ground.position.y_m,ground.position.z_m,coupler-rocker.anchor_j.x_m,coupler-rocker.anchor_j.y_m,coupler-rocker.anchor_j.z_m,objective_dexterity"),
+        header.ends_with(",violation_m,failed,ground.position.x_m,ground.position.y_m,ground.position.z_m,coupler-rocker.anchor_j.x_m,coupler-rocker.anchor_j.y_m,coupler-rocker.anchor_j.z_m,objective_dexterity"),
         "{header}"
     );
     // Every row has the columns filled (500 ticks, one finger).
@@ -333,7 +333,7 @@ fn design_flags_add_variables_and_objectives_to_any_scene() {
     assert_eq!(rows.len(), 500);
     assert!(
         rows.iter()
-            .all(|r| r.split(',').count() == 19 && !r.ends_with(','))
+            .all(|r| r.split(',').count() == 20 && !r.ends_with(','))
     );
     assert!(out.join("design.svg").exists());
 }

@@ -153,11 +153,11 @@ fn deterministic_runs_are_bit_identical() {
 /// Record every built-in scene's devices, replay them (recording again): the
 /// replay reproduces bit for bit the encoder counts and gimbal orientation
 /// read, the force the session commanded and the force the safety layer sent
-/// (every column of both device traces but none), every solver-side column of
-/// `trace.csv` (targets, positions, violation), and it adds no fault. What it
-/// does not reproduce: the motors' produced force (a replayed device has no
-/// motors, so it reports the command it was sent), hence the rendered-force
-/// column of `trace.csv`.
+/// (every column of both device traces but the hand's), every column of
+/// `trace.csv` — the motors' produced force too, since a replayed arm runs
+/// the same motor model on the same commands — and the safety layer's
+/// counts (clamps, thermal cuts), and it adds no fault; its own comparison
+/// finds every force sent equal to the recorded one.
 #[test]
 fn replaying_a_recorded_session_reproduces_it_bit_for_bit() {
     for b in BUILTIN {
@@ -228,19 +228,16 @@ fn replaying_a_recorded_session_reproduces_it_bit_for_bit() {
             );
             assert!(a == r, "{}/{}: replayed trace differs", b.name, d.name);
         }
-        let solver_side = |p: &Path| -> Vec<String> {
+        let every_column = |p: &Path| -> Vec<String> {
             std::fs::read_to_string(p)
                 .unwrap()
                 .lines()
-                .map(|l| {
-                    let c: Vec<&str> = l.split(',').collect();
-                    format!("{},{}", c[..8].join(","), c[11])
-                })
+                .map(str::to_owned)
                 .collect()
         };
         let (a, r) = (
-            solver_side(&rec_out.join("trace.csv")),
-            solver_side(&rep_out.join("trace.csv")),
+            every_column(&rec_out.join("trace.csv")),
+            every_column(&rep_out.join("trace.csv")),
         );
         assert_eq!(
             a.len(),
@@ -250,10 +247,27 @@ fn replaying_a_recorded_session_reproduces_it_bit_for_bit() {
         );
         assert!(
             a == r,
-            "{}: replayed targets/positions/violations differ",
+            "{}: replayed targets/positions/forces/violations differ",
             b.name
         );
         assert_eq!(replayed.stats.faults, recorded.stats.faults, "{}", b.name);
+        let limits = |o: &session::SessionOutcome| -> Vec<(u64, u64, u64)> {
+            o.device_limits
+                .iter()
+                .map(|d| (d.peak_clamp, d.motor_saturation, d.thermal_cut))
+                .collect()
+        };
+        assert_eq!(limits(&replayed), limits(&recorded), "{}", b.name);
+        for d in &replayed.device_limits {
+            let check = d.replay.expect("a replayed device");
+            assert_eq!(
+                (check.compared, check.diverged),
+                (ticks as u64, 0),
+                "{}/{}",
+                b.name,
+                d.device
+            );
+        }
         assert!(
             !replayed
                 .device_events
@@ -317,7 +331,10 @@ fn replay_refuses_a_trace_that_belongs_to_another_session() {
         "{e}"
     );
     let e = attempt(&text, "four-bar", deterministic(0.5));
-    assert!(e.contains("covers 0.200 s; this run needs 0.500 s"), "{e}");
+    assert!(
+        e.contains("covers 0.2 s; this run needs 0.5 s (pass --seconds 0.2 or less)"),
+        "{e}"
+    );
     let mut lines: Vec<&str> = text.lines().collect();
     let first = lines
         .iter()

@@ -276,6 +276,16 @@ fn a_virtual_device_is_recorded_and_replayed_bit_for_bit() {
         "the tip never moved: nothing was compared"
     );
     assert_eq!(recorded.virtual_devices.len(), 1);
+    // The replay checked every tick's force against the recording's
+    // (the virtual device's own clamp, not a PHANToM's motor model).
+    let check = replayed.device_limits[0]
+        .replay
+        .expect("a replayed device reports its check");
+    assert!(
+        check.compared > 900 && check.diverged == 0,
+        "replay check: {check:?}"
+    );
+    assert_eq!(replayed.device_limits[0].model, "virtual");
 }
 
 /// The fast loop allocates nothing with the live exchange on, while the

@@ -7,6 +7,7 @@
 //! | [`encoder`] | joint angle ↔ encoder count quantisation |
 //! | [`motors`] | Jᵀ torque mapping, torque saturation |
 //! | [`thermal`] | motor heating and the continuous-force cut |
+//! | [`drive`] | [`MotorDrive`]: thermal cut, Jᵀ mapping, saturation; shared by the simulated and the replayed arm |
 //! | [`options`] | [`SimOptions`]: loop period, sub-steps, which limits are modelled |
 //! | `stops` | end stops at the workspace box and the arm's reach |
 //! | [`sim`] | [`SimPhantom`]: sub-stepped tip dynamics under hand + motor force |
@@ -32,6 +33,7 @@
 //! damping it recommends rendering, not the arm's physical damping; it is not
 //! used for the arm model.
 
+pub mod drive;
 pub mod encoder;
 pub mod kinematics;
 pub mod motors;
@@ -40,6 +42,7 @@ pub mod sim;
 mod stops;
 pub mod thermal;
 
+pub use drive::MotorDrive;
 pub use kinematics::ArmGeometry;
 pub use options::SimOptions;
 pub use sim::SimPhantom;

@@ -75,9 +75,8 @@ impl MotorLimits {
         }
     }
 
-    /// Scales τ uniformly so every joint is within its limit. Returns the
-    /// scaled torques and whether scaling happened.
-    pub fn saturate(&self, torque_nm: Vector3<f64>) -> (Vector3<f64>, bool) {
+    /// The factor (≤ 1) that brings every joint of τ within its limit.
+    pub fn ratio(&self, torque_nm: &Vector3<f64>) -> f64 {
         let mut ratio: f64 = 1.0;
         for j in 0..3 {
             let t = torque_nm[j].abs();
@@ -85,6 +84,13 @@ impl MotorLimits {
                 ratio = ratio.min(self.max_torque_nm[j] / t);
             }
         }
+        ratio
+    }
+
+    /// Scales τ uniformly so every joint is within its limit. Returns the
+    /// scaled torques and whether scaling happened.
+    pub fn saturate(&self, torque_nm: Vector3<f64>) -> (Vector3<f64>, bool) {
+        let ratio = self.ratio(&torque_nm);
         if ratio < 1.0 {
             (torque_nm * ratio, true)
         } else {

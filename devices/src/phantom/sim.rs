@@ -28,10 +28,9 @@ use std::time::Duration;
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
+use super::drive::MotorDrive;
 use super::encoder::Encoder;
-use super::motors::{self, MotorLimits};
 use super::options::SimOptions;
-use super::thermal::ThermalModel;
 use super::{PhantomModel, stops};
 use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport, ReadingFlags};
 use crate::error::DeviceError;
@@ -46,7 +45,6 @@ pub struct SimPhantom {
     options: SimOptions,
     encoder: Encoder,
     gimbal: Encoder,
-    motor_limits: MotorLimits,
     hand: Hand,
     anchor_m_device: Vector3<f64>,
     p: Vector3<f64>,
@@ -61,7 +59,8 @@ pub struct SimPhantom {
     /// Jacobian at the last sensed (quantised) angles: what `write` maps with.
     sensed_jacobian: Matrix3<f64>,
     last_motor_force: Vector3<f64>,
-    thermal: ThermalModel,
+    /// The motors: thermal cut, saturation, the force they report.
+    drive: MotorDrive,
     faults: FaultSchedule,
     frozen_counts: [Option<i32>; 3],
     hand_work_j: f64,
@@ -105,7 +104,6 @@ impl SimPhantom {
             options,
             encoder,
             gimbal: Encoder::new(model.gimbal_counts_per_rev),
-            motor_limits: MotorLimits::for_peak_force(&model.geometry, model.peak_force_n),
             hand,
             anchor_m_device: options.start_m_device,
             p: options.start_m_device,
@@ -123,7 +121,7 @@ impl SimPhantom {
                 .geometry
                 .jacobian(&encoder.angles(&encoder.counts(&theta))),
             last_motor_force: Vector3::zeros(),
-            thermal: ThermalModel::new(model.continuous_force_n, model.thermal_time_constant_s),
+            drive: MotorDrive::new(model, options.thermal, options.motor_saturation),
             faults: FaultSchedule::default(),
             frozen_counts: [None; 3],
             hand_work_j: 0.0,
@@ -214,7 +212,7 @@ impl SimPhantom {
 
     /// Normalised motor temperature (1 = steady state at the continuous rating).
     pub fn thermal_load(&self) -> f64 {
-        self.thermal.load()
+        self.drive.thermal_load()
     }
 
     /// Integrates the arm up to `now` (no-op if `now` is not later).
@@ -248,6 +246,7 @@ impl SimPhantom {
             self.torque_nm = Vector3::zeros();
             self.watchdog_tripped = true;
             self.cached_forces = None;
+            self.drive.off(Duration::from_secs_f64(t_s));
         }
     }
 
@@ -280,9 +279,6 @@ impl SimPhantom {
         self.p = p_new;
         self.v = v_new;
         self.last_motor_force = end.motor;
-        if self.options.thermal {
-            self.thermal.update(end.motor.norm(), h);
-        }
         self.cached_forces = Some(end);
     }
 
@@ -348,6 +344,7 @@ impl Device for SimPhantom {
             self.motors_on = false;
             self.torque_nm = Vector3::zeros();
             self.cached_forces = None;
+            self.drive.off(now);
             return Err(DeviceFault::Disconnected);
         }
         if active.dropped {
@@ -402,46 +399,19 @@ impl Device for SimPhantom {
             self.motors_on = false;
             self.torque_nm = Vector3::zeros();
             self.cached_forces = None;
+            self.drive.off(now);
             return Err(DeviceFault::Disconnected);
         }
         self.last_write = now;
         self.watchdog_tripped = false;
-        if !force_n_device.iter().all(|v| v.is_finite()) {
-            // Defence in depth: the safety layer never sends this, but a device
-            // must not put a non-finite number on a motor.
-            self.torque_nm = Vector3::zeros();
-            self.motors_on = false;
-            self.cached_forces = None;
-            return Ok(MotorReport::off());
-        }
-        let mut force = force_n_device;
-        let allowed = if self.options.thermal {
-            self.thermal.allowed_force_n()
-        } else {
-            f64::INFINITY
-        };
-        let thermal_limited = force.norm() > allowed;
-        if thermal_limited {
-            force *= allowed / force.norm();
-        }
-        let tau = self.sensed_jacobian.transpose() * force;
-        let (tau, saturated) = if self.options.motor_saturation {
-            self.motor_limits.saturate(tau)
-        } else {
-            (tau, false)
-        };
-        self.torque_nm = tau;
-        self.motors_on = true;
+        // The motor model maps with the Jacobian at the sensed angles, like a
+        // real driver; a non-finite force switches the motors off (defence in
+        // depth: the safety layer never sends one).
+        let report = self.drive.write(force_n_device, &self.sensed_jacobian, now);
+        self.motors_on = force_n_device.iter().all(|v| v.is_finite());
+        self.torque_nm = report.torque_nm;
         self.cached_forces = None;
-        let (theta, _) = self.model.geometry.inverse(&self.p);
-        let produced =
-            motors::force_for_torques(&self.model.geometry, &theta, &tau).unwrap_or(force);
-        Ok(MotorReport {
-            force_n_device: produced,
-            torque_nm: tau,
-            thermal_limited,
-            saturated,
-        })
+        Ok(report)
     }
 
     fn motors_off(&mut self, now: Duration) {
@@ -449,6 +419,7 @@ impl Device for SimPhantom {
         self.motors_on = false;
         self.torque_nm = Vector3::zeros();
         self.cached_forces = None;
+        self.drive.off(now);
     }
 
     fn set_hardware_watchdog(&mut self, timeout: Option<Duration>) -> bool {

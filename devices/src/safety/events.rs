@@ -134,6 +134,9 @@ pub struct SafetyCounters {
     pub writes: u64,
     /// Readings returned held (last good value instead of this tick's).
     pub held_readings: u64,
+    /// Good readings whose tip was outside the device's workspace box: the
+    /// arm was at (or pushed past) a mechanical stop.
+    pub outside_workspace: u64,
     cut_ticks: [u64; CutReason::COUNT],
     cut_episodes: [u64; CutReason::COUNT],
     faults: [u64; FaultKind::COUNT],

@@ -259,6 +259,11 @@ impl<D: Device> SafeDevice<D> {
                 }
                 self.bad_run = 0;
                 self.holding = None;
+                let limits = &self.device.info().limits;
+                let (lo, hi) = (limits.workspace_min_m_device, limits.workspace_max_m_device);
+                if (0..3).any(|i| r.tip_m_device[i] < lo[i] || r.tip_m_device[i] > hi[i]) {
+                    self.counters.outside_workspace += 1;
+                }
                 self.last_good = Some(r);
                 self.velocity.push(now, r.tip_m_device);
                 r

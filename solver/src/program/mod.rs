@@ -156,7 +156,7 @@ impl Program {
         if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
             return Err(ProgramError::Unsupported(
                 "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
-                 `update = \"projected\"`",
+                 the projected update (the default; drop `--update gradient`)",
             ));
         }
         // The scene's `finger` and `least_astonishment` weights.

@@ -3,7 +3,8 @@
 use std::fmt;
 use std::ops::Range;
 
-/// A problem in a scene file, located at a line and column (1-based).
+/// A problem in a scene file, located at a line and column (1-based; 0 for
+/// the file as a whole).
 ///
 /// Displays as `file:line:column: message`, followed by the offending source
 /// line with a caret, e.g.
@@ -17,9 +18,9 @@ use std::ops::Range;
 pub struct SceneError {
     /// The file as the user named it (or `scenes/<name>.toml` for built-ins).
     pub file: String,
-    /// 1-based line.
+    /// 1-based line (0: the file as a whole).
     pub line: usize,
-    /// 1-based column, in characters.
+    /// 1-based column, in characters (0: the file as a whole).
     pub column: usize,
     /// What is wrong and what was expected.
     pub message: String,
@@ -45,12 +46,14 @@ impl SceneError {
         }
     }
 
-    /// An error about the file as a whole (it could not be read), at 1:1.
+    /// An error about the file as a whole (it could not be read, it is too
+    /// large, there is no such file): line and column 0, shown as
+    /// `file: message` without a position.
     pub fn whole_file(file: &str, message: impl Into<String>) -> Self {
         SceneError {
             file: file.to_string(),
-            line: 1,
-            column: 1,
+            line: 0,
+            column: 0,
             message: message.into(),
             source_line: String::new(),
         }
@@ -71,6 +74,14 @@ const EXCERPT_WIDTH: usize = 100;
 
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            return write!(
+                f,
+                "{}: {}",
+                escape_controls(&self.file),
+                escape_controls(&self.message)
+            );
+        }
         write!(
             f,
             "{}:{}:{}: {}",
@@ -190,6 +201,12 @@ mod tests {
         );
         assert!(shown.contains("\\u{1b}[31mred\\u{0}"), "{shown}");
         assert!(shown.starts_with("s\\u{7}.toml:1:1:"), "{shown}");
+    }
+
+    #[test]
+    fn whole_file_errors_have_no_position() {
+        let e = SceneError::whole_file("nosuchscene", "no such file");
+        assert_eq!(e.to_string(), "nosuchscene: no such file");
     }
 
     #[test]
