@@ -430,3 +430,86 @@ fn a_real_time_session_with_the_live_view_on_accounts_for_every_tick() {
         frames.load(Ordering::Relaxed)
     );
 }
+
+/// The fast loop's tick does not know the viewer exists: a deterministic
+/// run with the live exchange on, and a viewer thread reading every frame
+/// as it comes (a copy of each, as the page's server takes), gives the
+/// same fingers, bodies, contacts and violation, bit for bit, as the same
+/// run without it. PHANToM devices: nothing moves a pointer, so any
+/// difference would be the viewer's doing.
+#[test]
+fn a_deterministic_run_is_the_same_bit_for_bit_with_the_live_view_on() {
+    use haptloop::session::{LiveHook, LiveSources};
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    use std::sync::{Arc, Mutex};
+    for (name, seconds) in [("four-bar", 1.0), ("pinch-lift", 1.0)] {
+        let scene = resolve(name).unwrap();
+        let frames = Arc::new(AtomicU64::new(0));
+        let done = Arc::new(AtomicBool::new(false));
+        let viewer: Arc<Mutex<Option<std::thread::JoinHandle<()>>>> = Arc::default();
+        let (seen, flag, slot) = (frames.clone(), done.clone(), viewer.clone());
+        let hook = LiveHook(Arc::new(move |mut s: LiveSources| {
+            let (seen, flag) = (seen.clone(), flag.clone());
+            *slot.lock().unwrap() = Some(std::thread::spawn(move || {
+                while !flag.load(Ordering::Acquire) {
+                    if s.frames.refresh() {
+                        let frame = s.frames.latest().clone();
+                        assert!(frame.t_s.is_finite());
+                        seen.fetch_add(1, Ordering::Relaxed);
+                    }
+                    if s.fingers.refresh() {
+                        let _ = s.fingers.latest().clone();
+                    }
+                    std::thread::yield_now();
+                }
+            }));
+        }));
+        let go = |live: Option<LiveHook>| {
+            let options = SessionOptions {
+                live,
+                ..deterministic(seconds)
+            };
+            let plan = Plan::new(&scene, &options).unwrap();
+            session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap()
+        };
+        let off = go(None);
+        let on = go(Some(hook));
+        done.store(true, Ordering::Release);
+        viewer
+            .lock()
+            .unwrap()
+            .take()
+            .expect("the live hook started a viewer")
+            .join()
+            .unwrap();
+        assert_eq!(off.stats.ticks, on.stats.ticks, "{name}: ticks");
+        // scene.json, bodies.csv, fingers.csv and contacts.csv, as `run`
+        // writes them.
+        let info = haptloop::view::SceneInfo::of(&scene);
+        let files =
+            |o: &session::SessionOutcome| haptloop::view::files::contents(&info, o).unwrap();
+        for ((file, a), (_, b)) in files(&off).into_iter().zip(files(&on)) {
+            assert!(a == b, "{name}: {file} differs with the live view on");
+        }
+        let bits = |s: &haptloop::session::Series| -> Vec<(u64, u64)> {
+            s.points
+                .iter()
+                .map(|(t, v)| (t.to_bits(), v.to_bits()))
+                .collect()
+        };
+        assert_eq!(
+            bits(&off.recorder.violation),
+            bits(&on.recorder.violation),
+            "{name}: violation"
+        );
+        assert!(
+            off.recorder.fingers.samples.len() >= 99,
+            "{name}: {} samples compared",
+            off.recorder.fingers.samples.len()
+        );
+        assert!(
+            frames.load(Ordering::Relaxed) > 0,
+            "{name}: the viewer read no frame"
+        );
+    }
+}
