@@ -202,9 +202,11 @@ impl PageData {
         s.t = (0..PLOT_BINS).map(|k| (k as f64 * width) as f32).collect();
         s.force = vec![vec![0.0; PLOT_BINS]; scene.fingers.len()];
         s.violation = vec![0.0; PLOT_BINS];
+        let mut filled = vec![false; PLOT_BINS];
         for (line, fields) in &csv.rows {
             let t = csv.number(*line, fields, 0)?;
             let bin = ((t / width) as usize).min(PLOT_BINS - 1);
+            filled[bin] = true;
             let Some(k) = scene.fingers.iter().position(|f| f.name == fields[1]) else {
                 bail!(
                     "{}:{line}: finger `{}` is not in scene.json",
@@ -223,6 +225,24 @@ impl PageData {
                 s.violation[bin] = f32::NAN;
             } else {
                 s.violation[bin] = s.violation[bin].max(v);
+            }
+        }
+        // A run with fewer ticks than bins leaves some bins without a
+        // row: they hold the bin before (not a 0 that was never measured),
+        // the ones before the first tick the first filled bin.
+        let first = filled.iter().position(|f| *f).unwrap_or(0);
+        for bin in (0..first).rev() {
+            for f in &mut s.force {
+                f[bin] = f[bin + 1];
+            }
+            s.violation[bin] = s.violation[bin + 1];
+        }
+        for bin in first + 1..PLOT_BINS {
+            if !filled[bin] {
+                for f in &mut s.force {
+                    f[bin] = f[bin - 1];
+                }
+                s.violation[bin] = s.violation[bin - 1];
             }
         }
         Ok(())

@@ -513,3 +513,56 @@ fn a_deterministic_run_is_the_same_bit_for_bit_with_the_live_view_on() {
         );
     }
 }
+
+/// The page's force plot of a run with fewer ticks than plot bins (1 s at
+/// 1 kHz, 2000 bins): every bin holds a force some tick near it actually
+/// rendered (trace.csv, parsed here), never a 0 for a bin no tick fell in.
+#[test]
+fn every_bin_of_the_page_force_plot_is_a_rendered_force_near_its_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .args(["run", "four-bar", "--deterministic", "--seconds", "1"])
+        .args(["--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: Vec<(f64, f32)> = std::fs::read_to_string(out.join("trace.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<f64> = l
+                .split(',')
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect();
+            (
+                f[0],
+                (f[8] * f[8] + f[9] * f[9] + f[10] * f[10]).sqrt() as f32,
+            )
+        })
+        .collect();
+    let page = haptloop::view::PageData::read(&out).unwrap();
+    let (t, force) = (&page.series.t, &page.series.force[0]);
+    assert!(
+        t.len() > rows.len(),
+        "{} bins, {} ticks",
+        t.len(),
+        rows.len()
+    );
+    let width = f64::from(t[1] - t[0]);
+    let mut zeros = 0;
+    for (b, (&tb, &v)) in t.iter().zip(force).enumerate() {
+        let tb = f64::from(tb);
+        let near = rows
+            .iter()
+            .filter(|(tr, _)| (*tr - tb).abs() <= 2.0 * width + 1e-6);
+        assert!(
+            near.clone().any(|(_, f)| *f == v),
+            "bin {b} at {tb} s holds {v} N, which no tick within two bins of it rendered"
+        );
+        zeros += usize::from(v == 0.0);
+    }
+    assert!(zeros < 10, "{zeros} bins hold 0 N");
+}
