@@ -16,6 +16,7 @@
 //! a signal.
 
 pub mod cli;
+pub mod export;
 pub mod report;
 pub mod scenes;
 pub mod session;

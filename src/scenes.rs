@@ -1,5 +1,8 @@
 //! Built-in scenes (embedded, so `haptloop run four-bar` works from any
-//! directory) and resolution of a `SCENE|FILE` argument into a checked scene.
+//! directory), generated ones (`lattice-8x32`: [`generated`]) and resolution
+//! of a `SCENE|FILE` argument into a checked scene.
+
+pub mod generated;
 
 use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel, VIRTUAL_MODEL};
 use haptloop_solver::scene::{self, CompiledScene, HandPath, LoadedScene, SceneError};
@@ -95,6 +98,30 @@ pub const BUILTIN: &[Builtin] = &[
         name: "dodge",
         text: include_str!("../scenes/dodge.toml"),
     },
+    Builtin {
+        name: "bennett",
+        text: include_str!("../scenes/bennett.toml"),
+    },
+    Builtin {
+        name: "lattice",
+        text: include_str!("../scenes/lattice.toml"),
+    },
+    Builtin {
+        name: "chain",
+        text: include_str!("../scenes/chain.toml"),
+    },
+    Builtin {
+        name: "flexible-ik",
+        text: include_str!("../scenes/flexible-ik.toml"),
+    },
+    Builtin {
+        name: "dodge-belly",
+        text: include_str!("../scenes/dodge-belly.toml"),
+    },
+    Builtin {
+        name: "ball-bowl",
+        text: include_str!("../scenes/ball-bowl.toml"),
+    },
 ];
 
 /// The scene `haptloop` runs with no arguments.
@@ -133,29 +160,50 @@ impl Scene {
     }
 }
 
-/// Resolves `arg` (a built-in name or a path), then parses, validates and
-/// compiles it, checks device models and loads hand traces. Every error names
-/// the file, line and column.
+/// Resolves `arg` (a built-in name, a path, or a generated name such as
+/// `lattice-8x32`), then parses, validates and compiles it, checks device
+/// models and loads hand traces. Every error names the file, line and column.
 pub fn resolve(arg: &str) -> Result<Scene, SceneError> {
-    let loaded = match BUILTIN.iter().find(|b| b.name == arg) {
-        Some(b) => scene::parse(
+    check_loaded(load(arg)?)
+}
+
+/// Resolves `arg` as [`resolve`] does, up to the parsed file.
+pub fn load(arg: &str) -> Result<LoadedScene, SceneError> {
+    let builtin = |name: &str| BUILTIN.iter().find(|b| b.name == name);
+    if let Some(b) = builtin(arg) {
+        return scene::parse(
             &format!("scenes/{}.toml", b.name),
             b.text,
             Some(Path::new("scenes")),
-        )?,
-        None if Path::new(arg).exists() => scene::load(Path::new(arg))?,
-        None => {
-            let names: Vec<&str> = BUILTIN.iter().map(|b| b.name).collect();
-            return Err(SceneError::whole_file(
-                arg,
-                format!(
-                    "no such file, and not a built-in scene ({})",
-                    names.join(", ")
-                ),
-            ));
-        }
-    };
-    check_loaded(loaded)
+        );
+    }
+    if Path::new(arg).exists() {
+        return scene::load(Path::new(arg));
+    }
+    if let Some((family, size)) = generated::family_of(arg) {
+        let base = builtin(family.prefix).expect("every generated family has a built-in");
+        let text = generated::text(family, size, base.text).map_err(|e| {
+            SceneError::whole_file(arg, format!("generated `{}` scene: {e}", family.prefix))
+        })?;
+        return scene::parse(
+            &format!("scenes/{arg}.toml"),
+            &text,
+            Some(Path::new("scenes")),
+        );
+    }
+    let names: Vec<&str> = BUILTIN.iter().map(|b| b.name).collect();
+    let families: Vec<String> = generated::FAMILIES
+        .iter()
+        .map(|f| format!("{}-SIZE", f.prefix))
+        .collect();
+    Err(SceneError::whole_file(
+        arg,
+        format!(
+            "no such file, and not a built-in scene ({}) or a generated one ({})",
+            names.join(", "),
+            families.join(", ")
+        ),
+    ))
 }
 
 /// Compiles a loaded scene and checks what only the device crate knows.

@@ -13,7 +13,7 @@ fn main() {
         [n, d] => (n.as_str(), d.clone()),
         _ => {
             eprintln!(
-                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered> <device-name>"
+                "usage: scene_tables <four-bar|stewart|sphere-toy|sphere-toy-33|sphere-toy-400|cluttered|bennett|lattice|lattice-RxC|chain|chain-N> <device-name>"
             );
             std::process::exit(2);
         }
@@ -23,6 +23,26 @@ fn main() {
         "stewart" => mechanisms::stewart_builder(),
         "sphere-toy" => mechanisms::sphere_toy_builder(),
         "cluttered" => mechanisms::cluttered_builder(100),
+        "bennett" => mechanisms::bennett_builder(),
+        "lattice" => mechanisms::lattice_builder(),
+        "chain" => mechanisms::chain_builder(),
+        sized if sized.starts_with("lattice-") => {
+            let shape = sized["lattice-".len()..]
+                .split_once('x')
+                .and_then(|(r, c)| Some((r.parse().ok()?, c.parse().ok()?)));
+            let Some((rows, cols)) = shape else {
+                eprintln!("sized lattices: lattice-RxC, e.g. lattice-2x8");
+                std::process::exit(2);
+            };
+            mechanisms::lattice_sized(rows, cols)
+        }
+        sized if sized.starts_with("chain-") => {
+            let Ok(links) = sized["chain-".len()..].parse() else {
+                eprintln!("sized chains: chain-N, e.g. chain-16");
+                std::process::exit(2);
+            };
+            mechanisms::chain_sized(links)
+        }
         sized if sized.starts_with("sphere-toy-") => {
             let shape = sized["sphere-toy-".len()..]
                 .parse()
@@ -36,7 +56,7 @@ fn main() {
         }
         other => {
             eprintln!(
-                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N or cluttered"
+                "unknown mechanism `{other}`; expected four-bar, stewart, sphere-toy, sphere-toy-N, cluttered, bennett, lattice, lattice-RxC, chain or chain-N"
             );
             std::process::exit(2);
         }

@@ -87,12 +87,15 @@ pub enum EvalError {
 pub struct Evaluation {
     model_id: u64,
     /// One per body (fixed bodies pre-filled), then the world.
-    frames: Vec<BodyFrame>,
+    pub(crate) frames: Vec<BodyFrame>,
     values: Vec<f64>,
     jacobian: Jacobian,
     /// Parameters of the contact rows, one per slot (see
     /// [`crate::constraint::witness`]).
     witnesses: Vec<Witness>,
+    /// The rolling rows' tick-start anchors (`crate::parametric::rolling`),
+    /// off until [`Evaluation::anchor_rolling`] sets them.
+    pub(crate) rolling: Vec<crate::parametric::rolling::RollAnchor>,
 }
 
 impl Evaluation {
@@ -113,6 +116,7 @@ impl Evaluation {
                 w.extend(model.semantic.slots.iter().map(|p| Witness::Plane(*p)));
                 w
             },
+            rolling: vec![crate::parametric::rolling::RollAnchor::OFF; model.rolling.len()],
         }
     }
 
@@ -196,6 +200,7 @@ impl Evaluation {
             values,
             jacobian,
             witnesses,
+            rolling,
             ..
         } = self;
         let x = Ctx {
@@ -203,17 +208,32 @@ impl Evaluation {
             frames,
             targets,
             witnesses,
+            flex: &model.flex_anchors,
+            surfaces: &model.surfaces,
+            rolling,
         };
         let (blocks, vals) = jacobian.blocks_and_values_mut();
+        let flexible = !model.flex_anchors.is_empty();
         for ((g, info), b) in model.geometry.iter().zip(&model.constraints).zip(blocks) {
             let c = &mut values[info.rows.clone()];
             if jac {
                 let [f0, f1] = g.frames();
+                let flex = if flexible {
+                    g.anchors().map(|a| match a {
+                        crate::constraint::block::Param3::Flex(i) => {
+                            Some(&model.flex_anchors[i as usize])
+                        }
+                        _ => None,
+                    })
+                } else {
+                    [None, None]
+                };
                 let mut sink = Block {
                     vals: &mut vals[b.start..b.start + c.len() * b.width],
                     width: b.width,
                     pos: b.pos,
                     frames: [&frames[f0], &frames[f1]],
+                    flex,
                 };
                 g.eval(&x, c, &mut sink);
             } else {

@@ -91,6 +91,7 @@ mod cholesky;
 pub mod constraint;
 pub mod contact;
 mod evaluate;
+pub mod flexible;
 pub mod force;
 pub mod geometry;
 mod ids;
@@ -98,6 +99,7 @@ mod jacobian;
 pub mod mechanisms;
 mod model;
 pub mod objective;
+pub mod parametric;
 pub mod placement;
 pub mod program;
 pub mod rotation;
@@ -110,6 +112,7 @@ pub use evaluate::{EvalError, Evaluation, FingerTarget};
 pub use force::{FingerWrench, Redundancy, ReferenceError, reference_finger_wrenches};
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
+pub use model::{AuxBlock, AuxOwner, ContactSurface, Rest};
 pub use model::{
     Body, BodySpec, Bounds, BuildError, ContactLayout, ContactPair, DEFAULT_FINGERTIP_RADIUS_M,
     DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignOwner, DesignParam, DesignVar,

@@ -3,6 +3,7 @@
 //! clock (`session::timing`).
 
 use super::output::{check_writable, write_atomic};
+use super::values;
 use crate::report::summary::{Stages, Summary};
 use crate::scenes::resolve;
 use crate::session::{self, Plan, SessionOptions, Stage};
@@ -15,6 +16,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 /// Flags of `haptloop bench`.
 #[derive(Debug, Args)]
@@ -35,6 +37,19 @@ pub struct BenchArgs {
     /// solver's.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub iterations: Option<u32>,
+    /// Update rule of the fast loop, as for `run`: `projected` or
+    /// `gradient`. Default: the scene's, else `projected`.
+    #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
+    pub update: Option<haptloop_solver::UpdateRule>,
+    /// Constraint gain K of the fast update (finite, > 0), as for `run`.
+    /// Default: the scene's, else the solver's.
+    #[arg(long, value_parser = values::positive)]
+    pub gain: Option<f64>,
+    /// Time constant of the velocity filter behind the Eq. 7 inertial
+    /// force, ms (0 turns it off), as for `run`. Default: the scene's, else
+    /// 10 ms.
+    #[arg(long, value_name = "MS", value_parser = values::filter_ms)]
+    pub velocity_filter_ms: Option<f64>,
 }
 
 /// p50, p99, p99.9 and max of one figure, ns.
@@ -63,6 +78,8 @@ struct Violation {
     max: f64,
     /// RMS over ticks of the length rows' RMS, m.
     rms: f64,
+    /// Largest angle-row violation of any tick, rad.
+    max_rad: f64,
 }
 
 /// What `--json` writes.
@@ -72,6 +89,12 @@ struct BenchJson {
     ticks: u64,
     rate_hz: u32,
     iterations: u32,
+    /// The update rule, `projected` or `gradient`.
+    update: &'static str,
+    /// Constraint gain K.
+    gain: f64,
+    /// The velocity filter's time constant, ms.
+    velocity_filter_ms: f64,
     tick_ns: Quantiles,
     tick_without_device_ns: Quantiles,
     /// Mean of `tick_without_device_ns`.
@@ -108,10 +131,17 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         seconds,
         rate_hz: Some(rate),
         iterations: args.iterations,
+        update: args.update,
+        gain: args.gain,
+        velocity_filter: args
+            .velocity_filter_ms
+            .map(|ms| Duration::from_secs_f64(ms / 1000.0)),
         deterministic: true,
         ..SessionOptions::default()
     };
     let plan = Plan::new(&scene, &options)?;
+    let (update, gain) = (plan.solver.update, plan.solver.gain);
+    let velocity_filter_ms = plan.solver.velocity_filter.as_secs_f64() * 1e3;
     let outcome = session::run(&scene, plan, stop, &mut |_| {})?;
     let s = Summary::of(&outcome);
     let json = BenchJson {
@@ -119,6 +149,9 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         ticks: s.ticks,
         rate_hz: s.rate_hz,
         iterations: s.iterations,
+        update: crate::report::sweep::rule(update),
+        gain,
+        velocity_filter_ms,
         tick_ns: s.stages_ns.tick.into(),
         tick_without_device_ns: s.stages_ns.tick_without_device.into(),
         tick_without_device_mean_ns: s.stages_ns.tick_without_device_mean,
@@ -131,6 +164,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         violation: Violation {
             max: s.violation.max,
             rms: s.violation.rms,
+            max_rad: s.violation.max_rad,
         },
         solver_failures: s.safety.solver_failures,
     };
@@ -148,12 +182,15 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} update iteration{} per tick",
+        "haptloop bench {}: {} ticks at {} Hz on the mock clock, {} {} update iteration{} per tick, gain {}, velocity filter {} ms",
         b.scene,
         b.ticks,
         b.rate_hz,
         b.iterations,
-        if b.iterations == 1 { "" } else { "s" }
+        b.update,
+        if b.iterations == 1 { "" } else { "s" },
+        b.gain,
+        b.velocity_filter_ms
     );
     let _ = writeln!(
         out,
@@ -194,8 +231,8 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
     );
     let _ = write!(
         out,
-        "constraint violation: max {:.2e} m, RMS {:.2e} m; solver failures: {}",
-        b.violation.max, b.violation.rms, b.solver_failures
+        "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m; solver failures: {}",
+        b.violation.max, b.violation.max_rad, b.violation.rms, b.solver_failures
     );
     out
 }

@@ -140,11 +140,21 @@ pub fn summary(scene: &Scene) -> String {
         m.bodies().len() - moving
     );
     out += &format!(
-        "  coordinates  {} ({} body, {design} free design variable{})\n",
+        "  coordinates  {} ({} body, {design} free design variable{}{})\n",
         m.n_coords(),
         m.layout().body_coords(),
-        if design == 1 { "" } else { "s" }
+        if design == 1 { "" } else { "s" },
+        match m.layout().aux_coords() {
+            0 => String::new(),
+            n => format!(", {n} auxiliary"),
+        }
     );
+    for a in m.layout().aux_blocks() {
+        out += &format!(
+            "  auxiliary    {} ({} coordinates from column {})\n",
+            a.name, a.width, a.offset
+        );
+    }
     out += &format!("  constraints  {}\n", kinds.join(", "));
     for d in m.layout().design_vars() {
         let bounds = d.bounds.map_or("unbounded".to_string(), |b| {

@@ -3,6 +3,7 @@
 
 mod bench;
 mod check;
+mod export;
 mod output;
 mod preflight;
 mod probe;
@@ -95,6 +96,10 @@ enum Command {
     View(view::ViewArgs),
     /// List the built-in scenes, one line each.
     Scenes,
+    /// Write a scene in another program's format: `export mjcf SCENE`.
+    ///
+    /// MJCF is MuJoCo's: the model `benches/peers/` steps beside haptloop.
+    Export(export::ExportArgs),
     /// Validate a scene file (or built-in name) and print what it compiles to.
     ///
     /// Errors name the file, line and column and what was expected; the exit
@@ -132,6 +137,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Scenes) => scenes::run(),
         Some(Command::Check { scene, seconds }) => check::run(&scene, seconds),
         Some(Command::Bench(args)) => bench::run(&args, &stop),
+        Some(Command::Export(args)) => export::run(&args),
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         Some(Command::View(args)) => view::run(&args),

@@ -22,6 +22,16 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A finite number ≥ 0 (a damping).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number ≥ 0, got {v}"))
+    }
+}
+
 /// The velocity filter's time constant, ms: 0 (off) to 1000.
 pub fn filter_ms(s: &str) -> Result<f64, String> {
     let v = number(s)?;

@@ -10,7 +10,7 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
-fn rule(u: UpdateRule) -> &'static str {
+pub(crate) fn rule(u: UpdateRule) -> &'static str {
     match u {
         UpdateRule::Projected => "projected",
         UpdateRule::Gradient => "gradient",

@@ -107,3 +107,100 @@ fn bench_refuses_bad_input_with_a_clear_error() {
         assert!(err.contains(says), "{args:?}: {err}");
     }
 }
+
+/// `bench` takes `run`'s solver flags, and a scene file as well as a built-in
+/// name: with the same flags its session is `run --deterministic`'s (the
+/// same violation to the bit, from two processes), the JSON records the
+/// settings used, and the flags change the result.
+#[test]
+fn bench_takes_the_solver_flags_and_scene_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("my-bennett.toml");
+    std::fs::write(
+        &file,
+        haptloop::scenes::BUILTIN
+            .iter()
+            .find(|b| b.name == "bennett")
+            .unwrap()
+            .text,
+    )
+    .unwrap();
+    let flags = [
+        "--update",
+        "gradient",
+        "--iterations",
+        "3",
+        "--gain",
+        "500",
+        "--velocity-filter-ms",
+        "5",
+    ];
+    let bench = |extra: &[&str], name: &str| -> serde_json::Value {
+        let json = dir.path().join(name);
+        let out = haptloop()
+            .args(["bench", file.to_str().unwrap(), "--ticks", "400", "--json"])
+            .arg(&json)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+    };
+    let flagged = bench(&flags, "flagged.json");
+    assert_eq!(flagged["scene"], "bennett");
+    assert_eq!(flagged["update"], "gradient");
+    assert_eq!(flagged["iterations"], 3);
+    assert_eq!(flagged["gain"], 500.0);
+    assert_eq!(flagged["velocity_filter_ms"], 5.0);
+    let plain = bench(&[], "plain.json");
+    assert_eq!(plain["update"], "projected");
+    let (vf, vp) = (
+        flagged["violation"]["max"].as_f64().unwrap(),
+        plain["violation"]["max"].as_f64().unwrap(),
+    );
+    assert_ne!(vf, vp, "the flags changed nothing");
+    let run_dir = dir.path().join("run");
+    let out = haptloop()
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--deterministic",
+            "--seconds",
+            "0.4",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&run_dir)
+        .args(flags)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["violation"]["max"].as_f64(), Some(vf));
+    // Bad values are usage errors naming the flag.
+    for (flag, value) in [
+        ("--update", "sideways"),
+        ("--gain", "0"),
+        ("--velocity-filter-ms", "2000"),
+    ] {
+        let out = haptloop()
+            .args(["bench", "bennett", flag, value])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(flag),
+            "{flag}"
+        );
+    }
+}

@@ -180,13 +180,16 @@ fn an_interrupted_sweep_exits_130_and_labels_what_ran() {
     let child = haptloop()
         .args(["sweep", "four-bar", "--iterations", "1,2,3,4,5,6"])
         .args(["--update", "projected,gradient", "--rate", "1000,2000"])
-        .args(["--seconds", "3", "--threads", "1", "--quiet", "--out"])
+        .args(["--seconds", "10", "--threads", "1", "--quiet", "--out"])
         .arg(&out)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // 24 points of 3 s: about 10 s of work on an idle machine.
+    // 24 points of 10 s: 480 s of session time (accuracy, then timing), at
+    // least ~13 s of work even on CI's faster cores (3 s points finished
+    // there inside the 4 s wait), while the first point is measured in
+    // about a second.
     std::thread::sleep(Duration::from_secs(4));
     Command::new("kill")
         .args(["-INT", &child.id().to_string()])

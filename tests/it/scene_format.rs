@@ -121,6 +121,10 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
         }),
         ("shape", after("[[body]]\n", "shape = { zz_unknown = 1 }\n")),
         (
+            "flexible",
+            after("[[body]]\n", "flexible = { zz_unknown = 1 }\n"),
+        ),
+        (
             "capsule",
             after(
                 "[[body]]\n",
@@ -130,6 +134,14 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
         (
             "kind values",
             replace("kind = \"revolute\"", "kind = \"zz_unknown\""),
+        ),
+        (
+            "surface",
+            after("[[joint]]\n", "surface = { zz_unknown = 1 }\n"),
+        ),
+        (
+            "type values",
+            after("[[joint]]\n", "surface = { type = \"zz_unknown\" }\n"),
         ),
         (
             "free values",

@@ -474,6 +474,12 @@ fn a_deterministic_run_is_the_same_bit_for_bit_with_the_live_view_on() {
         };
         let off = go(None);
         let on = go(Some(hook));
+        // A loaded machine may not have scheduled the viewer during the
+        // run; the last frame is still in the mailbox for it to read.
+        let waited = std::time::Instant::now();
+        while frames.load(Ordering::Relaxed) == 0 && waited.elapsed().as_secs() < 30 {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
         done.store(true, Ordering::Release);
         viewer
             .lock()

@@ -179,6 +179,12 @@ impl<C: Clock> Periodic<C> {
                 OverrunPolicy::Skip => behind,
                 OverrunPolicy::CatchUp { max_burst } => behind.saturating_sub(u64::from(max_burst)),
             };
+            // Slots past the run's end are not skipped: they never belonged to
+            // the run (a stall across the end used to count them, 408 slots
+            // for a 400-slot limit).
+            missed.skipped = missed
+                .skipped
+                .min(slots_left(index, &limit, end_at, origin, period));
             index += missed.skipped;
 
             self.record(&tick, end, lateness, compute, prev_start, &missed);
@@ -315,4 +321,24 @@ mod tests {
         assert_eq!(slots_behind(Nanos(2501), Nanos(1000), b, p), 2);
         assert_eq!(slots_behind(Nanos(6200), Nanos(1000), b, p), 5);
     }
+}
+
+/// How many slots from `index` on still belong to a run with this limit: the
+/// slot count's rest and the slots whose deadline is not past `end_at`.
+fn slots_left(
+    index: u64,
+    limit: &RunLimit,
+    end_at: Option<Nanos>,
+    origin: Nanos,
+    period: Nanos,
+) -> u64 {
+    let by_count = limit.slots.map_or(u64::MAX, |n| n.saturating_sub(index));
+    let by_time = end_at.map_or(u64::MAX, |e| {
+        if e < origin {
+            0
+        } else {
+            ((e - origin).0 / period.0.max(1) + 1).saturating_sub(index)
+        }
+    });
+    by_count.min(by_time)
 }

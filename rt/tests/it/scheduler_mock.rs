@@ -102,6 +102,27 @@ fn a_host_stall_while_sleeping_shows_as_a_late_tick_plus_skipped_slots() {
 }
 
 #[test]
+fn a_stall_across_the_end_counts_only_the_runs_own_slots() {
+    // Tick 997 of a 1000-slot run computes for 9.3 ms: 9 slots are behind but
+    // only 998 and 999 belong to the run (the real-thread test once saw 408
+    // slots for a limit of 400 after such a stall).
+    for limit in [
+        RunLimit::slots(1000),
+        RunLimit::duration(Duration::from_millis(1000)),
+    ] {
+        let clock = start();
+        let (mut sched, _iv) = Periodic::new(&config(1000), clock.clone()).unwrap();
+        let mut body = Recorder::new(clock.clone());
+        body.stall_at = Some((997, 9_300_000));
+        assert_eq!(sched.run(&mut body, limit, &StopFlag::new()), RunEnd::Limit);
+        let r = sched.report();
+        assert_eq!(r.slots, 1000, "{limit:?}");
+        assert_eq!(r.misses.skipped, 2, "{limit:?}");
+        assert_eq!(r.ticks, 998, "{limit:?}");
+    }
+}
+
+#[test]
 fn catch_up_runs_a_bounded_burst_and_counts_it() {
     let clock = start();
     let cfg = ScheduleConfig {

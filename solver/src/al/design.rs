@@ -81,7 +81,7 @@ impl DesignStep {
     /// design columns. Allocates.
     pub fn new(model: &Model, w_kg: f64) -> Option<Self> {
         let l = model.layout();
-        let cols: Vec<usize> = (l.body_coords()..model.n_coords()).collect();
+        let cols: Vec<usize> = l.design_range().collect();
         if cols.is_empty() {
             return None;
         }

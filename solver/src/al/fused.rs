@@ -155,6 +155,9 @@ impl Fused {
             frames: &self.frames,
             targets,
             witnesses,
+            flex: &model.flex_anchors,
+            surfaces: &model.surfaces,
+            rolling: &[],
         };
         let mut sink = GradSink {
             rows: [RowGrad::default(); MAX_ROWS],

@@ -23,6 +23,13 @@ pub(crate) struct Ctx<'a> {
     pub targets: &'a [FingerTarget],
     /// The witness table (contact rows' parameters).
     pub witnesses: &'a [crate::constraint::witness::Witness],
+    /// The model's deforming points (`Param3::Flex` indexes them; empty
+    /// for a rigid model).
+    pub flex: &'a [crate::flexible::anchor::FlexAnchor],
+    /// The model's surface contacts (`crate::parametric`; empty without).
+    pub surfaces: &'a [crate::parametric::SurfaceContact],
+    /// The rolling rows' tick-start anchors (`crate::parametric::rolling`).
+    pub rolling: &'a [crate::parametric::rolling::RollAnchor],
 }
 
 impl Ctx<'_> {
@@ -36,6 +43,7 @@ impl Ctx<'_> {
         match *p {
             Param3::Const(v) => v,
             Param3::Free(col) => Vector3::new(self.q[col], self.q[col + 1], self.q[col + 2]),
+            Param3::Flex(i) => flex_point(self.flex, i, self.q),
         }
     }
 
@@ -48,11 +56,31 @@ impl Ctx<'_> {
     }
 }
 
-/// A 3-vector that is a constant or a free design variable (its column in q).
+/// The deformed point of a flexible body's anchor `i`: out of line and
+/// cold, so the rigid path's `Ctx::vec3` stays two arms of straight code
+/// (inlined into every anchor's evaluation; the flexible arm inline cost a
+/// rigid four-bar 20 % of its evaluation, `haptloop bench`).
+#[cold]
+#[inline(never)]
+fn flex_point(flex: &[crate::flexible::anchor::FlexAnchor], i: u32, q: &[f64]) -> Vector3<f64> {
+    flex[i as usize].point(q)
+}
+
+/// Φᵀ d into a flexible anchor's columns (out of line, as [`flex_point`]).
+#[cold]
+#[inline(never)]
+fn flex_gradient(a: &crate::flexible::anchor::FlexAnchor, d: &Vector3<f64>, out: &mut [f64]) {
+    a.gradient(d, out);
+}
+
+/// A 3-vector that is a constant, a free design variable (its column in
+/// q), or a point of a flexible body that moves with its deformation (an
+/// index into the model's deforming points, `crate::flexible::anchor`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Param3 {
     Const(Vector3<f64>),
     Free(usize),
+    Flex(u32),
 }
 
 /// A scalar that is a constant or a free design variable (its column in q).
@@ -70,6 +98,8 @@ pub(crate) enum Slot {
     BodyJ = 1,
     AnchorI = 2,
     AnchorJ = 3,
+    /// A distance joint's free length (1 column), or a surface contact's
+    /// (u, v) (2 columns): written through `Sink::set` only.
     Length = 4,
     /// The free position (3 design columns, world frame) of a fixed body at
     /// end 0 or 1 (see `Model::constraint_groups`).
@@ -129,7 +159,9 @@ pub(crate) struct Point {
 }
 
 impl Pair {
-    /// Column groups of the two bodies and of any free anchors.
+    /// Column groups of the two bodies and of any free anchors (a flexible
+    /// anchor's deformation columns are added by `Model::constraint_groups`,
+    /// which knows where they are).
     pub fn groups(&self) -> Groups {
         let mut g: Groups = [None; SLOTS];
         for end in 0..2 {
@@ -300,6 +332,9 @@ pub(crate) struct Block<'a> {
     pub pos: [u16; SLOTS],
     /// Frames of the two ends (for Ω and Rᵀ).
     pub frames: [&'a BodyFrame; 2],
+    /// A deforming anchor at either end: its anchor slot holds the
+    /// deformation columns, ∂/∂q_f = Φᵀ Rᵀ n (`None` on rigid models).
+    pub flex: [Option<&'a crate::flexible::anchor::FlexAnchor>; 2],
 }
 
 impl Sink for Block<'_> {
@@ -318,7 +353,11 @@ impl Sink for Block<'_> {
             let p = self.pos[Slot::anchor(end) as usize];
             if p != u16::MAX {
                 let dk = f.rot.tr_mul(&g.lin[end]);
-                self.vals[base + p as usize..base + p as usize + 3].copy_from_slice(dk.as_slice());
+                let at = base + p as usize;
+                match self.flex[end] {
+                    None => self.vals[at..at + 3].copy_from_slice(dk.as_slice()),
+                    Some(a) => flex_gradient(a, &dk, &mut self.vals[at..at + a.width()]),
+                }
             }
             let p = self.pos[Slot::origin(end) as usize];
             if p != u16::MAX {

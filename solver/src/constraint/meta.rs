@@ -59,6 +59,12 @@ pub enum ConstraintKind {
     /// A hand's hold on a body: the fingertip's centre fixed in the body
     /// (a spherical joint the slow loop adds and removes): 3 rows, m.
     Hold,
+    /// A point held on a parametric surface with its (u, v) coordinates
+    /// (Nelson & Cohen App. E; `crate::parametric`): 3 rows, m.
+    OnSurface,
+    /// A ball rolling without slipping on a surface: the contact point's
+    /// tangential displacement over a tick (nonholonomic): 2 rows, m.
+    Rolling,
 }
 
 impl ConstraintKind {
@@ -68,7 +74,7 @@ impl ConstraintKind {
         let metres = match self {
             Spherical | Distance | PointOnPlane | PointFinger | PrismaticLimit | DistanceLimit
             | PointPlaneInequality | Contact | ContactFriction | DesignBound | DesignPin
-            | SurfacePlane | SurfaceInclusion | Hold => {
+            | SurfacePlane | SurfaceInclusion | Hold | OnSurface | Rolling => {
                 return RowUnit::Length;
             }
             Perpendicular | RevoluteLimit => return RowUnit::Angle,
@@ -120,6 +126,8 @@ impl ConstraintKind {
             SurfacePlane => "surface plane",
             SurfaceInclusion => "surface inclusion",
             Hold => "hold",
+            OnSurface => "on_surface",
+            Rolling => "rolling",
         }
     }
 }

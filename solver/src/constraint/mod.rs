@@ -16,6 +16,7 @@
 //! | `limit.rs` | joint limits on a revolute / prismatic / distance coordinate (≥) | 2 | angle or m |
 //! | `bound.rs` | bounds on a design-variable component (≥), or a pin (=) when lo = hi | 2 / 1 | m |
 //! | `witness/` | contact witnesses (≥), one witness kind per file, and friction stick rows | per pair | m |
+//! | `crate::parametric` | `on_surface` (3 rows, m, with (u, v) columns) and `rolling` (2 rows, m) | 3 / 2 | m |
 //! | `surface.rs` | semantic surface constraints: plane rows (=) and polygon inclusion (≥), parameters in the witness table's tail | 3 / per vertex × edge | m |
 //!
 //! `axes.rs` holds the reference directions of the axis-aligning joints.
@@ -59,6 +60,8 @@ pub(crate) enum Geometry {
     Contact(witness::ContactRows),
     Bound(bound::DesignBound),
     Surface(surface::SurfaceRows),
+    OnSurface(crate::parametric::contact::OnSurface),
+    Rolling(crate::parametric::rolling::Rolling),
 }
 
 impl Geometry {
@@ -79,6 +82,8 @@ impl Geometry {
             Self::Contact(c) => c.rows as usize,
             Self::Bound(b) => b.rows(),
             Self::Surface(s) => s.rows as usize,
+            Self::OnSurface(_) => crate::parametric::contact::OnSurface::ROWS,
+            Self::Rolling(_) => crate::parametric::rolling::Rolling::ROWS,
         }
     }
 
@@ -112,6 +117,8 @@ impl Geometry {
             Self::Contact(c) => c.pair.groups(),
             Self::Bound(b) => b.groups(),
             Self::Surface(s) => s.pair.groups(),
+            Self::OnSurface(s) => s.pair.groups(),
+            Self::Rolling(r) => r.pair.groups(),
         }
     }
 
@@ -134,6 +141,31 @@ impl Geometry {
             // Raw values only, like the norm row.
             Self::Bound(_) => [0, 0],
             Self::Surface(s) => s.pair.frame,
+            Self::OnSurface(s) => s.pair.frame,
+            Self::Rolling(r) => r.pair.frame,
+        }
+    }
+
+    /// The anchors of the two ends (constants for the kinds without a pair
+    /// of anchors): where a flexible body's deforming points are found.
+    pub fn anchors(&self) -> [block::Param3; 2] {
+        let none = [block::Param3::Const(nalgebra::Vector3::zeros()); 2];
+        match self {
+            Self::Spherical(j) => j.pair.anchor,
+            Self::Perpendicular(j) => j.pair.anchor,
+            Self::Universal(j) => j.pair.anchor,
+            Self::Revolute(j) => j.pair.anchor,
+            Self::Prismatic(j) => j.pair.anchor,
+            Self::Weld(j) => j.pair.anchor,
+            Self::Distance(j) => j.pair.anchor,
+            Self::PointPlane(j) => j.pair.anchor,
+            Self::Finger(j) => j.pair.anchor,
+            Self::Limit(j) => j.pair().anchor,
+            Self::Contact(c) => c.pair.anchor,
+            Self::Surface(s) => s.pair.anchor,
+            Self::OnSurface(s) => s.pair.anchor,
+            Self::Rolling(r) => r.pair.anchor,
+            Self::QuatNorm(_) | Self::Bound(_) => none,
         }
     }
 
@@ -155,6 +187,8 @@ impl Geometry {
             Self::Contact(j) => j.eval(x, c, sink),
             Self::Bound(j) => j.eval(x, c, sink),
             Self::Surface(j) => j.eval(x, c, sink),
+            Self::OnSurface(j) => j.eval(x, c, sink),
+            Self::Rolling(j) => j.eval(x, c, sink),
         }
     }
 }

@@ -30,6 +30,17 @@ struct FingerRows {
     /// A contact finger's proxy under inertial motion (its rows have
     /// [`Role::Coupling`]): the coupling force is known, not solved for.
     proxy: bool,
+    /// A point on a flexible body: it moves with the deformation.
+    flex: Option<crate::flexible::anchor::FlexAnchor>,
+}
+
+impl FingerRows {
+    /// The attachment point, body frame, at `q` (deformed on a flexible
+    /// body).
+    #[inline]
+    fn point_at(&self, q: &[f64]) -> Vector3<f64> {
+        self.flex.map_or(self.point, |a| a.point(q))
+    }
 }
 
 /// Buffers and factor of the force computation.
@@ -74,6 +85,9 @@ pub(crate) struct Feedback {
     /// Counts the factorisations: whatever caches products with the factor
     /// (the projected update's design columns) recomputes when it changes.
     pub generation: u64,
+    /// Per flexible body of the model: its body's column offset (its
+    /// deformation columns' b is the elastic force, `crate::flexible`).
+    flex_offsets: Vec<usize>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -123,6 +137,12 @@ impl Feedback {
                 let proxy = settings.dynamics
                     && settings.update == UpdateRule::Projected
                     && f.tip.is_some();
+                let flex = match model.geometry[f.constraint.index()].anchors()[0] {
+                    crate::constraint::block::Param3::Flex(i) => {
+                        Some(model.flex_anchors[i as usize])
+                    }
+                    _ => None,
+                };
                 FingerRows {
                     proxy,
                     rigid: rows.len() == 6,
@@ -130,12 +150,18 @@ impl Feedback {
                     pos,
                     offset,
                     point: f.point_m,
+                    flex,
                 }
             })
             .collect::<Vec<_>>();
         let tau = settings.velocity_filter.as_secs_f64();
         Ok(Self {
-            motion: Motion::new(model.q0(), masses.len(), tau),
+            motion: Motion::new(
+                model.q0(),
+                masses.len(),
+                model.n_coords() - model.layout().aux_coords(),
+                tau,
+            ),
             masses,
             gram,
             solve,
@@ -160,6 +186,11 @@ impl Feedback {
             known: vec![None; m_f],
             max_pull_n: 0.0,
             generation: 0,
+            flex_offsets: model
+                .flexible
+                .iter()
+                .map(|f| model.layout().body_offset(f.body).unwrap_or(0))
+                .collect(),
             fingers,
             b: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
@@ -315,6 +346,18 @@ impl Feedback {
                 &mo.w[k],
                 &mo.alpha[k],
                 &mut self.b[o..o + 7],
+            );
+        }
+        for (fb, &o) in model.flexible.iter().zip(&self.flex_offsets) {
+            let f = frame(q, o).ok_or(FactorError)?;
+            let (c, w) = (fb.col, fb.width());
+            let a = c - self.motion.aux_start;
+            fb.generalized_force(
+                q,
+                &f.rot,
+                &g,
+                &self.motion.aux_a[a..a + w],
+                &mut self.b[c..c + w],
             );
         }
         self.couplings(s, settings, q, targets, dt_s)?;
@@ -495,7 +538,7 @@ impl Feedback {
     ) -> Result<(), FactorError> {
         for (k, fr) in self.fingers.iter().enumerate() {
             let f = frame(q, fr.offset).ok_or(FactorError)?;
-            let err = f.point(&fr.point) - targets[k].position_m;
+            let err = f.point(&fr.point_at(q)) - targets[k].position_m;
             let rate = if self.motion.ticks > 1 && dt_s > 0.0 {
                 (err - self.prev_error[k]) / dt_s
             } else {
@@ -541,7 +584,7 @@ impl Feedback {
                     *w += vals[fr.pos[n] + c] * lam;
                 }
             }
-            let p = f.point(&fr.point);
+            let p = f.point(&fr.point_at(q));
             let (force, torque) = on_finger(&f, &p, &w_c);
             let t = &targets[k];
             let (err, rate) = self.coupling[k];

@@ -11,6 +11,10 @@
 //! the row's 7 or 4 Jacobian values on the body's columns, times the row's
 //! scale) and adds c_a · u_b to each precomputed destination. Design-variable
 //! columns have no inertia: they are frozen in Eq. 7 (M⁻¹ = 0 there).
+//! Auxiliary blocks (flexible deformations, surface parameters;
+//! `model::auxiliary`) have their metric H: the rows touching a block add
+//! c_a · H⁻¹ c_b over its columns, in a pass of their own that a model
+//! without such blocks never runs.
 
 use faer::sparse::SymbolicSparseColMat;
 use nalgebra::{Matrix4, Vector3, Vector4};
@@ -38,6 +42,17 @@ struct Entry {
     pos: usize,
     /// 7 (r and e) or 4 (e only: quaternion-norm rows).
     width: usize,
+}
+
+/// The rows touching one auxiliary block and where their products go.
+#[derive(Debug, Clone)]
+struct AuxRows {
+    /// Index into the model's auxiliary blocks.
+    block: usize,
+    /// (row, value index of the block's first column in that row).
+    entries: Vec<(usize, usize)>,
+    /// Destination of c_a · H⁻¹ c_b for (a, b), b ≤ a, in that order.
+    products: Vec<u32>,
 }
 
 #[derive(Debug, Clone)]
@@ -74,6 +89,12 @@ pub(crate) struct Gram {
     live: Vec<bool>,
     /// M̃_e⁻¹ of each body (layout order) at the last assembly.
     minv_e: Vec<Matrix4<f64>>,
+    /// The model's auxiliary blocks (metric and columns).
+    aux_blocks: Vec<crate::model::AuxBlock>,
+    /// Their rows (empty for a model without auxiliary columns).
+    aux: Vec<AuxRows>,
+    /// c and H⁻¹ c of one block's entries (2 × width per entry).
+    aux_cu: Vec<f64>,
 }
 
 impl Gram {
@@ -127,6 +148,24 @@ impl Gram {
                 products: first_pair..pairs.len(),
             });
         }
+        // Rows sharing an auxiliary block couple through its metric.
+        let mut aux_pairs = Vec::new();
+        for (k, blk) in model.layout().aux_blocks().iter().enumerate() {
+            let o = blk.offset;
+            let entries: Vec<(usize, usize)> = (col_ptr[o]..col_ptr[o + 1])
+                .map(|p| (col_rows[p], col_val[p]))
+                .filter(|&(row, _)| slot[row] != Slot::Out)
+                .collect();
+            for a in 0..entries.len() {
+                for b in 0..=a {
+                    let (ra, rb) = (entries[a].0, entries[b].0);
+                    if let (Slot::J(x), Slot::J(y)) = (slot[ra], slot[rb]) {
+                        lower.push((x.max(y), x.min(y)));
+                    }
+                }
+            }
+            aux_pairs.push((k, entries));
+        }
         lower.extend((0..n_j).map(|j| (j, j)));
         lower.sort_unstable_by_key(|&(r, c)| (c, r));
         lower.dedup();
@@ -155,6 +194,38 @@ impl Gram {
                 dest as u32
             })
             .collect();
+        let dest = |ra: usize, rb: usize| -> u32 {
+            (match (slot[ra], slot[rb]) {
+                (Slot::J(x), Slot::J(y)) => find(x.max(y), x.min(y)),
+                (Slot::F(f), Slot::J(j)) | (Slot::J(j), Slot::F(f)) => nnz + f * n_j + j,
+                (Slot::F(x), Slot::F(y)) => nnz + m_f * n_j + x.max(y) * m_f + x.min(y),
+                (Slot::Out, _) | (_, Slot::Out) => unreachable!("excluded rows have no entries"),
+            }) as u32
+        };
+        let aux: Vec<AuxRows> = aux_pairs
+            .into_iter()
+            .map(|(block, entries)| {
+                let mut products = Vec::new();
+                for a in 0..entries.len() {
+                    for b in 0..=a {
+                        products.push(dest(entries[a].0, entries[b].0));
+                    }
+                }
+                AuxRows {
+                    block,
+                    entries,
+                    products,
+                }
+            })
+            .collect();
+        let aux_blocks = model.layout().aux_blocks().to_vec();
+        let aux_cu = vec![
+            0.0;
+            aux.iter()
+                .map(|a| 2 * aux_blocks[a.block].width * a.entries.len())
+                .max()
+                .unwrap_or(0)
+        ];
         let max_entries = bodies.iter().map(|b| b.entries.len()).max().unwrap_or(0);
         let pattern = SymbolicSparseColMat::new_checked(n_j, n_j, cp, None, ri);
         Self {
@@ -172,6 +243,9 @@ impl Gram {
             cu: vec![0.0; 14 * max_entries],
             live: vec![false; max_entries],
             minv_e: vec![Matrix4::zeros(); masses.len()],
+            aux_blocks,
+            aux,
+            aux_cu,
         }
     }
 
@@ -193,6 +267,7 @@ impl Gram {
         let mut fj: Vec<usize> = self
             .products
             .iter()
+            .chain(self.aux.iter().flat_map(|a| &a.products))
             .map(|&d| d as usize)
             .filter(|&d| d >= nnz && d < nnz + m_f * n_j)
             .collect();
@@ -224,6 +299,9 @@ impl Gram {
             }
             let ge = Vector4::new(g[o + 3], g[o + 4], g[o + 5], g[o + 6]);
             out[o + 3..o + 7].copy_from_slice((minv * ge).as_slice());
+        }
+        for blk in &self.aux_blocks {
+            blk.apply_inverse(g, out);
         }
     }
 
@@ -306,11 +384,52 @@ impl Gram {
                 first += a + 1;
             }
         }
+        if !self.aux.is_empty() {
+            self.assemble_aux(jac, scale, b, y);
+        }
         let (nnz, m_f, n_j) = (self.nnz(), self.m_f, self.n_j);
         let ff = &mut self.values[nnz + m_f * n_j..];
         for x in 0..m_f {
             for z in 0..x {
                 ff[z * m_f + x] = ff[x * m_f + z];
+            }
+        }
+    }
+}
+
+impl Gram {
+    /// The auxiliary blocks' share of A (c_a · H⁻¹ c_b per pair of rows on
+    /// a block) and of y = M̃⁻¹ b (H⁻¹ b on the block's columns).
+    ///
+    /// # Real-time
+    /// No allocation; O(Σ_blocks rows² · width + rows · width²).
+    fn assemble_aux(&mut self, jac: &Jacobian, scale: &[f64], b: &[f64], y: &mut [f64]) {
+        let vals = jac.values();
+        for a in &self.aux {
+            let blk = &self.aux_blocks[a.block];
+            let w = blk.width;
+            blk.apply_inverse(b, y);
+            for (k, &(row, pos)) in a.entries.iter().enumerate() {
+                let s = scale[row];
+                let cu = &mut self.aux_cu[2 * w * k..2 * w * (k + 1)];
+                let (c, u) = cu.split_at_mut(w);
+                for (d, v) in c.iter_mut().zip(&vals[pos..pos + w]) {
+                    *d = v * s;
+                }
+                blk.inverse_times(c, u);
+            }
+            let mut next = 0;
+            for x in 0..a.entries.len() {
+                for z in 0..=x {
+                    let dest = a.products[next] as usize;
+                    next += 1;
+                    let c = &self.aux_cu[2 * w * x..2 * w * x + w];
+                    let u = &self.aux_cu[2 * w * z + w..2 * w * (z + 1)];
+                    let acc: f64 = c.iter().zip(u).map(|(p, q)| p * q).sum();
+                    if acc != 0.0 {
+                        self.values[dest] += acc;
+                    }
+                }
             }
         }
     }

@@ -21,6 +21,10 @@
 //! the second stage spreads it over τ_a. Accelerations lag by about
 //! τ + τ_a + dt.
 //!
+//! Auxiliary columns (a flexible body's deformation, `crate::flexible`) get
+//! the same differences and filters per column: `aux_v`, `aux_a` (empty
+//! for a model without them).
+//!
 //! History after a reset ([`Program::new`](crate::Program::new), `assemble`,
 //! `set_q`): the program is taken to be at rest. The first tick's velocity is
 //! measured against the reset configuration, but its acceleration is reported
@@ -53,12 +57,18 @@ pub(crate) struct Motion {
     /// Ticks since the last reset (saturating).
     pub ticks: u32,
     tau_s: f64,
+    /// First auxiliary column (all of them are at the end of q).
+    pub aux_start: usize,
+    /// Velocity and acceleration of each auxiliary column.
+    pub aux_v: Vec<f64>,
+    pub aux_a: Vec<f64>,
 }
 
 impl Motion {
-    /// At rest at `q`. Allocates.
-    pub fn new(q: &[f64], bodies: usize, tau_s: f64) -> Self {
+    /// At rest at `q`, auxiliary columns from `aux_start` on. Allocates.
+    pub fn new(q: &[f64], bodies: usize, aux_start: usize, tau_s: f64) -> Self {
         let z = vec![Vector3::zeros(); bodies];
+        let n_aux = q.len() - aux_start;
         Self {
             q_prev: q.to_vec(),
             v: z.clone(),
@@ -67,6 +77,9 @@ impl Motion {
             alpha: z,
             ticks: 0,
             tau_s,
+            aux_start,
+            aux_v: vec![0.0; n_aux],
+            aux_a: vec![0.0; n_aux],
         }
     }
 
@@ -79,6 +92,8 @@ impl Motion {
         for x in [&mut self.v, &mut self.w, &mut self.a, &mut self.alpha] {
             x.fill(Vector3::zeros());
         }
+        self.aux_v.fill(0.0);
+        self.aux_a.fill(0.0);
         self.ticks = 0;
     }
 
@@ -129,6 +144,16 @@ impl Motion {
             }
             self.v[k] = v;
             self.w[k] = w;
+        }
+        for (c, (v, a)) in self.aux_v.iter_mut().zip(&mut self.aux_a).enumerate() {
+            let i = self.aux_start + c;
+            let v_new = *v + ((q[i] - self.q_prev[i]) / dt_s - *v) * alpha_f;
+            *a = if first {
+                0.0
+            } else {
+                *a + ((v_new - *v) / dt_s - *a) * alpha_a
+            };
+            *v = v_new;
         }
         self.q_prev.copy_from_slice(q);
         self.ticks = self.ticks.saturating_add(1);

@@ -568,7 +568,19 @@ fn dependent_in_order(
 ) -> Vec<usize> {
     let q = model.q0();
     let jac = ev.jacobian();
-    let nb = model.layout().body_coords();
+    let nb0 = model.layout().body_coords();
+    // Auxiliary blocks (flexible deformations, surface parameters) take
+    // part with their metric: Lᵀ with L Lᵀ = H⁻¹, after the bodies'.
+    let aux: Vec<(usize, usize, nalgebra::DMatrix<f64>)> = model
+        .layout()
+        .aux_blocks()
+        .iter()
+        .filter_map(|b| {
+            let inv = nalgebra::DMatrix::from_row_slice(b.width, b.width, &b.inv_metric);
+            Some((b.offset, b.width, inv.cholesky()?.l().transpose()))
+        })
+        .collect();
+    let nb = nb0 + aux.iter().map(|a| a.1).sum::<usize>();
     // M̃^{-1/2} per body: 1/√m on r, Lᵀ with L Lᵀ = M̃_e⁻¹ on e.
     let halves: Vec<(usize, f64, Matrix4<f64>)> = masses
         .iter()
@@ -599,6 +611,12 @@ fn dependent_in_order(
             }
             let ce = lt * Vector4::new(raw[o + 3], raw[o + 4], raw[o + 5], raw[o + 6]);
             col[o + 3..o + 7].copy_from_slice(ce.as_slice());
+        }
+        let mut at = nb0;
+        for (o, w, lt) in &aux {
+            let c = lt * nalgebra::DVector::from_column_slice(&raw[*o..o + w]);
+            col[at..at + w].copy_from_slice(c.as_slice());
+            at += w;
         }
         let own = norm(&col);
         let kept = betas.len();
@@ -635,4 +653,58 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 #[inline]
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BodySpec, JointKind, JointSpec, ModelBuilder, SolverSettings};
+
+    /// A beam welded to the ground at one end and pinned (spherical) at the
+    /// other: 9 rows on a rigid body's 6 motions, so a rigid beam's three
+    /// pin rows depend on the weld's; a flexible beam's two transverse ones
+    /// do not (they hold its bending), its axial one still does (the beam
+    /// bends, it does not stretch). The dense QR and the sparse ordered
+    /// test must both see the deformation columns.
+    fn clamped_pinned(flexible: bool) -> Model {
+        let mut b = ModelBuilder::new();
+        b.body(BodySpec::fixed("ground"));
+        let mut beam = BodySpec::new("beam").mass(0.05).inertia([1e-6, 2e-4, 2e-4]);
+        if flexible {
+            beam = beam.flexible(crate::flexible::BeamSpec::new([0.0, 0.2], 0.05, 3));
+        }
+        b.body(beam);
+        b.joint(JointSpec::new(JointKind::Fixed, "ground", "beam").named("clamp"));
+        b.joint(
+            JointSpec::new(JointKind::Spherical, "beam", "ground")
+                .named("pin")
+                .anchors([0.2, 0.0, 0.0], [0.2, 0.0, 0.0]),
+        );
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn deformation_columns_make_a_clamped_pinned_beam_independent() {
+        for (flexible, masked) in [(false, 3), (true, 1)] {
+            let model = clamped_pinned(flexible);
+            let mut ev = model.evaluation();
+            ev.evaluate(&model, model.q0(), &[]).unwrap();
+            let s = Scaling::new(&model, &SolverSettings::default());
+            let masses = BodyMass::of_model(&model);
+            let rows: Vec<usize> = (0..model.n_rows())
+                .filter(|&i| s.role[i] == Role::Equality)
+                .collect();
+            let dense = dependent_in_order(&model, &ev, &masses, &s.ell, &rows);
+            assert_eq!(dense.len(), masked, "flexible {flexible}: dense {dense:?}");
+            let p = crate::Program::new(
+                std::sync::Arc::new(model),
+                SolverSettings {
+                    redundancy: RedundancyCheck::Dense,
+                    ..SolverSettings::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(p.redundancy().rows.len(), masked, "flexible {flexible}");
+        }
+    }
 }

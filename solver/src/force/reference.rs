@@ -14,7 +14,9 @@
 //! i.e. the smallest finger load that balances b along every free motion, with
 //! any imbalance measured in the kinetic-energy metric (angle rows of a rigid
 //! grasp scaled to metres by the model's characteristic length, as in the fast
-//! path). Design variables are frozen (no inertia).
+//! path). Design variables are frozen (no inertia). Auxiliary columns
+//! (flexible deformations) take part with their metric (K_f, as in the
+//! fast path) and their generalized force (−K_f q_f − M_f q̈_f + g_f).
 
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion, Vector3, Vector4};
 
@@ -93,10 +95,13 @@ pub fn reference_finger_wrenches(
     let targets: Vec<FingerTarget> = model
         .fingers()
         .iter()
-        .map(|f| {
+        .enumerate()
+        .map(|(k, f)| {
             let o = model.layout().body_offset(f.body).unwrap_or(0);
             FingerTarget {
-                position_m: frame(o).map_or(Vector3::zeros(), |fr| fr.point(&f.point_m)),
+                position_m: model
+                    .finger_point(q, FingerId(k as u32))
+                    .unwrap_or(Vector3::zeros()),
                 orientation: UnitQuaternion::new_normalize(Quaternion::new(
                     q[o + 3],
                     q[o + 4],
@@ -107,12 +112,41 @@ pub fn reference_finger_wrenches(
         })
         .collect();
     let mut ev = model.evaluation();
+    ev.anchor_rolling(model, q);
     ev.evaluate(model, q, &targets)?;
     let cq = ev.jacobian().to_dense();
-    let nb = model.layout().body_coords();
+    let nb0 = model.layout().body_coords();
+    // The columns with a metric: the bodies', then the auxiliary blocks'
+    // (flexible deformations: metric K_f, b = −K_f q_f − M_f q̈_f + g_f).
+    let cols: Vec<usize> = (0..nb0)
+        .chain(
+            model
+                .layout()
+                .aux_blocks()
+                .iter()
+                .flat_map(|a| a.offset..a.offset + a.width),
+        )
+        .collect();
+    let nb = cols.len();
     let masses = BodyMass::of_model(model);
     let g = model.gravity_m_s2();
     let (mut m, mut b) = (DMatrix::zeros(nb, nb), DVector::zeros(nb));
+    let mut at = nb0;
+    for a in model.layout().aux_blocks() {
+        m.view_mut((at, at), (a.width, a.width))
+            .copy_from(&a.metric_matrix());
+        at += a.width;
+    }
+    let mut flex_b = vec![0.0; model.n_coords()];
+    for fb in &model.flexible {
+        let o = model.layout().body_offset(fb.body).unwrap_or(0);
+        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
+        let (c, w) = (fb.col, fb.width());
+        fb.generalized_force(q, &f.rot, &g, &q_ddot[c..c + w], &mut flex_b[c..c + w]);
+    }
+    for (k, &c) in cols.iter().enumerate().skip(nb0) {
+        b[k] = flex_b[c];
+    }
     for bm in &masses {
         let o = bm.offset;
         let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
@@ -139,7 +173,9 @@ pub fn reference_finger_wrenches(
     // with zero rows to a square matrix, so the SVD returns all of V.
     let mut padded = DMatrix::zeros(j_rows.len().max(nb), nb);
     for (k, &i) in j_rows.iter().enumerate() {
-        padded.row_mut(k).copy_from(&cq.view((i, 0), (1, nb)));
+        for (x, &c) in cols.iter().enumerate() {
+            padded[(k, x)] = cq[(i, c)];
+        }
     }
     let svd = padded.svd(false, true);
     let vt = svd.v_t.expect("requested");
@@ -165,18 +201,14 @@ pub fn reference_finger_wrenches(
                 }
             })
             .collect();
-        let cf = DMatrix::from_fn(nb, f_rows.len(), |r, k| cq[(f_rows[k], r)] * scale[k]);
+        let cf = DMatrix::from_fn(nb, f_rows.len(), |r, k| cq[(f_rows[k], cols[r])] * scale[k]);
         let lhs = l
             .solve_lower_triangular(&(t.transpose() * cf))
             .ok_or(ReferenceError::Massless)?;
         let rhs = l
             .solve_lower_triangular(&(t.transpose() * &b))
             .ok_or(ReferenceError::Massless)?;
-        let svd = lhs.svd(true, true);
-        let eps = 1e-10 * svd.singular_values.max();
-        let scaled = svd
-            .solve(&rhs, eps)
-            .unwrap_or_else(|_| DVector::zeros(f_rows.len()));
+        let scaled = min_norm_solve(&lhs, &rhs, 1e-10);
         lambda_f = DVector::from_fn(f_rows.len(), |k, _| scaled[k] * scale[k]);
     }
     let mut out = Vec::with_capacity(model.fingers().len());
@@ -194,7 +226,10 @@ pub fn reference_finger_wrenches(
             }
         }
         let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
-        let (force_n, torque_nm) = on_finger(&f, &f.point(&finger.point_m), &w_c);
+        let p = model
+            .finger_point(q, FingerId(k as u32))
+            .unwrap_or(Vector3::zeros());
+        let (force_n, torque_nm) = on_finger(&f, &p, &w_c);
         out.push(FingerWrench {
             finger: FingerId(k as u32),
             force_n,
@@ -202,4 +237,31 @@ pub fn reference_finger_wrenches(
         });
     }
     Ok(out)
+}
+
+/// The minimum-norm least-squares solution of `a x ≈ b`, singular values
+/// below `relative` × the largest treated as zero; by faer's SVD (nalgebra's
+/// mis-converged on a 6 × 3 matrix with 1e-30 entries beside O(1) ones: a
+/// singular value off by 6e-4 relative, a flexible cantilever's tip load by
+/// 1e-3). Zero when the SVD fails.
+fn min_norm_solve(a: &DMatrix<f64>, b: &DVector<f64>, relative: f64) -> DVector<f64> {
+    let (m, n) = a.shape();
+    let mat = faer::Mat::<f64>::from_fn(m, n, |i, j| a[(i, j)]);
+    let Ok(svd) = mat.thin_svd() else {
+        return DVector::zeros(n);
+    };
+    let (u, v, s) = (svd.U(), svd.V(), svd.S().column_vector());
+    let k = s.nrows();
+    let top = (0..k).map(|i| s[i]).fold(0.0, f64::max);
+    let mut x = DVector::zeros(n);
+    for i in 0..k {
+        if s[i] <= relative * top || s[i] == 0.0 {
+            continue;
+        }
+        let ub: f64 = (0..m).map(|r| u[(r, i)] * b[r]).sum();
+        for c in 0..n {
+            x[c] += v[(c, i)] * ub / s[i];
+        }
+    }
+    x
 }

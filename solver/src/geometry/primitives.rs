@@ -297,6 +297,9 @@ pub fn value_at(w: &Witness, pa: &Pose3, pb: &Pose3) -> (f64, Vector3<f64>) {
         frames: &frames,
         targets: &[],
         witnesses: std::slice::from_ref(w),
+        flex: &[],
+        surfaces: &[],
+        rolling: &[],
     };
     let pair = Pair {
         frame: [0, 1],

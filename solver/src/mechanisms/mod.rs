@@ -7,18 +7,29 @@
 //! | [`stewart`] | 13 (+ base) | 6 × (U, P, S) | rigid on the platform | 6 |
 //! | [`sphere_toy`] | 132 | 120 U + 72 S | point on a top bead | see [`sphere_toy`] |
 //! | [`cluttered_builder`] | n + 1 (+ table) | none: contact only | rigid on the dragged box | 6 (n + 1) |
+//! | [`bennett`] | 3 (+ ground) | 4 R (3 rows redundant) | point on the link opposite the ground | 1 |
+//! | [`lattice`] | 132 bars (+ ground) | 196 R, planar (192 rows redundant) | point on a top corner bar | 4 |
+//! | [`chain`] | 64 (+ ground) | 63 U + 2 S, one long loop | point on the middle link | 126 |
 //!
 //! All are written in world coordinates first (joint points and axes) and
 //! converted to body-frame anchors and axes by a private `Assembly` helper, which makes
 //! the initial configuration exact.
 
+mod bennett;
+mod chain;
 mod cluttered;
 mod four_bar;
+mod lattice;
 mod sphere_toy;
 mod stewart;
 
+pub use bennett::{BENNETT_A_M, BENNETT_B_M, bennett, bennett_builder};
+pub use chain::{CHAIN_LINK_KG, CHAIN_LINK_M, chain, chain_builder, chain_sized};
 pub use cluttered::{CLUTTER_SPACING_M, DRAGGED_HALF_M, clutter_side, cluttered_builder};
 pub use four_bar::{four_bar, four_bar_builder};
+pub use lattice::{
+    LATTICE_BAR_KG, LATTICE_BAR_M, lattice, lattice_builder, lattice_shape, lattice_sized,
+};
 pub use sphere_toy::{
     SPHERE_TOY_RADIUS_M, sphere_toy, sphere_toy_builder, sphere_toy_shape, sphere_toy_sized,
 };

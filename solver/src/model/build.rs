@@ -148,6 +148,13 @@ impl ModelBuilder {
         let mut frames: Vec<BodyFrame> = bodies.iter().map(initial_frame).collect();
         frames.push(BodyFrame::IDENTITY);
         let mut cx = Compiler::new(&bodies, &by_name, &frames, &body_cols, col);
+        for (i, s) in self.bodies.iter().enumerate() {
+            if let Some(beam) = s.flexible {
+                let id = BodyId(i as u32);
+                let beam = crate::flexible::beam::Beam::new(beam, bodies[i].mass_kg);
+                cx.flexible(id, crate::flexible::body::FlexBody::new(id, beam));
+            }
+        }
         // Free positions of fixed bodies: the first design columns.
         let mut origin_cols = vec![None; bodies.len()];
         for (i, s) in self.bodies.iter().enumerate() {
@@ -161,9 +168,11 @@ impl ModelBuilder {
 
         let mut out = Assembler::default();
         let mut limits = Vec::new();
+        let mut rolls = Vec::new();
         let mut joint_names = HashMap::new();
         for (k, spec) in self.joints.iter().enumerate() {
-            let (info, geometry, limit) = compile_joint(k, spec, &mut cx)?;
+            let (info, geometry, limit, roll) = compile_joint(k, spec, &mut cx)?;
+            rolls.extend(roll);
             if spec.name.is_some() && joint_names.insert(info.name.clone(), ()).is_some() {
                 return Err(BuildError::DuplicateName {
                     owner: Owner::Joint(info.name),
@@ -185,7 +194,8 @@ impl ModelBuilder {
             fingers.push(finger);
             out.push(info, geometry);
         }
-        let (design_vars, dv_q0, len, characteristic_length) = cx.finish();
+        let fin = cx.finish()?;
+        let (design_vars, len, characteristic_length) = (fin.design_vars, fin.len, fin.lever);
         for (i, b) in bodies.iter().enumerate() {
             if let Some(col) = body_cols[i] {
                 let info = ConstraintInfo {
@@ -198,6 +208,15 @@ impl ModelBuilder {
                 };
                 out.push(info, Geometry::QuatNorm(QuatNorm { col }));
             }
+        }
+        // Rolling joints' no-slip rows (equalities; anchors per tick).
+        let mut rolling = Vec::with_capacity(rolls.len());
+        for (slot, (info, mut g)) in rolls.into_iter().enumerate() {
+            if let Geometry::Rolling(r) = &mut g {
+                r.slot = slot as u32;
+            }
+            rolling.push(out.infos.len());
+            out.push(info, g);
         }
         // Pinned design components (equalities), then the joint limits and
         // the design bounds (inequalities).
@@ -220,7 +239,8 @@ impl ModelBuilder {
             q0.extend_from_slice(b.position_m.as_slice());
             q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
         }
-        q0.extend_from_slice(&dv_q0);
+        q0.extend_from_slice(&fin.q0_tail);
+        q0.resize(len, 0.0); // undeformed flexible bodies
         let body_coords = col;
         let mut model = Model {
             id: next_model_id(),
@@ -231,6 +251,7 @@ impl ModelBuilder {
                 origin_cols,
                 design_vars,
                 body_coords,
+                aux: fin.aux,
                 len,
             },
             geometry: out.geometry,
@@ -243,6 +264,10 @@ impl ModelBuilder {
             contact: super::ContactLayout::default(),
             objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
+            flexible: fin.flex_bodies,
+            flex_anchors: fin.anchors,
+            surfaces: fin.surfaces,
+            rolling,
         };
         if with_fingers {
             model.objectives = crate::objective::compile(&self.objectives, &model)?;
@@ -467,6 +492,23 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             return Err(BuildError::DuplicateFree {
                 owner: owner(),
                 param,
+            });
+        }
+    }
+    if let Some(beam) = &s.flexible {
+        let why = if s.fixed {
+            Some("a flexible body must move (weld it to a fixed body at its clamp)".into())
+        } else if s.shape.is_some() {
+            Some("a flexible body takes part in no contact: its shape would not bend".into())
+        } else {
+            beam.check()
+                .err()
+                .map(|(field, why)| format!("flexible `{field}` {why}"))
+        };
+        if let Some(why) = why {
+            return Err(BuildError::Flexible {
+                owner: owner(),
+                why,
             });
         }
     }

@@ -30,6 +30,35 @@ pub(super) struct Compiler<'a> {
     design_vars: Vec<DesignVar>,
     dv_q0: Vec<f64>,
     pub lever: f64,
+    /// Per body: its index among the flexible bodies.
+    flexible: Vec<Option<usize>>,
+    /// The flexible bodies (columns assigned by `finish`).
+    pub flex_bodies: Vec<crate::flexible::body::FlexBody>,
+    /// Deforming anchors, their columns relative to their body's block
+    /// until `finish`.
+    anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    /// Per anchor: its flexible body.
+    anchor_body: Vec<usize>,
+    /// Surface contacts (their (u, v) columns assigned by `finish`), each
+    /// with its joint's name, initial (u, v) and metric, kg/m².
+    surfaces: Vec<(crate::parametric::SurfaceContact, String, [f64; 2], f64)>,
+}
+
+/// What [`Compiler::finish`] hands back.
+pub(super) struct Finished {
+    pub design_vars: Vec<DesignVar>,
+    /// Initial values of the design variables, then of the surface
+    /// contacts' (u, v); the flexible deformations start at 0.
+    pub q0_tail: Vec<f64>,
+    pub len: usize,
+    pub lever: f64,
+    pub flex_bodies: Vec<crate::flexible::body::FlexBody>,
+    pub anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    pub surfaces: Vec<crate::parametric::SurfaceContact>,
+    /// The auxiliary blocks, in column order: surface contacts' (u, v),
+    /// then flexible deformations (rest 0 last, as `program::objective`
+    /// needs).
+    pub aux: Vec<super::auxiliary::AuxBlock>,
 }
 
 impl<'a> Compiler<'a> {
@@ -49,13 +78,135 @@ impl<'a> Compiler<'a> {
             design_vars: Vec::new(),
             dv_q0: Vec::new(),
             lever: 1e-3,
+            flexible: vec![None; bodies.len()],
+            flex_bodies: Vec::new(),
+            anchors: Vec::new(),
+            anchor_body: Vec::new(),
+            surfaces: Vec::new(),
         }
     }
 
-    /// Design variables, their initial values, the total coordinate count and
-    /// the characteristic length.
-    pub fn finish(self) -> (Vec<DesignVar>, Vec<f64>, usize, f64) {
-        (self.design_vars, self.dv_q0, self.next_col, self.lever)
+    /// Registers a surface contact of joint `name` starting at `uv0` with
+    /// metric `metric_kg` per m² on (u, v); its index.
+    pub fn surface(
+        &mut self,
+        name: &str,
+        contact: crate::parametric::SurfaceContact,
+        uv0: [f64; 2],
+        metric_kg: f64,
+    ) -> u32 {
+        self.surfaces
+            .push((contact, name.to_owned(), uv0, metric_kg));
+        self.surfaces.len() as u32 - 1
+    }
+
+    /// Declares `body` flexible (its beam compiled).
+    pub fn flexible(&mut self, body: BodyId, beam: crate::flexible::body::FlexBody) {
+        self.flexible[body.index()] = Some(self.flex_bodies.len());
+        self.flex_bodies.push(beam);
+    }
+
+    /// Whether `body` is flexible.
+    pub fn is_flexible(&self, body: BodyId) -> bool {
+        self.flexible[body.index()].is_some()
+    }
+
+    /// The clamp x of flexible body `body`, metres.
+    pub fn clamp_of(&self, body: BodyId) -> Option<f64> {
+        let k = self.flexible[body.index()]?;
+        Some(self.flex_bodies[k].beam.spec.clamp_m)
+    }
+
+    /// The parameter of body point `k` of `body` (body frame): a constant,
+    /// or on a flexible body off its clamp a deforming anchor. A point
+    /// beyond the beam's span is an error.
+    pub fn anchor(
+        &mut self,
+        owner: &Owner,
+        body: BodyId,
+        k: Vector3<f64>,
+    ) -> Result<Param3, BuildError> {
+        let Some(fb) = self.flexible[body.index()] else {
+            return Ok(Param3::Const(k));
+        };
+        let beam = &self.flex_bodies[fb].beam;
+        if !beam.covers(k.x) {
+            let [x0, x1] = beam.spec.span_m;
+            return Err(BuildError::Flexible {
+                owner: owner.clone(),
+                why: format!(
+                    "the point at x = {} m of flexible body `{}` lies off its span [{x0}, {x1}] m",
+                    k.x,
+                    self.bodies[body.index()].name
+                ),
+            });
+        }
+        let a = crate::flexible::anchor::FlexAnchor {
+            k,
+            col: 0,
+            modes: beam.modes(),
+            shape: beam.shape(k.x),
+        };
+        if a.is_rigid() {
+            return Ok(Param3::Const(k));
+        }
+        self.anchors.push(a);
+        self.anchor_body.push(fb);
+        Ok(Param3::Flex(self.anchors.len() as u32 - 1))
+    }
+
+    /// Assigns the auxiliary columns after the design variables (surface
+    /// contacts, then flexible bodies) and hands everything back.
+    pub fn finish(mut self) -> Result<Finished, BuildError> {
+        use super::auxiliary::{AuxBlock, AuxOwner, Rest};
+        let mut col = self.next_col;
+        let mut aux = Vec::new();
+        let mut q0_tail = self.dv_q0;
+        let mut surfaces = Vec::with_capacity(self.surfaces.len());
+        for (k, (mut sc, name, uv0, metric)) in self.surfaces.into_iter().enumerate() {
+            sc.uv_col = col;
+            let h = nalgebra::DMatrix::from_diagonal_element(2, 2, metric);
+            aux.extend(AuxBlock::new(
+                format!("{name}.uv"),
+                AuxOwner::Surface(k),
+                Rest::Current,
+                col,
+                &h,
+            ));
+            q0_tail.extend_from_slice(&uv0);
+            surfaces.push(sc);
+            col += 2;
+        }
+        for (k, fb) in self.flex_bodies.iter_mut().enumerate() {
+            fb.col = col;
+            let name = format!("{}.flex", self.bodies[fb.body.index()].name);
+            let block = AuxBlock::new(
+                name,
+                AuxOwner::Flexible(k),
+                Rest::Zero,
+                col,
+                &fb.beam.stiffness(),
+            )
+            .ok_or_else(|| BuildError::Flexible {
+                owner: Owner::Body(self.bodies[fb.body.index()].name.clone()),
+                why: "its stiffness matrix is not positive definite".into(),
+            })?;
+            aux.push(block);
+            col += fb.width();
+        }
+        for (a, &b) in self.anchors.iter_mut().zip(&self.anchor_body) {
+            a.col = self.flex_bodies[b].col;
+        }
+        Ok(Finished {
+            design_vars: self.design_vars,
+            q0_tail,
+            len: col,
+            lever: self.lever,
+            flex_bodies: self.flex_bodies,
+            anchors: self.anchors,
+            surfaces,
+            aux,
+        })
     }
 
     pub fn resolve(&self, owner: &Owner, name: &str) -> Result<BodyId, BuildError> {
@@ -224,12 +375,24 @@ pub(super) fn compile_finger(
     let point = Vector3::from(s.point_m);
     cx.lever = cx.lever.max(point.norm());
     let world = cx.frames.len() - 1;
+    let anchor = cx.anchor(&owner, body, point)?;
+    let rigid = s.grasp == Grasp::Rigid;
+    let clamp = cx.clamp_of(body).unwrap_or(0.0);
+    if rigid && matches!(anchor, Param3::Flex(_)) {
+        return Err(BuildError::Flexible {
+            owner,
+            why: format!(
+                "a rigid grasp holds the orientation of flexible body `{}`'s frame, which is its \
+                 section at its clamp (x = {} m) only: put the point there, or use a point grasp",
+                s.body, clamp
+            ),
+        });
+    }
     let pair = Pair {
         frame: [body.index(), world],
         col: [Some(col), None],
-        anchor: [Param3::Const(point), Param3::Const(Vector3::zeros())],
+        anchor: [anchor, Param3::Const(Vector3::zeros())],
     };
-    let rigid = s.grasp == Grasp::Rigid;
     let kind = if rigid {
         ConstraintKind::RigidFinger
     } else {

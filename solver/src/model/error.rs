@@ -365,6 +365,26 @@ pub enum BuildError {
         /// The model's owner (the scene).
         owner: Owner,
     },
+    /// An `on_surface` or `rolling` joint that cannot be built (see
+    /// [`crate::parametric`]).
+    #[error("{owner}: {why}")]
+    Surface {
+        /// The joint.
+        owner: Owner,
+        /// The key at fault: `surface`, `radius`, `anchors` or `kind`.
+        field: &'static str,
+        /// What is wrong, with the values.
+        why: String,
+    },
+    /// A flexible body, or a joint or finger on one, that cannot be built
+    /// (see [`crate::flexible`]).
+    #[error("{owner}: {why}")]
+    Flexible {
+        /// The body, joint or finger.
+        owner: Owner,
+        /// What is wrong, with the values.
+        why: String,
+    },
     /// A body's Coulomb μ is negative or not finite.
     #[error("{owner}: `friction` = {value} must be finite and ≥ 0")]
     BadFriction {
@@ -416,7 +436,9 @@ impl BuildError {
             | Shape { owner, .. }
             | BadFingertip { owner, .. }
             | BadFriction { owner, .. }
-            | AlreadyDerived { owner } => owner,
+            | AlreadyDerived { owner }
+            | Flexible { owner, .. }
+            | Surface { owner, .. } => owner,
         }
     }
 }

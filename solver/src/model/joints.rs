@@ -30,10 +30,18 @@ fn constraint_kind(kind: JointKind) -> ConstraintKind {
         JointKind::Distance => ConstraintKind::Distance,
         JointKind::Perpendicular => ConstraintKind::Perpendicular,
         JointKind::PointOnPlane => ConstraintKind::PointOnPlane,
+        JointKind::OnSurface | JointKind::Rolling => ConstraintKind::OnSurface,
     }
 }
 
-type Compiled = (ConstraintInfo, Geometry, Option<(ConstraintInfo, Geometry)>);
+/// A joint's constraint, its limits', and a rolling joint's no-slip rows
+/// (appended among the equalities after the quaternion norms).
+type Compiled = (
+    ConstraintInfo,
+    Geometry,
+    Option<(ConstraintInfo, Geometry)>,
+    Option<(ConstraintInfo, Geometry)>,
+);
 
 /// A joint spec whose names resolved and whose numbers are finite and
 /// consistent with its kind.
@@ -54,7 +62,10 @@ pub(super) fn compile_joint(
 ) -> Result<Compiled, BuildError> {
     let j = check(k, s, cx)?;
     let (pair, length) = params(&j, ConstraintId(k as u32), cx)?;
-    let geometry = geometry(&j, pair, length, cx)?;
+    let geometry = match s.kind {
+        JointKind::OnSurface | JointKind::Rolling => surface_contact(&j, pair, cx)?,
+        _ => geometry(&j, pair, length, cx)?,
+    };
     let info = |name: String, kind| ConstraintInfo {
         name,
         kind,
@@ -70,11 +81,117 @@ pub(super) fn compile_joint(
             Some((info(format!("{}.limits", j.name), kind), g))
         }
     };
+    let rolling = match (s.kind, geometry) {
+        (JointKind::Rolling, Geometry::OnSurface(g)) => Some((
+            info(format!("{}.roll", j.name), ConstraintKind::Rolling),
+            Geometry::Rolling(crate::parametric::rolling::Rolling {
+                pair: g.pair,
+                contact: g.index,
+                slot: 0, // assigned by the builder
+            }),
+        )),
+        _ => None,
+    };
     Ok((
         info(j.name.clone(), constraint_kind(s.kind)),
         geometry,
         limit,
+        rolling,
     ))
+}
+
+/// An `on_surface` or `rolling` joint: its surface registered with the
+/// compiler (initial (u, v) by projecting anchor i at the initial poses).
+fn surface_contact(j: &Checked, pair: Pair, cx: &mut Compiler) -> Result<Geometry, BuildError> {
+    let s = j.spec;
+    let bad = |field: &'static str, why: String| BuildError::Surface {
+        owner: j.owner.clone(),
+        field,
+        why,
+    };
+    let Some(spec) = s.surface else {
+        return Err(bad(
+            "surface",
+            format!("a `{}` joint needs a `surface`", s.kind),
+        ));
+    };
+    let radius = s.radius_m.unwrap_or(0.0);
+    if !(0.0..=10.0).contains(&radius) {
+        return Err(bad(
+            "radius",
+            format!("`radius` = {radius} must be finite, in [0, 10] m"),
+        ));
+    }
+    if s.kind == JointKind::Rolling && radius <= 0.0 {
+        return Err(bad(
+            "radius",
+            "a `rolling` joint needs the ball's `radius` > 0".into(),
+        ));
+    }
+    let [bi, bj] = j.bodies.map(|b| b.index());
+    if cx.is_flexible(j.bodies[1]) {
+        return Err(bad(
+            "kind",
+            format!(
+                "the surface's body `{}` is flexible: a surface does not bend",
+                s.bodies[1]
+            ),
+        ));
+    }
+    if s.kind == JointKind::Rolling {
+        if !cx.bodies[bj].fixed || cx.bodies[bi].fixed {
+            return Err(bad(
+                "kind",
+                "a `rolling` joint rolls a moving ball (body i) on a fixed body's surface (body j)"
+                    .into(),
+            ));
+        }
+        if !matches!(pair.anchor[0], Param3::Const(_)) {
+            return Err(bad(
+                "kind",
+                format!("the rolling ball `{}` must be rigid", s.bodies[0]),
+            ));
+        }
+    }
+    if !s.free.is_empty() {
+        return Err(bad(
+            "kind",
+            format!("a `{}` joint has no design variables", s.kind),
+        ));
+    }
+    let surface = crate::parametric::surface::check(&spec).map_err(|why| bad("surface", why))?;
+    let (f0, f1) = (cx.frames[bi], cx.frames[bj]);
+    let p = f1
+        .rot
+        .tr_mul(&(f0.point(&Vector3::from(s.anchors_m[0])) - f1.r));
+    let ([u, v], _) = surface.project(&p, radius);
+    if !surface.covers(u, v) {
+        return Err(bad(
+            "anchors",
+            format!(
+                "anchor i at the initial poses lies off the surface's patch (u, v) = ({u}, {v})"
+            ),
+        ));
+    }
+    let mass = [bi, bj]
+        .iter()
+        .find(|&&b| !cx.bodies[b].fixed)
+        .map_or(1.0, |&b| cx.bodies[b].mass_kg);
+    let contact = crate::parametric::SurfaceContact {
+        surface,
+        radius_m: radius,
+        uv_col: 0,
+    };
+    let index = cx.surface(
+        &j.name,
+        contact,
+        [u, v],
+        crate::parametric::UV_METRIC * mass,
+    );
+    Ok(Geometry::OnSurface(crate::parametric::contact::OnSurface {
+        pair,
+        index,
+    }))
 }
 
 /// Names, bodies, finiteness, design variables, `length` and `axes`.
@@ -130,6 +247,21 @@ fn check<'s>(k: usize, s: &'s JointSpec, cx: &Compiler) -> Result<Checked<'s>, B
                 param,
             });
         }
+    }
+    let surface_kind = matches!(s.kind, JointKind::OnSurface | JointKind::Rolling);
+    if !surface_kind && (s.surface.is_some() || s.radius_m.is_some()) {
+        return Err(BuildError::Surface {
+            owner,
+            field: if s.surface.is_some() {
+                "surface"
+            } else {
+                "radius"
+            },
+            why: format!(
+                "`surface` and `radius` belong to `on_surface` and `rolling` joints, not `{}`",
+                s.kind
+            ),
+        });
     }
     if s.length_m.is_some() && s.kind != JointKind::Distance {
         return Err(BuildError::UnexpectedLength {
@@ -210,6 +342,46 @@ fn params(j: &Checked, id: ConstraintId, cx: &mut Compiler) -> Result<(Pair, Par
             (DesignParam::Length, Param1::Free(_)) | (DesignParam::Position, _) => {}
         }
     }
+    // Points of flexible bodies deform with them (`crate::flexible`).
+    for (end, a) in anchor.iter_mut().enumerate() {
+        let body = j.bodies[end];
+        if !cx.is_flexible(body) {
+            continue;
+        }
+        *a = match *a {
+            Param3::Const(k) => cx.anchor(&j.owner, body, k)?,
+            _ => {
+                return Err(BuildError::Flexible {
+                    owner: j.owner.clone(),
+                    why: format!(
+                        "the anchor on flexible body `{}` cannot be a design variable",
+                        s.bodies[end]
+                    ),
+                });
+            }
+        };
+    }
+    let uses_axes = |end: usize| match s.kind {
+        JointKind::Spherical
+        | JointKind::Distance
+        | JointKind::Perpendicular
+        | JointKind::OnSurface
+        | JointKind::Rolling => false,
+        JointKind::PointOnPlane => end == 1,
+        _ => true,
+    };
+    for (end, a) in anchor.iter().enumerate() {
+        if uses_axes(end) && matches!(a, Param3::Flex(_)) {
+            return Err(BuildError::Flexible {
+                owner: j.owner.clone(),
+                why: format!(
+                    "a `{}` joint uses the axes of flexible body `{}`, which are its section's at \
+                     its clamp only: anchor it there (or use a spherical or distance joint)",
+                    s.kind, s.bodies[end]
+                ),
+            });
+        }
+    }
     let pair = Pair {
         frame: [bi, bj],
         col: [cx.body_cols[bi], cx.body_cols[bj]],
@@ -277,6 +449,9 @@ fn geometry(
                 return Err(BuildError::CoincidentAnchors { owner: owner() });
             }
             Geometry::Distance(Distance { pair, length })
+        }
+        JointKind::OnSurface | JointKind::Rolling => {
+            unreachable!("surface joints compile in `surface_contact`")
         }
     })
 }

@@ -3,6 +3,7 @@
 //! q = [ moving bodies in body order: r (3, metres, world) then e (4, [w, x, y, z]) ]
 //!     [ free positions of fixed bodies, in body order (3 each, metres, world) ]
 //!     [ free design variables of joints in joint order, then in the order `free` lists them ]
+//!     [ auxiliary blocks: flexible bodies' deformations, surface contacts' (u, v) ]
 //!
 //! Fixed bodies have no coordinates of their own; a fixed body whose position
 //! is free (`free = ["position"]`) has it among the design variables: its
@@ -61,6 +62,8 @@ pub struct Layout {
     pub(crate) origin_cols: Vec<Option<usize>>,
     pub(crate) design_vars: Vec<DesignVar>,
     pub(crate) body_coords: usize,
+    /// Auxiliary blocks (`super::auxiliary`), after the design variables.
+    pub(crate) aux: Vec<super::auxiliary::AuxBlock>,
     pub(crate) len: usize,
 }
 
@@ -92,9 +95,26 @@ impl Layout {
         self.origin_cols.get(body.index()).copied().flatten()
     }
 
-    /// Number of design-variable columns (every column after the bodies').
+    /// Number of design-variable columns (those after the bodies' and before
+    /// the auxiliary blocks).
     pub fn design_coords(&self) -> usize {
-        self.len - self.body_coords
+        self.len - self.body_coords - self.aux_coords()
+    }
+
+    /// The design-variable columns.
+    pub fn design_range(&self) -> Range<usize> {
+        self.body_coords..self.body_coords + self.design_coords()
+    }
+
+    /// The auxiliary blocks (flexible bodies' deformations, surface
+    /// contacts' parameters), in column order.
+    pub fn aux_blocks(&self) -> &[super::auxiliary::AuxBlock] {
+        &self.aux
+    }
+
+    /// Number of auxiliary columns (all at the end of q).
+    pub fn aux_coords(&self) -> usize {
+        self.aux.iter().map(|b| b.width).sum()
     }
 
     /// Columns of r (metres, world frame) of a moving body.

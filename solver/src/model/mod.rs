@@ -4,6 +4,7 @@
 //! model with extra point–plane inequalities for a new active set,
 //! [`Model::with_semantic`] one with satisfied surface constraints and holds.
 
+mod auxiliary;
 mod build;
 mod compiler;
 mod contact;
@@ -14,15 +15,16 @@ mod layout;
 mod spec;
 mod surface;
 
+pub use auxiliary::{AuxBlock, AuxOwner, Rest};
 pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};
 pub use inequality::{PlaneOwner, PointPlaneSpec};
 pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{
-    BodySpec, Bounds, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG,
-    DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Shape,
-    UnknownName,
+    BodySpec, Bounds, ContactSurface, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M,
+    DEFAULT_MASS_KG, DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind,
+    JointSpec, Shape, UnknownName,
 };
 pub use surface::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 
@@ -93,6 +95,14 @@ pub struct Model {
     pub(crate) contact: ContactLayout,
     pub(crate) objectives: crate::objective::Objectives,
     pub(crate) semantic: SemanticLayout,
+    /// Flexible bodies (`crate::flexible`; empty: a rigid model).
+    pub(crate) flexible: Vec<crate::flexible::body::FlexBody>,
+    /// The deforming points `Param3::Flex` indexes.
+    pub(crate) flex_anchors: Vec<crate::flexible::anchor::FlexAnchor>,
+    /// Surface contacts (`crate::parametric`; `Ctx::surfaces`).
+    pub(crate) surfaces: Vec<crate::parametric::SurfaceContact>,
+    /// The rolling constraints (their indices; the anchor table's order).
+    pub(crate) rolling: Vec<usize>,
 }
 
 fn next_model_id() -> u64 {
@@ -227,7 +237,15 @@ impl Model {
     /// World position of a finger's attachment point at `q`, metres.
     pub fn finger_point(&self, q: &[f64], finger: FingerId) -> Option<Vector3<f64>> {
         let f = self.fingers.get(finger.index())?;
-        self.body_frame(q, f.body).map(|fr| fr.point(&f.point_m))
+        if q.len() != self.layout.len {
+            return None;
+        }
+        let g = &self.geometry[f.constraint.index()];
+        let k = match g.anchors()[0] {
+            crate::constraint::block::Param3::Flex(i) => self.flex_anchors[i as usize].point(q),
+            _ => f.point_m,
+        };
+        self.body_frame(q, f.body).map(|fr| fr.point(&k))
     }
 
     pub(crate) fn body_frame(&self, q: &[f64], body: BodyId) -> Option<BodyFrame> {
@@ -263,6 +281,19 @@ impl Model {
             for (end, &f) in g.frames().iter().enumerate() {
                 if let Some(c) = self.layout.origin_cols.get(f).copied().flatten() {
                     groups[Slot::origin(end) as usize] = Some((c, 3));
+                }
+            }
+            if let crate::constraint::Geometry::OnSurface(s) = g
+                && let Some(sc) = self.surfaces.get(s.index as usize)
+            {
+                groups[Slot::Length as usize] = Some((sc.uv_col, 2));
+            }
+            if !self.flex_anchors.is_empty() {
+                for (end, a) in g.anchors().iter().enumerate() {
+                    if let crate::constraint::block::Param3::Flex(i) = *a {
+                        let a = &self.flex_anchors[i as usize];
+                        groups[Slot::anchor(end) as usize] = Some((a.col, a.width()));
+                    }
                 }
             }
         }

@@ -52,6 +52,10 @@ pub struct BodySpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the freed position (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// A flexible body's beam (Nelson & Cohen §4; see
+    /// [`crate::flexible`]): its points bend with 2 × `modes` deformation
+    /// coordinates. `None`: rigid.
+    pub flexible: Option<crate::flexible::BeamSpec>,
 }
 
 impl BodySpec {
@@ -69,6 +73,7 @@ impl BodySpec {
             friction: 0.0,
             free: Vec::new(),
             bounds: None,
+            flexible: None,
         }
     }
 
@@ -131,6 +136,12 @@ impl BodySpec {
     /// Sets bounds on the freed position.
     pub fn bounds(mut self, bounds: Bounds) -> Self {
         self.bounds = Some(bounds);
+        self
+    }
+
+    /// Makes the body flexible: it bends as `beam`.
+    pub fn flexible(mut self, beam: crate::flexible::BeamSpec) -> Self {
+        self.flexible = Some(beam);
         self
     }
 }
@@ -228,6 +239,12 @@ named_enum!(
         /// Anchor i stays on the plane through anchor j with normal `axes[1]` of
         /// body j (1 row); `axes[0]` is ignored.
         PointOnPlane = "point_on_plane",
+        /// Anchor i (a ball's centre if `radius` is given) stays on body j's
+        /// `surface` (3 rows, 2 coordinates (u, v)); frictionless.
+        OnSurface = "on_surface",
+        /// Body i, a ball of `radius` centred at anchor i, rolls without
+        /// slipping on fixed body j's `surface` (3 + 2 rows, (u, v)).
+        Rolling = "rolling",
     }
 );
 
@@ -295,6 +312,34 @@ pub struct JointSpec {
     pub free: Vec<DesignParam>,
     /// Optional bounds on the design variables `free` lists (see [`Bounds`]).
     pub bounds: Option<Bounds>,
+    /// `on_surface` and `rolling`: body j's surface.
+    pub surface: Option<ContactSurface>,
+    /// `on_surface` (optional) and `rolling` (required): the ball's radius,
+    /// metres (anchor i is its centre).
+    pub radius_m: Option<f64>,
+}
+
+/// A parametric surface fixed to a body (`surface` of an `on_surface` or
+/// `rolling` joint; see [`crate::parametric`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSurface {
+    /// Its shape (radius, concave or convex).
+    pub kind: crate::parametric::SurfaceKind,
+    /// Origin of its local frame, metres, body frame.
+    pub origin_m: [f64; 3],
+    /// Its local frame, `[w, x, y, z]`, local → body (normalised on build).
+    pub orientation_wxyz: [f64; 4],
+}
+
+impl ContactSurface {
+    /// A surface of `kind` with its local frame at the body's.
+    pub fn new(kind: crate::parametric::SurfaceKind) -> Self {
+        Self {
+            kind,
+            origin_m: [0.0; 3],
+            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
 }
 
 impl JointSpec {
@@ -310,7 +355,21 @@ impl JointSpec {
             limits: None,
             free: Vec::new(),
             bounds: None,
+            surface: None,
+            radius_m: None,
         }
+    }
+
+    /// Sets the surface of an `on_surface` or `rolling` joint.
+    pub fn surface(mut self, surface: ContactSurface) -> Self {
+        self.surface = Some(surface);
+        self
+    }
+
+    /// Sets the ball radius of an `on_surface` or `rolling` joint, metres.
+    pub fn radius(mut self, radius_m: f64) -> Self {
+        self.radius_m = Some(radius_m);
+        self
     }
 
     /// Sets the name.

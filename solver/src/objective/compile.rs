@@ -275,6 +275,7 @@ fn dexterity(
             crate::constraint::block::Param3::Free(c) => {
                 Vector3::new(model.q0()[c], model.q0()[c + 1], model.q0()[c + 2])
             }
+            crate::constraint::block::Param3::Flex(i) => model.flex_anchors[i as usize].k,
         };
         points.push(f.point(&k0));
     }

@@ -98,6 +98,9 @@ impl Dexterity {
         let k = match *k {
             Param3::Const(v) => v,
             Param3::Free(c) => Vector3::new(q[c], q[c + 1], q[c + 2]),
+            // A joint on a flexible body: its deformed point (the
+            // deformation columns' share of the gradient is left out).
+            Param3::Flex(i) => g.flex[i as usize].point(q),
         };
         let lever = g.frames[f].rot * k;
         (g.frames[f].r + lever, lever)

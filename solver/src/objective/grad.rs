@@ -7,7 +7,10 @@
 //! body-fixed direction a ([`BodyGrad::direction`]); [`BodyGrad::flush`] then
 //! writes r and Ωᵀ·(δθ part) into a moving body's 7 columns, the δr part into
 //! a fixed body's free-position columns, and drops what falls on a fixed
-//! body. Free anchors get Rᵀ n directly ([`BodyGrad::anchor`]).
+//! body. Free anchors get Rᵀ n directly ([`BodyGrad::anchor`]). A point of a
+//! flexible body is deformed ([`BodyGrad::lever`]) and its gradient also
+//! reaches the body's deformation columns, Φᵀ Rᵀ n
+//! ([`BodyGrad::point_at`], `crate::flexible::anchor`).
 
 use nalgebra::Vector3;
 
@@ -24,6 +27,18 @@ pub(crate) struct BodyGrad {
     pub frames: Vec<BodyFrame>,
     lin: Vec<Vector3<f64>>,
     ang: Vec<Vector3<f64>>,
+    /// The model's deforming points (joint-limit terms evaluate joints on
+    /// flexible bodies through them).
+    pub flex: Vec<crate::flexible::anchor::FlexAnchor>,
+    /// Per body: its flexible body's index in the model, if any.
+    flexible: Vec<Option<usize>>,
+    /// The flexible bodies (columns, beams).
+    beams: Vec<crate::flexible::body::FlexBody>,
+    /// q's auxiliary columns at the last `frames` call, and where they start.
+    q_aux: Vec<f64>,
+    aux_start: usize,
+    /// ∂F on the auxiliary columns, flushed with the bodies'.
+    aux_grad: Vec<f64>,
 }
 
 impl BodyGrad {
@@ -32,10 +47,67 @@ impl BodyGrad {
         let n = model.bodies.len();
         let mut frames: Vec<BodyFrame> = model.bodies.iter().map(initial_frame).collect();
         frames.push(BodyFrame::IDENTITY);
+        let mut flexible = vec![None; n];
+        for (k, f) in model.flexible.iter().enumerate() {
+            flexible[f.body.index()] = Some(k);
+        }
+        let aux = model.layout.aux_coords();
         Self {
             frames,
             lin: vec![Vector3::zeros(); n],
             ang: vec![Vector3::zeros(); n],
+            flex: model.flex_anchors.clone(),
+            flexible,
+            beams: model.flexible.clone(),
+            q_aux: vec![0.0; aux],
+            aux_start: model.n_coords() - aux,
+            aux_grad: vec![0.0; aux],
+        }
+    }
+
+    /// The lever arm R k(q_f) of body point `k` of `body` (deformed when
+    /// the body is flexible), at the last [`frames`](Self::frames).
+    #[inline]
+    pub fn lever(&self, body: BodyId, k: &Vector3<f64>) -> Vector3<f64> {
+        let f = &self.frames[body.index()];
+        match self.flexible.get(body.index()).copied().flatten() {
+            None => f.rot * k,
+            Some(b) => f.rot * self.anchor_of(b, k).point(&self.q_aux),
+        }
+    }
+
+    /// The deforming point `k` of flexible body `b`, with columns relative
+    /// to the auxiliary block.
+    fn anchor_of(&self, b: usize, k: &Vector3<f64>) -> crate::flexible::anchor::FlexAnchor {
+        let fb = &self.beams[b];
+        crate::flexible::anchor::FlexAnchor {
+            k: *k,
+            col: fb.col - self.aux_start,
+            modes: fb.beam.modes(),
+            shape: fb.beam.shape(k.x),
+        }
+    }
+
+    /// [`point`](Self::point) for body point `k` (body frame, undeformed)
+    /// with lever arm `lever` from [`lever`](Self::lever): on a flexible
+    /// body the gradient also reaches its deformation columns.
+    #[inline]
+    pub fn point_at(
+        &mut self,
+        body: BodyId,
+        k: &Vector3<f64>,
+        lever: &Vector3<f64>,
+        n: &Vector3<f64>,
+    ) {
+        self.point(body, lever, n);
+        if let Some(b) = self.flexible.get(body.index()).copied().flatten() {
+            let a = self.anchor_of(b, k);
+            let d = self.frames[body.index()].rot.tr_mul(n);
+            let mut g = [0.0; 2 * crate::flexible::MAX_MODES];
+            a.gradient(&d, &mut g[..a.width()]);
+            for (j, v) in g[..a.width()].iter().enumerate() {
+                self.aux_grad[a.col + j] += v;
+            }
         }
     }
 
@@ -64,6 +136,8 @@ impl BodyGrad {
         }
         self.lin.fill(Vector3::zeros());
         self.ang.fill(Vector3::zeros());
+        self.q_aux.copy_from_slice(&q[self.aux_start..]);
+        self.aux_grad.fill(0.0);
         Ok(())
     }
 
@@ -130,6 +204,9 @@ impl BodyGrad {
                     out[o + j] += self.lin[b][j];
                 }
             }
+        }
+        for (o, g) in out[self.aux_start..].iter_mut().zip(&self.aux_grad) {
+            *o += g;
         }
     }
 }

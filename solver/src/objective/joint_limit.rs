@@ -36,6 +36,9 @@ impl Centred {
             frames: &g.frames,
             targets: &[],
             witnesses: &[],
+            flex: &g.flex,
+            surfaces: &[],
+            rolling: &[],
         };
         let l = &self.limits[k];
         let (s, rg) = l.coordinate(&x);

@@ -53,7 +53,7 @@ impl Avoid {
     fn obstacle_at(&self, g: &BodyGrad) -> Vector3<f64> {
         match self.obstacle {
             Obstacle::World(o) => o,
-            Obstacle::Body(b, p) => g.frames[b.index()].point(&p),
+            Obstacle::Body(b, p) => g.frames[b.index()].r + g.lever(b, &p),
         }
     }
 
@@ -62,7 +62,7 @@ impl Avoid {
     fn pair(&self, g: &BodyGrad, o: &Vector3<f64>, k: usize) -> Pair {
         let (b, p) = self.points[k];
         let f = &g.frames[b.index()];
-        let lever = f.rot * p;
+        let lever = g.lever(b, &p);
         let v = f.r + lever - o;
         let d = v.norm();
         let dd = d.max(MIN_DISTANCE_FRACTION * self.distance_m);
@@ -121,7 +121,8 @@ impl Avoid {
                 continue;
             }
             let c = w * scale * (p.barrier / norm).powi(3) * p.slope;
-            g.point(self.points[k].0, &p.lever, &(p.u * c));
+            let (body, k_body) = self.points[k];
+            g.point_at(body, &k_body, &p.lever, &(p.u * c));
         }
         scale * norm
     }

@@ -29,7 +29,7 @@ impl StraightLine {
     #[inline]
     fn offset(&self, g: &BodyGrad) -> (Vector3<f64>, Vector3<f64>) {
         let f = &g.frames[self.body.index()];
-        let lever = f.rot * self.point;
+        let lever = g.lever(self.body, &self.point);
         let d = f.r + lever - self.line_point;
         (d - self.direction * self.direction.dot(&d), lever)
     }
@@ -47,7 +47,7 @@ impl StraightLine {
     /// F, and `w` × ∂F into `g`'s accumulators.
     pub fn gradient(&self, g: &mut BodyGrad, w: f64) -> f64 {
         let (off, lever) = self.offset(g);
-        g.point(self.body, &lever, &(off * w));
+        g.point_at(self.body, &self.point, &lever, &(off * w));
         0.5 * off.norm_squared()
     }
 }

@@ -68,6 +68,10 @@ pub struct TickState {
     w: Vec<Vector3<f64>>,
     a: Vec<Vector3<f64>>,
     alpha: Vec<Vector3<f64>>,
+    aux_v: Vec<f64>,
+    aux_a: Vec<f64>,
+    /// The objectives' pull on flexible deformations (`program::objective`).
+    static_shift: Vec<f64>,
     ticks: u32,
     prev_error: Vec<Vector3<f64>>,
     last_targets: Vec<FingerTarget>,
@@ -131,6 +135,9 @@ impl Program {
         copy(&mut out.w, &mo.w);
         copy(&mut out.a, &mo.a);
         copy(&mut out.alpha, &mo.alpha);
+        copy(&mut out.aux_v, &mo.aux_v);
+        copy(&mut out.aux_a, &mo.aux_a);
+        copy(&mut out.static_shift, self.static_shift());
         out.ticks = mo.ticks;
         copy(&mut out.prev_error, self.feedback.prev_errors_snapshot());
         copy(&mut out.last_targets, &self.last_targets);
@@ -166,6 +173,7 @@ impl Program {
             (before.lambda.len(), m),
             (before.v.len(), bodies),
             (after.a.len(), bodies),
+            (after.aux_a.len(), self.feedback.motion.aux_a.len()),
             (targets.len(), self.outputs.len()),
             (before.prev_error.len(), self.outputs.len()),
         ] {
@@ -177,6 +185,7 @@ impl Program {
             return Err(ProgramError::NonFinite { index });
         }
         self.load_motion(before, &before.q_prev);
+        self.set_static_shift(&before.static_shift);
         self.feedback.forced.fill(false);
         self.q.copy_from_slice(&before.q);
         self.lambda.copy_from_slice(&before.lambda);
@@ -185,8 +194,10 @@ impl Program {
         }
         self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
+        self.rest_aux();
         self.pull_objectives();
         self.step_budget_m = f64::INFINITY;
         let mut r = ConvergedTick {
@@ -312,6 +323,8 @@ impl Program {
         mo.w.copy_from_slice(&s.w);
         mo.a.copy_from_slice(&s.a);
         mo.alpha.copy_from_slice(&s.alpha);
+        mo.aux_v.copy_from_slice(&s.aux_v);
+        mo.aux_a.copy_from_slice(&s.aux_a);
         mo.ticks = s.ticks;
     }
 }

@@ -55,6 +55,7 @@
 //! whole session tick without the devices, the scenes' settings): four-bar
 //! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
+mod auxiliary;
 mod contact;
 mod converged;
 mod objective;
@@ -159,12 +160,19 @@ impl Program {
                  the projected update (the default; drop `--update gradient`)",
             ));
         }
+        if settings.update == UpdateRule::Gradient && !model.layout().aux_blocks().is_empty() {
+            return Err(ProgramError::Unsupported(
+                "the gradient update (Eq. 3) does not cover flexible bodies or surface \
+                 contacts: this scene needs `update = \"projected\"`",
+            ));
+        }
         // The scene's `finger` and `least_astonishment` weights.
         let mut settings = settings;
         let weights = model.objectives();
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
         let mut ev = model.evaluation();
+        ev.anchor_rolling(&model, model.q0());
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
         // Rows dependent within their body pair never enter A's pattern.

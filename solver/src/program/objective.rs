@@ -51,6 +51,40 @@ pub(super) struct ObjectivePull {
     /// The largest scaled coordinate change the last pull asked for, m
     /// (after the cap).
     last_step_m: f64,
+    /// The shift applied to the columns of auxiliary blocks with rest 0
+    /// (flexible deformations, the tail of q) at the last tick.
+    static_shift: Vec<f64>,
+}
+
+impl ObjectivePull {
+    /// The objectives' pull on a flexible body's deformation: with metric
+    /// K_f and rest 0, q₀ = −K_f⁻¹ ∇E is the static shape of U + E
+    /// linearised (the whole equilibrium in one tick, not a step per tick).
+    /// So that it is approached like a motion, never jumped to, the shift
+    /// moves by at most [`OBJECTIVE_STEP_LIMIT_M`] per tick toward it, in
+    /// its direction; `goal` is q₀ on those columns (0 before the call).
+    fn static_rest(&mut self, goal: &mut [f64]) {
+        let moving = self.shift.len() - self.static_shift.len();
+        let target = &self.shift[moving..];
+        let change = target
+            .iter()
+            .zip(&self.static_shift)
+            .map(|(t, p)| (t - p).abs())
+            .fold(0.0, |a: f64, v| if v > a || v.is_nan() { v } else { a });
+        if !change.is_finite() {
+            return;
+        }
+        let f = if change > 0.0 {
+            (OBJECTIVE_STEP_LIMIT_M / change).min(1.0)
+        } else {
+            0.0
+        };
+        for ((p, t), g) in self.static_shift.iter_mut().zip(target).zip(goal) {
+            *p += f * (t - *p);
+            *g -= *p;
+        }
+        self.last_step_m = self.last_step_m.max(f * change);
+    }
 }
 
 impl ObjectivePull {
@@ -70,8 +104,32 @@ impl ObjectivePull {
             energy_kg: mean_mass_kg / o.least_astonishment,
             design_kg: design_metric_kg(model, mean_mass_kg),
             last_step_m: 0.0,
+            static_shift: vec![0.0; static_columns(model)],
         })
     }
+}
+
+/// The number of trailing columns of q in auxiliary blocks whose rest is 0
+/// (flexible deformations; `model::auxiliary`). They are the last blocks:
+/// every flexible block precedes no other kind (checked here).
+fn static_columns(model: &crate::Model) -> usize {
+    let blocks = model.layout().aux_blocks();
+    let tail = blocks
+        .iter()
+        .rev()
+        .take_while(|b| b.rest == crate::model::Rest::Zero)
+        .map(|b| b.width)
+        .sum();
+    debug_assert_eq!(
+        tail,
+        blocks
+            .iter()
+            .filter(|b| b.rest == crate::model::Rest::Zero)
+            .map(|b| b.width)
+            .sum::<usize>(),
+        "rest-0 blocks must be the last ones"
+    );
+    tail
 }
 
 /// The least-astonishment metric of one design column, kg: the mean body
@@ -91,11 +149,14 @@ impl Program {
         if o.eval.gradient(&self.model, &self.q, &mut o.grad).is_err() {
             return;
         }
-        let nb = self.model.layout().body_coords();
+        let design = self.model.layout().design_range();
         match self.settings.update {
             UpdateRule::Projected => {
                 self.feedback.apply_inverse_mass(&o.grad, &mut o.shift);
-                for (s, g) in o.shift[nb..].iter_mut().zip(&o.grad[nb..]) {
+                for (s, g) in o.shift[design.clone()]
+                    .iter_mut()
+                    .zip(&o.grad[design.clone()])
+                {
                     *s = g / o.design_kg;
                 }
                 let k = o.energy_kg;
@@ -114,17 +175,23 @@ impl Program {
                 }
             }
         }
-        let size = o
-            .shift
+        // Flexible deformations (rest 0) are static: their shift is a
+        // shape, not a step, and is rate-limited on its own (`static_rest`).
+        let n_static = o.static_shift.len();
+        let moving = o.shift.len() - n_static;
+        let size = o.shift[..moving]
             .iter()
             .zip(&self.scaling.sqrt_metric)
             .map(|(s, w)| (s * w).abs())
             .fold(0.0, |a: f64, v| if v > a || v.is_nan() { v } else { a });
+        if n_static > 0 {
+            o.static_rest(&mut self.q_goal[moving..]);
+        }
         if !size.is_finite() || size == 0.0 {
             return;
         }
         let f = (OBJECTIVE_STEP_LIMIT_M / size).min(1.0);
-        for (g, s) in self.q_goal.iter_mut().zip(&o.shift) {
+        for (g, s) in self.q_goal[..moving].iter_mut().zip(&o.shift) {
             *g -= f * s;
         }
         o.last_step_m = f * size;
@@ -146,6 +213,21 @@ impl Program {
     /// successful tick (NaN before the first; empty without objectives).
     pub fn objective_reports(&self) -> &[f64] {
         self.objective.as_ref().map_or(&[], |o| &o.reports)
+    }
+
+    /// The objectives' pull on flexible deformations at the last tick (the
+    /// state `ObjectivePull::static_rest` rate-limits; empty without).
+    pub(super) fn static_shift(&self) -> &[f64] {
+        self.objective.as_ref().map_or(&[], |o| &o.static_shift)
+    }
+
+    /// Replaces that state (a replayed tick; ignored on a length mismatch).
+    pub(super) fn set_static_shift(&mut self, s: &[f64]) {
+        if let Some(o) = &mut self.objective
+            && o.static_shift.len() == s.len()
+        {
+            o.static_shift.copy_from_slice(s);
+        }
     }
 
     /// The largest scaled coordinate change the objectives asked of the last

@@ -26,6 +26,7 @@ impl Program {
         }
         self.q.copy_from_slice(q);
         self.q_ref.copy_from_slice(q);
+        self.anchor_rolling();
         self.feedback.motion.reset(q);
         // A failed refresh (a q that cannot be evaluated) shows up as the
         // status of the next tick.
@@ -62,6 +63,7 @@ impl Program {
             self.q_ref[i] += d;
             self.feedback.motion.q_prev[i] += d;
         }
+        self.anchor_rolling();
         let _ = self.refresh();
         Ok(())
     }
@@ -112,6 +114,23 @@ impl Program {
                 }
             }
         }
+        // Auxiliary blocks (flexible deformations, surface parameters), by
+        // name and width.
+        let (na, oa) = (new_m.layout().aux_blocks(), old_m.layout().aux_blocks());
+        let (n_start, o_start) = (self.feedback.motion.aux_start, mo.aux_start);
+        for (i, b) in na.iter().enumerate() {
+            let found = match_index(i, oa.len(), |a, c| na[a].name == oa[c].name);
+            if let Some(j) = found.filter(|&j| oa[j].width == b.width) {
+                let (n, o) = (b.offset, oa[j].offset);
+                self.q[n..n + b.width].copy_from_slice(&old.q[o..o + b.width]);
+                self.feedback.motion.q_prev[n..n + b.width]
+                    .copy_from_slice(&mo.q_prev[o..o + b.width]);
+                let (nm, om) = (n - n_start, o - o_start);
+                let m = &mut self.feedback.motion;
+                m.aux_v[nm..nm + b.width].copy_from_slice(&mo.aux_v[om..om + b.width]);
+                m.aux_a[nm..nm + b.width].copy_from_slice(&mo.aux_a[om..om + b.width]);
+            }
+        }
         self.feedback.motion.ticks = mo.ticks;
         self.q_ref.copy_from_slice(&self.q);
         // Multipliers of surviving constraints.
@@ -145,6 +164,7 @@ impl Program {
                 self.outputs[k] = old.outputs[j];
             }
         }
+        self.set_static_shift(old.static_shift());
         self.adopt_friction(old);
         self.adopt_semantic(old);
         let _ = self.refresh();

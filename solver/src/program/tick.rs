@@ -145,6 +145,8 @@ impl Program {
     pub fn iterate(&mut self, targets: &[FingerTarget], iterations: u32) -> TickOutcome {
         self.q_ref.copy_from_slice(&self.q);
         self.q_goal.copy_from_slice(&self.q);
+        self.rest_aux();
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         let status = match self.iterations(targets, iterations) {
             Ok(_) => match self.diverged_state() {
@@ -265,8 +267,10 @@ impl Program {
     ) -> TickReport {
         self.last_dt_s = dt_s;
         self.q_ref.copy_from_slice(&self.q);
+        self.anchor_rolling();
         self.saved_lambda.copy_from_slice(&self.lambda);
         self.predict(dt_s);
+        self.rest_aux();
         self.carry_groups();
         self.ramp_snaps(dt_s);
         self.pull_objectives();
@@ -367,6 +371,8 @@ impl Program {
         for k in 0..max_iterations {
             self.q_ref.copy_from_slice(&self.q);
             self.q_goal.copy_from_slice(&self.q);
+            self.rest_aux();
+            self.anchor_rolling();
             if let Err(status) = self.assembly_step(targets) {
                 self.q.copy_from_slice(&self.q_ref);
                 self.lambda.copy_from_slice(&self.saved_lambda);

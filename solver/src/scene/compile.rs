@@ -197,6 +197,38 @@ fn joint_kind(k: JointKindSpec) -> JointKind {
         JointKindSpec::Distance => JointKind::Distance,
         JointKindSpec::Perpendicular => JointKind::Perpendicular,
         JointKindSpec::PointOnPlane => JointKind::PointOnPlane,
+        JointKindSpec::OnSurface => JointKind::OnSurface,
+        JointKindSpec::Rolling => JointKind::Rolling,
+    }
+}
+
+fn contact_surface(s: &super::spec::SurfaceSection) -> crate::ContactSurface {
+    use super::spec::SurfaceTypeSpec as T;
+    use crate::parametric::SurfaceKind as K;
+    let r = s.radius.unwrap_or(f64::NAN);
+    let kind = match s.kind {
+        T::Plane => K::Plane,
+        T::Bowl => K::Sphere {
+            radius_m: r,
+            concave: true,
+        },
+        T::Dome => K::Sphere {
+            radius_m: r,
+            concave: false,
+        },
+        T::Trough => K::Cylinder {
+            radius_m: r,
+            concave: true,
+        },
+        T::Ridge => K::Cylinder {
+            radius_m: r,
+            concave: false,
+        },
+    };
+    crate::ContactSurface {
+        kind,
+        origin_m: s.origin.map_or([0.0; 3], |o| o.get()),
+        orientation_wxyz: s.orientation.map_or([1.0, 0.0, 0.0, 0.0], |q| q.get()),
     }
 }
 
@@ -219,6 +251,15 @@ fn body_spec(b: &BodySection) -> BodySpec {
     spec.friction = b.friction.as_ref().map_or(0.0, |m| *m.get_ref());
     spec.free = b.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = b.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.flexible = b.flexible.as_ref().map(|f| {
+        let f = f.get_ref();
+        crate::flexible::BeamSpec {
+            span_m: f.span.get(),
+            clamp_m: f.clamp.unwrap_or(0.0),
+            stiffness_n_m2: [f.stiffness, f.stiffness_z.unwrap_or(f.stiffness)],
+            modes: f.modes.map_or(3, |m| m as usize),
+        }
+    });
     spec
 }
 
@@ -343,6 +384,8 @@ fn joint_spec(j: &JointSection) -> JointSpec {
     spec.limits = j.limits.as_ref().map(|l| l.get_ref().get());
     spec.free = j.free.iter().map(|f| free_param(*f.get_ref())).collect();
     spec.bounds = j.bounds.as_ref().map(|x| bounds(*x.get_ref()));
+    spec.surface = j.surface.as_ref().map(|x| contact_surface(x.get_ref()));
+    spec.radius_m = j.radius.as_ref().map(|x| *x.get_ref());
     spec
 }
 
@@ -352,6 +395,13 @@ fn normalised(q: Quat) -> Quat {
 }
 
 impl LoadedScene {
+    /// The `[[joint]]` tables as the model builder takes them, in file order
+    /// (axes as written, not normalised), e.g. to write the mechanism in
+    /// another program's format.
+    pub fn joint_specs(&self) -> Vec<JointSpec> {
+        self.spec.joints.iter().map(joint_spec).collect()
+    }
+
     /// Builds the model and wires devices to fingers. Every error names the
     /// file, line and column of the offending value.
     pub fn compile(&self) -> Result<CompiledScene, SceneError> {
@@ -595,7 +645,7 @@ impl LoadedScene {
                     | BuildError::OutOfRange {
                         field: "position", ..
                     } => f.position.as_ref().map_or(f.name.span(), Spanned::span),
-                    BuildError::NonFinite { .. } => {
+                    BuildError::NonFinite { .. } | BuildError::Flexible { .. } => {
                         f.point.as_ref().map_or(f.name.span(), Spanned::span)
                     }
                     BuildError::BadFingertip {
@@ -651,6 +701,7 @@ fn body_field(b: &BodySection, e: &BuildError) -> Range<usize> {
         } => or_name(b.density.as_ref().map(Spanned::span)),
         BuildError::Shape { .. } => or_name(b.shape.as_ref().map(Spanned::span)),
         BuildError::BadFriction { .. } => or_name(b.friction.as_ref().map(Spanned::span)),
+        BuildError::Flexible { .. } => or_name(b.flexible.as_ref().map(Spanned::span)),
         BuildError::UnsupportedBodyFree { .. } | BuildError::DuplicateFree { .. } => {
             let dup = matches!(e, BuildError::DuplicateFree { .. });
             or_name(
@@ -740,7 +791,14 @@ fn joint_field(j: &JointSection, e: &BuildError) -> Range<usize> {
         | BuildError::OutOfRange {
             field: "anchors", ..
         }
-        | BuildError::CoincidentAnchors { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
+        | BuildError::CoincidentAnchors { .. }
+        | BuildError::Flexible { .. } => or_head(j.anchors.as_ref().map(Spanned::span)),
+        BuildError::Surface { field, .. } => or_head(match *field {
+            "radius" => j.radius.as_ref().map(Spanned::span),
+            "anchors" => j.anchors.as_ref().map(Spanned::span),
+            "kind" => Some(j.kind.span()),
+            _ => j.surface.as_ref().map(Spanned::span),
+        }),
         BuildError::NonFinite {
             field: "length", ..
         }

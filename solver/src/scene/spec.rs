@@ -207,6 +207,30 @@ pub struct BodySection {
     /// Bounds on the freed position.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// A flexible body's beam (Nelson & Cohen §4).
+    #[serde(default)]
+    pub flexible: Option<Spanned<FlexibleSpec>>,
+}
+
+/// `flexible = { span, clamp, stiffness, stiffness_z, modes }`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlexibleSpec {
+    /// `[x0, x1]` along the body's x axis, m, body frame.
+    pub span: Arr<f64, 2>,
+    /// Where on the span the body frame is the beam's tangent frame, m
+    /// (default 0).
+    #[serde(default)]
+    pub clamp: Option<f64>,
+    /// EI for deflection along the body's y axis (and z unless
+    /// `stiffness_z`), N·m².
+    pub stiffness: f64,
+    /// EI for deflection along z, N·m² (default: `stiffness`).
+    #[serde(default)]
+    pub stiffness_z: Option<f64>,
+    /// Shape functions per direction (default 3).
+    #[serde(default)]
+    pub modes: Option<u32>,
 }
 
 /// `shape = { … }`.
@@ -260,6 +284,10 @@ pub enum JointKindSpec {
     Perpendicular,
     /// 1 row.
     PointOnPlane,
+    /// 3 rows + (u, v).
+    OnSurface,
+    /// 3 + 2 rows + (u, v).
+    Rolling,
 }
 
 /// A name in `free = [...]`.
@@ -344,6 +372,46 @@ pub struct JointSection {
     /// Bounds on the design variables.
     #[serde(default)]
     pub bounds: Option<Spanned<BoundsSpec>>,
+    /// `on_surface` and `rolling`: body j's surface.
+    #[serde(default)]
+    pub surface: Option<Spanned<SurfaceSection>>,
+    /// `on_surface` and `rolling`: the ball's radius, m.
+    #[serde(default)]
+    pub radius: Option<Spanned<f64>>,
+}
+
+/// `surface = { type, radius, origin, orientation }` of a joint.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSection {
+    /// The surface's shape.
+    #[serde(rename = "type")]
+    pub kind: SurfaceTypeSpec,
+    /// Sphere or cylinder radius, m.
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// Origin of its local frame, m, body j's frame.
+    #[serde(default)]
+    pub origin: Option<Vec3>,
+    /// Its local frame, `[w, x, y, z]`, local → body.
+    #[serde(default)]
+    pub orientation: Option<Quat>,
+}
+
+/// `type = "…"` of a surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceTypeSpec {
+    /// The local xy plane.
+    Plane,
+    /// A sphere seen from inside.
+    Bowl,
+    /// A sphere seen from outside.
+    Dome,
+    /// A cylinder along local x seen from inside.
+    Trough,
+    /// A cylinder along local x seen from outside.
+    Ridge,
 }
 
 /// `[[device]]`.

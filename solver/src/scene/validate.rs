@@ -88,6 +88,17 @@ impl Checker<'_> {
             for area in b.offer.iter().chain(&b.binding) {
                 self.area(area)?;
             }
+            if let Some(f) = &b.flexible
+                && !(b.offer.is_empty() && b.binding.is_empty())
+            {
+                return Err(self.err(
+                    f.span(),
+                    format!(
+                        "body `{}`: a flexible body cannot carry semantic areas (they would not bend)",
+                        b.name.get_ref()
+                    ),
+                ));
+            }
         }
         self.devices(s)?;
         self.finger_wiring(s)?;

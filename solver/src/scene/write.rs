@@ -61,6 +61,17 @@ fn body(out: &mut String, b: &BodySpec) {
             let _ = writeln!(out, "shape = {{ convex = [{}] }}", pts.join(", "));
         }
     }
+    if let Some(f) = &b.flexible {
+        let _ = writeln!(
+            out,
+            "flexible = {{ span = {}, clamp = {}, stiffness = {}, stiffness_z = {}, modes = {} }}",
+            arr(&f.span_m),
+            num(f.clamp_m),
+            num(f.stiffness_n_m2[0]),
+            num(f.stiffness_n_m2[1]),
+            f.modes
+        );
+    }
     out.push('\n');
 }
 
@@ -89,6 +100,28 @@ fn joint(out: &mut String, j: &JointSpec) {
             .map(|p| format!("\"{}\"", p.as_str()))
             .collect();
         let _ = writeln!(out, "free = [{}]", names.join(", "));
+    }
+    if let Some(s) = &j.surface {
+        use crate::parametric::SurfaceKind as K;
+        let (kind, radius) = match s.kind {
+            K::Plane => ("plane", None),
+            K::Sphere { radius_m, concave } => {
+                (if concave { "bowl" } else { "dome" }, Some(radius_m))
+            }
+            K::Cylinder { radius_m, concave } => {
+                (if concave { "trough" } else { "ridge" }, Some(radius_m))
+            }
+        };
+        let radius = radius.map_or(String::new(), |r| format!(", radius = {}", num(r)));
+        let _ = writeln!(
+            out,
+            "surface = {{ type = \"{kind}\"{radius}, origin = {}, orientation = {} }}",
+            arr(&s.origin_m),
+            arr(&s.orientation_wxyz)
+        );
+    }
+    if let Some(r) = j.radius_m {
+        let _ = writeln!(out, "radius = {}", num(r));
     }
     out.push('\n');
 }

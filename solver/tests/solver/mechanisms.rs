@@ -2,7 +2,10 @@
 //! degrees of freedom the docs claim (coordinates − rank of the equality rows
 //! without finger rows).
 
-use haptloop_solver::mechanisms::{four_bar, sphere_toy, stewart};
+use haptloop_solver::mechanisms::{
+    bennett, chain, chain_sized, four_bar, lattice, lattice_shape, lattice_sized, sphere_toy,
+    stewart,
+};
 use haptloop_solver::{ConstraintKind, Model};
 
 use crate::common::initial_residual;
@@ -176,4 +179,102 @@ fn sphere_toy_counts_assembly_and_full_rank() {
     assert_eq!(loops(&m), 61);
     assert_eq!(dof_without_fingers(&m), 96);
     assert_eq!(rank(&m, |_| true), 831, "finger rows independent too");
+}
+
+fn count_kind(model: &Model, kind: ConstraintKind) -> usize {
+    model
+        .constraints()
+        .iter()
+        .filter(|c| c.kind == kind)
+        .count()
+}
+
+/// Equality rows without the finger's that the rank shows to be dependent.
+fn redundant_rows(model: &Model) -> usize {
+    let eq = model.equality_rows();
+    let n_fingers = model
+        .constraints()
+        .iter()
+        .filter(|c| {
+            matches!(
+                c.kind,
+                ConstraintKind::PointFinger | ConstraintKind::RigidFinger
+            )
+        })
+        .count();
+    let rows = eq.len() - 3 * n_fingers;
+    rows - (model.n_coords() - dof_without_fingers(model))
+}
+
+#[test]
+fn bennett_counts_assembly_one_dof_and_three_redundant_rows() {
+    let m = bennett();
+    // 4 × 5 joint rows + 3 norms + 3 finger rows.
+    let (bodies, coords, eq, ineq, _) = counts(&m);
+    assert_eq!((bodies, coords, eq, ineq), (4, 21, 26, 0));
+    assert_eq!(count_kind(&m, ConstraintKind::Revolute), 4);
+    assert!(
+        initial_residual(&m) < 1e-15,
+        "C(q0) = {:e}",
+        initial_residual(&m)
+    );
+    assert_eq!(loops(&m), 1);
+    // Spatial Grübler says 6·3 − 20 = −2; Bennett's linkage moves with 1.
+    assert_eq!(dof_without_fingers(&m), 1);
+    assert_eq!(redundant_rows(&m), 3);
+}
+
+#[test]
+fn lattice_counts_assembly_and_planar_mobility() {
+    // The 4 × 16 rank (1115 rows, dense) takes long unoptimised: the debug
+    // run checks the 2 × 8 only.
+    let sizes: &[(usize, usize)] = if cfg!(debug_assertions) {
+        &[(2, 8)]
+    } else {
+        &[(4, 16), (2, 8)]
+    };
+    for &(rows, cols) in sizes {
+        let m = lattice_sized(rows, cols).build().unwrap();
+        let (bars, joints) = (rows * (2 * cols + 1), rows * (3 * cols + 1));
+        assert_eq!(m.bodies().len(), bars + 1, "{rows}×{cols}");
+        assert_eq!(count_kind(&m, ConstraintKind::Revolute), joints);
+        assert!(
+            initial_residual(&m) < 1e-15,
+            "C(q0) = {:e}",
+            initial_residual(&m)
+        );
+        assert_eq!(loops(&m), rows * cols, "one loop per cell");
+        // Planar Grübler 3·bars − 2·joints, exact for this lattice: one shear
+        // per row of cells.
+        assert_eq!(3 * bars - 2 * joints, rows);
+        assert_eq!(dof_without_fingers(&m), rows, "{rows}×{cols}");
+        // Each planar loop makes 3 of its out-of-plane rows dependent.
+        assert_eq!(redundant_rows(&m), 3 * rows * cols, "{rows}×{cols}");
+    }
+    assert_eq!(
+        lattice().bodies().len(),
+        133,
+        "the issue's 132 bars + ground"
+    );
+    assert_eq!(lattice_shape(512).map(|(r, c)| r * (2 * c + 1)), Some(520));
+}
+
+#[test]
+fn chain_counts_assembly_and_mobility() {
+    for links in [64, 8] {
+        let m = chain_sized(links).build().unwrap();
+        assert_eq!(m.bodies().len(), links + 1);
+        assert_eq!(count_kind(&m, ConstraintKind::Universal), links - 1);
+        assert_eq!(count_kind(&m, ConstraintKind::Spherical), 2);
+        assert!(
+            initial_residual(&m) < 1e-15,
+            "{links}: C(q0) = {:e}",
+            initial_residual(&m)
+        );
+        assert_eq!(loops(&m), 1);
+        // Spatial Grübler 6n − 4(n − 1) − 2·3, no redundant row.
+        assert_eq!(dof_without_fingers(&m), 2 * links - 2, "{links}");
+        assert_eq!(redundant_rows(&m), 0, "{links}");
+    }
+    assert_eq!(chain().bodies().len(), 65);
 }
