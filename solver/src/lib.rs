@@ -116,8 +116,9 @@ pub use model::{AuxBlock, AuxOwner, ContactSurface, Rest};
 pub use model::{
     Body, BodySpec, Bounds, BuildError, ContactLayout, ContactPair, DEFAULT_FINGERTIP_RADIUS_M,
     DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignOwner, DesignParam, DesignVar,
-    FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout, Model,
-    ModelBuilder, Owner, PlaneOwner, PointPlaneSpec, Shape, UnknownName,
+    FINGERTIP_MASS_KG, Finger, FingerSpec, Fingertip, Grasp, JointKind, JointSpec, Layout,
+    MAX_FINGERTIP_RADIUS_M, MAX_FRICTION, Model, ModelBuilder, Owner, PlaneOwner, PointPlaneSpec,
+    Shape, UnknownName,
 };
 pub use model::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 pub use objective::{

@@ -225,6 +225,18 @@ pub fn summary(scene: &Scene) -> String {
             if n == 1 { "y" } else { "ies" }
         ),
     };
+    for b in m.bodies() {
+        if let Some(h) = &b.hull {
+            out += &format!(
+                "  hull         {}: {} points cut to {} (at most {} per hull); the shape lies within {:.3} mm of the one given\n",
+                b.name,
+                h.from_points,
+                h.vertices,
+                haptloop_solver::geometry::MAX_HULL_VERTICES,
+                h.error_m * 1e3
+            );
+        }
+    }
     out += &crate::report::semantic::check_lines(c);
     out
 }

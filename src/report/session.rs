@@ -218,6 +218,7 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             units::or_not_measured(c.cycle_us_mean, 0, "µs"),
             units::or_not_measured(c.cycle_us_max, 0, "µs")
         );
+        let _ = writeln!(out, "  {}", speed_limit_line(c));
     }
     if let Some(sem) = &s.semantic {
         super::semantic::lines(&mut out, sem);
@@ -297,5 +298,25 @@ fn design_lines(out: &mut String, s: &Summary) {
                 v.start, v.end, v.min, v.max, o.kind, o.weight
             );
         }
+    }
+}
+
+/// The contact speed limit and what it cost: `contact_distance` per slow
+/// cycle bounds every shaped body's motion, so a small contact distance
+/// makes a fingertip lag its device, in free air too.
+fn speed_limit_line(c: &super::summary::Contact) -> String {
+    let head = format!(
+        "contact speed limit {:.3} m/s (contact_distance per 5 ms slow-loop cycle)",
+        c.speed_limit_m_per_s
+    );
+    if c.speed_limited_ticks == 0 {
+        format!("{head}: never reached")
+    } else {
+        format!(
+            "{head}: held a body back in {} ticks; the largest finger tracking error then {:.2} mm \
+             (raise [solver] contact_distance for faster motion)",
+            c.speed_limited_ticks,
+            c.speed_limit_lag_max_m * 1e3
+        )
     }
 }

@@ -372,6 +372,17 @@ pub struct Contact {
     /// Largest, µs.
     #[serde(with = "super::figure")]
     pub reuse_us_max: f64,
+    /// The contact speed limit, m/s: `contact_distance` per slow-loop
+    /// cycle, the most a shaped body may move.
+    #[serde(default)]
+    pub speed_limit_m_per_s: f64,
+    /// Ticks in which it held a shaped body back (a fingertip then lags its
+    /// device).
+    #[serde(default)]
+    pub speed_limited_ticks: u64,
+    /// The largest finger tracking error in such a tick, m.
+    #[serde(default)]
+    pub speed_limit_lag_max_m: f64,
 }
 
 /// How one design-variable component (m) or objective value moved over the
@@ -682,6 +693,9 @@ impl Summary {
                     } else {
                         c.reuse_ns_max as f64 / 1e3
                     },
+                    speed_limit_m_per_s: o.plan.solver.contact_step_m * f64::from(o.plan.rate_hz),
+                    speed_limited_ticks: f.speed_limited_ticks,
+                    speed_limit_lag_max_m: f.speed_limit_lag_max_m,
                 }
             }),
             semantic: o.semantic.as_ref().map(Into::into),

@@ -169,6 +169,11 @@ pub struct ContactStats {
     pub latency_sum_ticks: u64,
     /// Most friction pairs sticking at once.
     pub max_sticking: u32,
+    /// Ticks in which the contact speed limit held a shaped body back.
+    pub speed_limited_ticks: u64,
+    /// The largest finger tracking error of such a tick, m: how far the
+    /// limit left a fingertip behind its device.
+    pub speed_limit_lag_max_m: f64,
 }
 
 impl ContactStats {
@@ -189,6 +194,10 @@ impl ContactStats {
         self.activation_limit_ticks +=
             u64::from(r.activations >= haptloop_solver::program::MAX_ACTIVATIONS);
         self.max_sticking = self.max_sticking.max(r.sticking);
+        if r.speed_limited {
+            self.speed_limited_ticks += 1;
+            self.speed_limit_lag_max_m = self.speed_limit_lag_max_m.max(r.max_tracking_error_m);
+        }
     }
 }
 

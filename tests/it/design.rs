@@ -278,7 +278,7 @@ fn design_flags_add_variables_and_objectives_to_any_scene() {
     // joint_limit_distance on a model without limits is refused, naming the flag.
     assert_eq!(r.status.code(), Some(2), "{err}");
     assert!(
-        err.starts_with("--objective:1:1: objective `joint_limit_distance`"),
+        err.starts_with("--objective:1:29: objective `joint_limit_distance`"),
         "{err}"
     );
     let r = haptloop()
@@ -361,7 +361,7 @@ fn bad_design_flags_are_usage_errors_naming_the_flag() {
         ),
         (
             &["--objective", "dexterity:chain=[ground,crank,cuopler]"],
-            "--objective:1:1: objective `dexterity`: names unknown body `cuopler`",
+            "--objective:1:31: objective `dexterity`: names unknown body `cuopler`",
         ),
         (
             &[

@@ -187,3 +187,32 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
         "documented but not checked: {unprobed:?}"
     );
 }
+
+/// The "Limits" table of `docs/scene-format.md` lists exactly the loader's
+/// limits (`scene::limits::LIMITS`), with their values.
+#[test]
+fn the_reference_lists_exactly_the_loader_limits() {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene-format.md"))
+            .unwrap();
+    let section = text
+        .split("\n## Limits\n")
+        .nth(1)
+        .expect("a `## Limits` section");
+    let documented: BTreeMap<String, f64> = section
+        .lines()
+        .take_while(|l| !l.starts_with("## "))
+        .filter_map(|l| l.strip_prefix("| `"))
+        .map(|row| {
+            let cells: Vec<&str> = row.split('|').collect();
+            let name = cells[0].trim().trim_end_matches('`').to_owned();
+            let value: f64 = cells[1].trim().parse().unwrap_or_else(|_| panic!("{row}"));
+            (name, value)
+        })
+        .collect();
+    let code: BTreeMap<String, f64> = scene::limits::LIMITS
+        .iter()
+        .map(|l| (l.name.to_owned(), l.value))
+        .collect();
+    assert_eq!(documented, code);
+}

@@ -32,9 +32,15 @@
 //! solve. The result satisfies the linearised joints exactly, so bounds
 //! never fight the joints.
 //!
+//! **Masked rows.** Rows masked as redundant at build with the design
+//! frozen need not stay redundant once it moves (a Bennett loop); the small
+//! solve above then carries their condition on the design step
+//! (`design_closure`).
+//!
 //! # Real-time
 //! No allocation: every buffer is sized by `new`.
 
+use super::design_closure::MaskedRows;
 use crate::force::feedback::Feedback;
 use crate::force::small::cholesky_solve;
 use crate::{Evaluation, Model};
@@ -74,12 +80,18 @@ pub(crate) struct DesignStep {
     free: Vec<usize>,
     /// Per design column: W⁻¹ (Jᵀ y)_c of the last step (0 when frozen).
     pub mg: Vec<f64>,
+    /// Rows masked as redundant with the design frozen, kept closed
+    /// (`design_closure`); `None` without any.
+    masked: Option<MaskedRows>,
+    /// Scratch: each column's fixed step offset while frozen.
+    dd: Vec<f64>,
 }
 
 impl DesignStep {
-    /// For `model`'s design columns with metric `w_kg` each. `None` without
+    /// For `model`'s design columns with metric `w_kg` each; `masked`: the
+    /// equality rows masked as redundant (model row, ℓ). `None` without
     /// design columns. Allocates.
-    pub fn new(model: &Model, w_kg: f64) -> Option<Self> {
+    pub fn new(model: &Model, w_kg: f64, masked: &[(usize, f64)]) -> Option<Self> {
         let l = model.layout();
         let cols: Vec<usize> = l.design_range().collect();
         if cols.is_empty() {
@@ -116,6 +128,8 @@ impl DesignStep {
             rhs: vec![0.0; n],
             free: Vec::with_capacity(n),
             mg: vec![0.0; n],
+            masked: MaskedRows::new(model, masked, n),
+            dd: vec![0.0; n],
             cols,
         })
     }
@@ -156,6 +170,9 @@ impl DesignStep {
                 self.s[b * n + a] = v;
             }
         }
+        if let Some(mr) = &mut self.masked {
+            mr.refresh(ev, fb, &self.u, &self.cols, &self.w)?;
+        }
         self.generation = Some(fb.generation);
         Ok(())
     }
@@ -189,10 +206,14 @@ impl DesignStep {
         k_inv: &[f64],
         q: &[f64],
         d: &mut [f64],
+        r: &[f64],
         y: &mut [f64],
         step: f64,
     ) -> Result<bool, ()> {
         self.refresh(ev, fb, k_inv)?;
+        if let Some(mr) = &mut self.masked {
+            mr.prepare(ev, d, r);
+        }
         let (n, m) = (self.cols.len(), self.m);
         for k in 0..n {
             let c = self.cols[k];
@@ -211,9 +232,11 @@ impl DesignStep {
         for _round in 0..n + 2 {
             // ŷ₀ with the frozen columns' d moved to their bounds.
             self.y0[..m].copy_from_slice(&y[..m]);
+            self.dd.fill(0.0);
             for &k in &self.moving {
                 if self.frozen[k] {
                     let dd = (q[self.cols[k]] - self.at[k]) - self.d0[k];
+                    self.dd[k] = dd;
                     if dd != 0.0 {
                         let z = &self.z[k * m..(k + 1) * m];
                         for (y0, zk) in self.y0.iter_mut().zip(z) {
@@ -233,7 +256,17 @@ impl DesignStep {
                     self.small[i * nf + j] = self.s[a * n + b];
                 }
             }
-            if nf > 0 && !cholesky_solve(&mut self.small[..nf * nf], &mut self.rhs[..nf]) {
+            let solved = match &mut self.masked {
+                Some(mr) => mr.solve(
+                    &self.small[..nf * nf],
+                    &mut self.rhs[..nf],
+                    &self.free,
+                    &self.dd,
+                    n,
+                ),
+                None => nf == 0 || cholesky_solve(&mut self.small[..nf * nf], &mut self.rhs[..nf]),
+            };
+            if !solved {
                 return Err(());
             }
             for (i, &a) in self.free.iter().enumerate() {
@@ -245,7 +278,8 @@ impl DesignStep {
             // t = Uᵀ ŷ, each column's step, and the active set's changes.
             let mut again = false;
             for k in 0..n {
-                self.t[k] = dot(&self.u[k * m..(k + 1) * m], &self.y0);
+                self.t[k] = dot(&self.u[k * m..(k + 1) * m], &self.y0)
+                    + self.masked.as_ref().map_or(0.0, |mr| mr.pull(k, n));
                 let c = self.cols[k];
                 let want = -(self.d0[k] + self.t[k] / self.w[k]);
                 let pinned = self.lo[k] == self.hi[k];

@@ -44,6 +44,7 @@
 //! physical load on a finger comes from Eq. 7 ([`crate::force`]).
 
 pub(crate) mod design;
+mod design_closure;
 pub(crate) mod fused;
 pub(crate) mod projected;
 pub(crate) mod scaling;

@@ -111,6 +111,8 @@ pub(crate) struct Projected {
     reach: Vec<(usize, f64)>,
     /// How far the last taken step moved a shaped body's points, metres.
     moved_m: f64,
+    /// Whether the contact speed limit shortened the last step.
+    speed_limited: bool,
     /// The design columns' correction (models with design variables).
     design: Option<DesignStep>,
 }
@@ -184,6 +186,7 @@ impl Projected {
                 })
                 .collect(),
             moved_m: 0.0,
+            speed_limited: false,
             design: None,
         }
     }
@@ -200,9 +203,10 @@ impl Projected {
     }
 
     /// Lets the design columns of `model` move, with metric `w_kg` each (see
-    /// `design`). Allocates.
-    pub fn with_design(mut self, model: &Model, w_kg: f64) -> Self {
-        self.design = DesignStep::new(model, w_kg);
+    /// `design`), keeping its `masked` equality rows (model row, ℓ) closed.
+    /// Allocates.
+    pub fn with_design(mut self, model: &Model, w_kg: f64, masked: &[(usize, f64)]) -> Self {
+        self.design = DesignStep::new(model, w_kg, masked);
         self
     }
 
@@ -210,6 +214,11 @@ impl Projected {
     /// without a contact speed limit).
     pub fn last_moved_m(&self) -> f64 {
         self.moved_m
+    }
+
+    /// Whether the contact speed limit shortened the last step.
+    pub fn last_speed_limited(&self) -> bool {
+        self.speed_limited
     }
 
     /// One projected step of size `step` (1 = the full Gauss–Newton step) from
@@ -302,7 +311,16 @@ impl Projected {
         let mut d_changed = false;
         if let Some(design) = &mut self.design {
             d_changed = design
-                .correct(ev, fb, &self.k_inv, q, &mut self.d, &mut self.y, step)
+                .correct(
+                    ev,
+                    fb,
+                    &self.k_inv,
+                    q,
+                    &mut self.d,
+                    &self.r,
+                    &mut self.y,
+                    step,
+                )
                 .map_err(|()| StepError::Solve)?;
         }
         let scale = fb.row_scale();
@@ -348,7 +366,8 @@ impl Projected {
                     .sqrt();
                 moved = moved.max(step * (dr + 2.0 * radius * de));
             }
-            if moved > contact_step_m {
+            self.speed_limited = moved > contact_step_m;
+            if self.speed_limited {
                 step *= contact_step_m / moved;
                 size *= contact_step_m / moved;
                 moved = contact_step_m;
@@ -356,6 +375,7 @@ impl Projected {
             self.moved_m = moved;
         } else {
             self.moved_m = 0.0;
+            self.speed_limited = false;
         }
         // Predicted values of the inactive inequality rows after the step
         // (and the update of C_q d).

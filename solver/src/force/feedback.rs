@@ -238,6 +238,21 @@ impl Feedback {
         self.gram.apply_inverse_mass(&self.masses, g, out);
     }
 
+    /// The model row of each row of A_JJ (the joint rows, fingers left
+    /// out), in A_JJ's order.
+    pub fn joint_rows(&self) -> &[usize] {
+        &self.gram.j_rows
+    }
+
+    /// x ← A_JJ⁻¹ x (one entry per row of [`joint_rows`](Self::joint_rows))
+    /// with the factor of the last `compute`.
+    ///
+    /// # Real-time
+    /// No allocation; one pair of sparse triangular solves.
+    pub fn solve_joint(&mut self, x: &mut [f64]) {
+        self.solve.solve_joint(x);
+    }
+
     /// Per row: ℓ_i if the row took part in the last `compute`, else 0.
     pub fn row_scale(&self) -> &[f64] {
         &self.scale

@@ -51,7 +51,10 @@ impl Default for FingerOutput {
 }
 
 impl FingerOutput {
-    /// True when every number is finite.
+    /// True when every number is finite and so is every vector's length:
+    /// a force of 1e300 N (gravity of −1e300 m/s² on a body) has finite
+    /// components but an infinite magnitude, which no safety layer can
+    /// clamp to a device's peak; such a tick is a failure, not a 0 N write.
     pub fn is_finite(&self) -> bool {
         [
             &self.force_n,
@@ -64,7 +67,7 @@ impl FingerOutput {
             &self.target_m,
         ]
         .iter()
-        .all(|v| v.iter().all(|x| x.is_finite()))
+        .all(|v| v.iter().map(|x| x * x).sum::<f64>().is_finite())
             && self.tracking_error_m.is_finite()
     }
 }

@@ -136,7 +136,7 @@ fn full_rank_solve(a: &[f64], b: &[f64], x: &mut [f64], v: &mut [f64], reference
 
 /// Lower Cholesky factor of the n × n row-major `a` in place (lower
 /// triangle); false if a pivot is not positive.
-fn factor_in_place(a: &mut [f64], n: usize) -> bool {
+pub(crate) fn factor_in_place(a: &mut [f64], n: usize) -> bool {
     for j in 0..n {
         let mut d = a[j * n + j];
         for k in 0..j {
@@ -159,7 +159,7 @@ fn factor_in_place(a: &mut [f64], n: usize) -> bool {
 }
 
 /// b ← (L Lᵀ)⁻¹ b with the factor of [`factor_in_place`].
-fn substitute(l: &[f64], b: &mut [f64]) {
+pub(crate) fn substitute(l: &[f64], b: &mut [f64]) {
     let n = b.len();
     for i in 0..n {
         let mut v = b[i];

@@ -57,7 +57,21 @@ pub struct ContactSettings {
     pub slots_per_pair: usize,
     /// Row slots of a fingertip–body pair.
     pub finger_slots: usize,
+    /// Pairs a moving body (fingertips included) is tracked in at most,
+    /// nearest first (see [`MAX_PAIRS_PER_BODY`]).
+    pub max_pairs_per_body: usize,
 }
+
+/// Contact pairs a moving body takes part in at most. Every pair brings
+/// `slots_per_pair` rows, and the rows of bodies that all touch each other
+/// make a dense block of the force solve (its factorisation grows with the
+/// cube of the block: 25 boxes at one spot, 300 pairs, took 17 s to build a
+/// program; 50 never finished). Equal spheres can touch 12 others at most;
+/// a box in a stack touches 26 neighbours only in a lattice packed without
+/// gaps. Beyond this the farthest pairs are not tracked (counted per cycle
+/// as [`Cycle::crowded`]); a scene that starts that crowded is refused at
+/// load.
+pub const MAX_PAIRS_PER_BODY: usize = 16;
 
 impl Default for ContactSettings {
     fn default() -> Self {
@@ -67,6 +81,7 @@ impl Default for ContactSettings {
             penetration_tolerance_m: 1e-4,
             slots_per_pair: 8,
             finger_slots: 2,
+            max_pairs_per_body: MAX_PAIRS_PER_BODY,
         }
     }
 }
@@ -135,6 +150,9 @@ pub struct Cycle {
     pub candidates: u32,
     /// Tracked pairs after the cycle.
     pub tracked: u32,
+    /// Pairs within reach left untracked because a moving body of theirs
+    /// was already in [`ContactSettings::max_pairs_per_body`] nearer ones.
+    pub crowded: u32,
 }
 
 /// The active set (see the module docs).
@@ -305,11 +323,50 @@ impl ActiveSet {
         // Tracked pairs the broad phase no longer reports are beyond release.
         seen.sort_unstable();
         self.tracked.retain(|k, _| seen.binary_search(k).is_ok());
+        cycle.crowded = self.cap_pairs_per_body();
         let after: Vec<[u32; 2]> = self.tracked.keys().copied().collect();
         cycle.structure_changed = before != after;
         cycle.tracked = after.len() as u32;
         self.last_poses.copy_from_slice(poses);
         cycle
+    }
+
+    /// Keeps every moving body in at most
+    /// [`ContactSettings::max_pairs_per_body`] tracked pairs, nearest pairs
+    /// first (a penetrating pair before any separated one); returns how many
+    /// pairs were dropped.
+    fn cap_pairs_per_body(&mut self) -> u32 {
+        let cap = self.settings.max_pairs_per_body;
+        let bodies = &self.bodies;
+        let moving = |b: u32| bodies[b as usize].as_ref().is_some_and(|c| !c.fixed);
+        let mut count = vec![0usize; bodies.len()];
+        for key in self.tracked.keys() {
+            for &b in key.iter().filter(|&&b| moving(b)) {
+                count[b as usize] += 1;
+            }
+        }
+        if count.iter().all(|&c| c <= cap) {
+            return 0;
+        }
+        let mut order: Vec<([u32; 2], f64)> = self
+            .tracked
+            .iter()
+            .map(|(k, t)| (*k, t.distance_m))
+            .collect();
+        order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        count.fill(0);
+        let mut dropped = 0;
+        for (key, _) in order {
+            if key.iter().any(|&b| moving(b) && count[b as usize] >= cap) {
+                self.tracked.remove(&key);
+                dropped += 1;
+            } else {
+                for &b in key.iter().filter(|&&b| moving(b)) {
+                    count[b as usize] += 1;
+                }
+            }
+        }
+        dropped
     }
 
     /// The pair in row order (fingertip first, else lower index first), or

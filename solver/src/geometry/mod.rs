@@ -5,6 +5,7 @@
 //! | file | what it computes |
 //! |---|---|
 //! | `shape.rs` | [`Shape`] (scene vocabulary), mass from density, [`Collider`] (core + margin) |
+//! | `simplify.rs` | hulls cut to a vertex budget at load, with the distance they moved |
 //! | `polyhedron.rs` | hull topology, Voronoi prisms, the support-set feature classifier |
 //! | `convert.rs` | nalgebra ↔ parry (glam) conversions, [`Pose3`] |
 //! | `broad.rs` | BVH broad phase (no all-pairs scan) |
@@ -26,8 +27,12 @@ pub mod polyhedron;
 pub mod primitives;
 pub mod sat;
 pub mod shape;
+pub mod simplify;
 
-pub use active_set::{ActiveSet, ContactBody, ContactSettings, Cycle, PairSpec};
+pub use active_set::{
+    ActiveSet, ContactBody, ContactSettings, Cycle, MAX_PAIRS_PER_BODY, PairSpec,
+};
 pub use convert::Pose3;
 pub use polyhedron::{Feature, Polyhedron};
 pub use shape::{Collider, DEFAULT_DENSITY_KG_M3, MassProps, Shape, ShapeError};
+pub use simplify::{HullSimplification, MAX_HULL_VERTICES};

@@ -153,13 +153,52 @@ impl Shape {
         })
     }
 
+    /// The whole shape as parry sees it and its bounding radius, m, without
+    /// the witness topology of [`collider`](Self::collider); a convex shape
+    /// of more than [`MAX_HULL_VERTICES`](super::MAX_HULL_VERTICES) points
+    /// is its simplified hull (`simplify.rs`: parry's hull of many points
+    /// costs far more than linear time). Allocates.
+    pub fn parry_shape(&self) -> Result<(SharedShape, f64), ShapeError> {
+        match self {
+            Shape::Convex { points_m } => {
+                let cut = super::simplify::simplify_hull(points_m, super::MAX_HULL_VERTICES)?;
+                let kept = cut
+                    .as_ref()
+                    .map_or(points_m.as_slice(), |c| c.points_m.as_slice());
+                let pts: Vec<_> = kept.iter().map(|p| to_glam(&Vector3::from(*p))).collect();
+                let hull = parry3d_f64::shape::ConvexPolyhedron::from_convex_hull(&pts)
+                    .ok_or(HullError::Flat)?;
+                let r = kept
+                    .iter()
+                    .map(|p| Vector3::from(*p).norm())
+                    .fold(0.0, f64::max);
+                Ok((SharedShape::new(hull), r))
+            }
+            _ => {
+                let c = self.collider()?;
+                Ok((c.full, c.radius_m))
+            }
+        }
+    }
+
     /// Mass and principal inertia at `density` (kg/m³).
     pub fn mass_properties(&self, density_kg_m3: f64) -> Result<MassProps, ShapeError> {
-        let c = self.collider()?;
-        let mp = c.full.mass_properties(density_kg_m3);
+        self.mass_properties_within(density_kg_m3, 0.0)
+    }
+
+    /// [`mass_properties`](Self::mass_properties), the centre of mass
+    /// allowed `com_slack_m` farther from the origin than round-off (a
+    /// simplified hull's moves by up to the distance it was cut by).
+    pub fn mass_properties_within(
+        &self,
+        density_kg_m3: f64,
+        com_slack_m: f64,
+    ) -> Result<MassProps, ShapeError> {
+        let (full, radius_m) = self.parry_shape()?;
+        let mp = full.mass_properties(density_kg_m3);
         let com = to_na(mp.local_com);
-        let size = c.radius_m.max(1e-12);
-        if com.norm() > 1e-3 * size {
+        let size = radius_m.max(1e-12);
+        if com.norm() > 1e-3 * size + com_slack_m {
             return Err(ShapeError::OffCentre(com.into()));
         }
         let i = mp.reconstruct_inertia_matrix();

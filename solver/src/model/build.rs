@@ -10,12 +10,14 @@ use super::joints::compile_joint;
 use super::layout::{DesignOwner, DesignVar, Layout};
 use super::spec::{
     BodySpec, DEFAULT_DENSITY_KG_M3, DEFAULT_INERTIA_RADIUS_M, DEFAULT_MASS_KG, DesignParam,
-    FINGERTIP_MASS_KG, FingerSpec, Fingertip, JointSpec, Shape,
+    FINGERTIP_MASS_KG, FingerSpec, Fingertip, JointSpec, MAX_FINGERTIP_RADIUS_M, MAX_FRICTION,
+    Shape,
 };
 use super::{Body, Model, initial_frame, next_model_id};
 use crate::constraint::bound::DesignBound;
 use crate::constraint::quat_norm::QuatNorm;
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, RowInfo};
+use crate::geometry::simplify::{MAX_HULL_VERTICES, simplify_hull};
 use crate::rotation::BodyFrame;
 use crate::{BodyId, ConstraintId, FingerId};
 
@@ -341,15 +343,15 @@ fn design_bounds(vars: &[DesignVar]) -> Vec<(ConstraintInfo, DesignBound)> {
 /// [`FINGERTIP_MASS_KG`] at its start position.
 fn tip_body(f: &FingerSpec, t: &Fingertip) -> Result<BodySpec, BuildError> {
     let owner = || Owner::Finger(f.name.clone());
-    if !(t.radius_m.is_finite() && t.radius_m > 0.0 && t.radius_m <= 1.0) {
+    if !(t.radius_m.is_finite() && t.radius_m > 0.0 && t.radius_m <= MAX_FINGERTIP_RADIUS_M) {
         return Err(BuildError::BadFingertip {
             owner: owner(),
             field: "radius",
             value: t.radius_m,
-            why: "finite, > 0 and at most 1 m",
+            why: "finite, > 0 and at most 1 m (a larger ball is a body with a `shape`)",
         });
     }
-    if !(t.friction.is_finite() && (0.0..=10.0).contains(&t.friction)) {
+    if !(t.friction.is_finite() && (0.0..=MAX_FRICTION).contains(&t.friction)) {
         return Err(BuildError::BadFingertip {
             owner: owner(),
             field: "friction",
@@ -378,9 +380,11 @@ fn tip_body(f: &FingerSpec, t: &Fingertip) -> Result<BodySpec, BuildError> {
 /// (inertia scaled to a given mass); else the defaults.
 fn mass_and_inertia(
     s: &BodySpec,
+    shape: Option<&Shape>,
+    com_slack_m: f64,
     owner: &dyn Fn() -> Owner,
 ) -> Result<(f64, [f64; 3]), BuildError> {
-    let from_shape = match &s.shape {
+    let from_shape = match shape {
         Some(shape) => {
             let density = s.density_kg_m3.unwrap_or(DEFAULT_DENSITY_KG_M3);
             if !(density.is_finite() && density > 0.0) {
@@ -402,9 +406,11 @@ fn mass_and_inertia(
                 })?;
                 None
             } else {
+                // Of the kept hull (its centre of mass may lie up to the
+                // distance it was cut by from the given shape's).
                 Some(
                     shape
-                        .mass_properties(density)
+                        .mass_properties_within(density, com_slack_m)
                         .map_err(|error| BuildError::Shape {
                             owner: owner(),
                             field: "shape",
@@ -450,7 +456,29 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     if let Some(m) = s.mass_kg {
         finite("mass", &[m])?;
     }
-    let (mass_kg, inertia) = mass_and_inertia(s, &owner)?;
+    // A hull past the vertex budget is cut before anything uses it (mass
+    // properties included): every later collider is built from the kept
+    // vertices.
+    let (shape, hull) = match &s.shape {
+        Some(Shape::Convex { points_m }) => {
+            match simplify_hull(points_m, MAX_HULL_VERTICES).map_err(|e| BuildError::Shape {
+                owner: owner(),
+                field: "shape",
+                error: e.into(),
+            })? {
+                Some(cut) => (
+                    Some(Shape::Convex {
+                        points_m: cut.points_m.clone(),
+                    }),
+                    (cut.error_m > 0.0).then(|| cut.summary()),
+                ),
+                None => (s.shape.clone(), None),
+            }
+        }
+        other => (other.clone(), None),
+    };
+    let slack = hull.map_or(0.0, |h| h.error_m);
+    let (mass_kg, inertia) = mass_and_inertia(s, shape.as_ref(), slack, &owner)?;
     finite("mass", &[mass_kg])?;
     if mass_kg <= 0.0 {
         return Err(BuildError::NonPositiveMass {
@@ -475,7 +503,7 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
             inertia_kg_m2: inertia,
         });
     }
-    if !(s.friction.is_finite() && s.friction >= 0.0) {
+    if !(s.friction.is_finite() && (0.0..=MAX_FRICTION).contains(&s.friction)) {
         return Err(BuildError::BadFriction {
             owner: owner(),
             value: s.friction,
@@ -528,8 +556,9 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         orientation: UnitQuaternion::from_quaternion(q),
         mass_kg,
         inertia_kg_m2: Vector3::from(inertia),
-        shape: s.shape.clone(),
+        shape,
         fingertip: false,
         friction: s.friction,
+        hull,
     })
 }

@@ -385,8 +385,9 @@ pub enum BuildError {
         /// What is wrong, with the values.
         why: String,
     },
-    /// A body's Coulomb μ is negative or not finite.
-    #[error("{owner}: `friction` = {value} must be finite and ≥ 0")]
+    /// A body's Coulomb μ is negative, not finite or above
+    /// [`MAX_FRICTION`](super::MAX_FRICTION).
+    #[error("{owner}: `friction` = {value} must be finite and in [0, 10]")]
     BadFriction {
         /// The body.
         owner: Owner,

@@ -24,7 +24,7 @@ pub use layout::{DesignOwner, DesignVar, Layout};
 pub use spec::{
     BodySpec, Bounds, ContactSurface, DEFAULT_FINGERTIP_RADIUS_M, DEFAULT_INERTIA_RADIUS_M,
     DEFAULT_MASS_KG, DesignParam, FINGERTIP_MASS_KG, FingerSpec, Fingertip, Grasp, JointKind,
-    JointSpec, Shape, UnknownName,
+    JointSpec, MAX_FINGERTIP_RADIUS_M, MAX_FRICTION, Shape, UnknownName,
 };
 pub use surface::{HoldSpec, SemanticLayout, SnapSettings, SurfaceInfo, SurfaceRow, SurfaceSpec};
 
@@ -59,6 +59,11 @@ pub struct Body {
     /// Coulomb μ of its contacts with other bodies (see
     /// [`BodySpec::friction`](crate::BodySpec::friction)).
     pub friction: f64,
+    /// Its convex shape was cut to [`MAX_HULL_VERTICES`](crate::geometry::MAX_HULL_VERTICES)
+    /// points at build (`shape` holds the kept ones; `None` when nothing was
+    /// cut off): how, and the largest distance a given point lies from the
+    /// kept hull.
+    pub hull: Option<crate::geometry::HullSimplification>,
 }
 
 /// One finger: a point (or rigid) grasp of a moving body.

@@ -419,6 +419,15 @@ impl JointSpec {
 /// fingertip's pad.
 pub const DEFAULT_FINGERTIP_RADIUS_M: f64 = 0.008;
 
+/// The largest Coulomb μ a body or fingertip may have: 10 already sticks
+/// anything a hand can push (rubber on rubber is about 1–2); larger values
+/// only stiffen the friction rows' cone test toward round-off.
+pub const MAX_FRICTION: f64 = 10.0;
+
+/// The largest fingertip radius, metres: a fingertip is a finger's pad, and
+/// a larger ball is a body of its own (give it a `shape`).
+pub const MAX_FINGERTIP_RADIUS_M: f64 = 1.0;
+
 /// Mass of a contact finger's fingertip ball, kilograms: 10 g, light next to
 /// the objects it pushes (so their inertia, not its own, is what Eq. 7 feeds
 /// back) yet a well-conditioned body. It feels no gravity (the user's hand

@@ -72,7 +72,10 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
         let term = match s {
             ObjectiveSpec::Finger { .. } => {
                 if std::mem::replace(&mut seen.0, true) {
-                    return Err(BuildError::DuplicateName { owner: owner() });
+                    return Err(bad(
+                        "kind",
+                        "given once: a scene has one `finger` objective (its weight is the fingers' pull)",
+                    ));
                 }
                 if w <= 0.0 {
                     return Err(bad(
@@ -85,7 +88,10 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
             }
             ObjectiveSpec::LeastAstonishment { design_weight, .. } => {
                 if std::mem::replace(&mut seen.1, true) {
-                    return Err(BuildError::DuplicateName { owner: owner() });
+                    return Err(bad(
+                        "kind",
+                        "given once: a scene has one `least_astonishment` objective (its weight divides every other)",
+                    ));
                 }
                 if w <= 0.0 {
                     return Err(bad(
@@ -280,6 +286,14 @@ fn dexterity(
         points.push(f.point(&k0));
     }
     let last = *ids.last().expect("two or more");
+    if model.bodies()[last.index()].fixed {
+        // The point rides on the last body: on a fixed one it never moves,
+        // J̃ is zero and F sits at its floor for good.
+        return Err(bad(
+            "chain",
+            "base first, tip last: its last body is fixed, so its point never moves (is the chain reversed?)",
+        ));
+    }
     let tip = Vector3::from(*point_m);
     if let Some(f) = frame(last.index()) {
         points.push(f.point(&tip));

@@ -14,8 +14,9 @@
 //! b is C¹ (zero value and slope at d = D), so F is C¹ everywhere, zero with
 //! no point in range, and max_k b_k ≤ F/D² ≤ 4^¼ max_k b_k for up to four
 //! points in range: it follows the nearest pair as Eq. 15 does. Guards: a
-//! distance below [`MIN_DISTANCE_FRACTION`] × D counts as that distance (no
-//! division by zero, a bounded pull), and at d = 0 the direction u is zero.
+//! distance below [`MIN_DISTANCE_FRACTION`] × D (at most
+//! [`MAX_DISTANCE_FLOOR_M`]) counts as that distance (no division by zero, a
+//! bounded pull), and at d = 0 the direction u is zero.
 //!
 //! The obstacle is an input, not a variable: when it is a point of a body
 //! (moved by its own finger or joints), F's gradient leaves that body's
@@ -27,8 +28,14 @@ use nalgebra::Vector3;
 use super::grad::BodyGrad;
 use crate::BodyId;
 
-/// Distances below this fraction of the activation distance count as it.
+/// Distances below this fraction of the activation distance count as it…
 pub const MIN_DISTANCE_FRACTION: f64 = 1e-3;
+
+/// … but never more than this, metres: with the floor at a fixed fraction
+/// of D, an activation distance of 1 km put the floor at 1 m, every point
+/// of a desk-sized scene under it, and the objective (whose barrier is flat
+/// there) silently off.
+pub const MAX_DISTANCE_FLOOR_M: f64 = 1e-3;
 
 /// The obstacle point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,7 +72,8 @@ impl Avoid {
         let lever = g.lever(b, &p);
         let v = f.r + lever - o;
         let d = v.norm();
-        let dd = d.max(MIN_DISTANCE_FRACTION * self.distance_m);
+        let floor = (MIN_DISTANCE_FRACTION * self.distance_m).min(MAX_DISTANCE_FLOOR_M);
+        let dd = d.max(floor);
         let u = if d > 0.0 { v / d } else { Vector3::zeros() };
         let ratio = self.distance_m / dd;
         let b_k = if dd < self.distance_m {

@@ -116,6 +116,8 @@ pub struct Program {
     contact_step_m: f64,
     /// What is left of it in the current tick.
     step_budget_m: f64,
+    /// The contact speed limit held a body back in this tick.
+    speed_limited: bool,
     /// Scratch: each finger's coupling error at the last force solve.
     prev_error_buf: Vec<nalgebra::Vector3<f64>>,
     /// Per witness-table slot: a friction stick row (its anchor is the fast
@@ -213,6 +215,7 @@ impl Program {
         .with_design(
             &model,
             objective::design_metric_kg(&model, feedback.mean_mass_kg()),
+            &masked_equalities(&model, &scaling, &redundancy.rows),
         );
         let objective = objective::ObjectivePull::new(&model, feedback.mean_mass_kg());
         let mut friction_slot = vec![false; model.contact().slots];
@@ -243,6 +246,7 @@ impl Program {
             activations: 0,
             last_dt_s: 1e-3,
             step_budget_m: f64::INFINITY,
+            speed_limited: false,
             contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
             objective,
@@ -373,6 +377,17 @@ impl Program {
 }
 
 /// The limits documented on [`DivergenceLimits`].
+/// The masked rows that are equalities (joints), with their ℓ: the ones a
+/// moving design must keep closed (`al/design_closure.rs`). Masked
+/// inequality rows (a contact the joints already hold) stay out.
+fn masked_equalities(model: &Model, scaling: &Scaling, masked: &[usize]) -> Vec<(usize, f64)> {
+    masked
+        .iter()
+        .filter(|&&i| model.rows()[i].sense == crate::Sense::Equality)
+        .map(|&i| (i, scaling.ell[i]))
+        .collect()
+}
+
 fn divergence_limits(
     s: &Scaling,
     settings: &SolverSettings,

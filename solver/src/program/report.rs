@@ -100,6 +100,10 @@ pub struct TickReport {
     pub activations: u32,
     /// Friction pairs sticking after the force solve.
     pub sticking: u32,
+    /// The contact speed limit (`SolverSettings::contact_step_m`) held a
+    /// shaped body back this tick: a step was shortened, or the tick's
+    /// steps stopped on its budget.
+    pub speed_limited: bool,
     /// How it ended.
     pub status: TickOutcome,
 }

@@ -186,6 +186,7 @@ impl Program {
         self.activations = 0;
         // The contact speed limit is a budget for the whole tick.
         self.step_budget_m = self.contact_step_m;
+        self.speed_limited = false;
         self.projected.begin();
         let mut k = 0;
         while k < n {
@@ -197,8 +198,10 @@ impl Program {
                 Ok(Step::Taken(size)) => {
                     allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
                     k += 1;
+                    self.speed_limited |= self.projected.last_speed_limited();
                     self.step_budget_m -= self.projected.last_moved_m();
                     if self.step_budget_m <= 0.0 {
+                        self.speed_limited |= k < n;
                         return Ok(k);
                     }
                 }
@@ -326,6 +329,7 @@ impl Program {
             active_contacts: self.active_contacts(),
             activations: self.activations,
             sticking: self.sticking(),
+            speed_limited: self.speed_limited,
             status: TickOutcome::Ok,
         }
     }

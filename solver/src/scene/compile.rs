@@ -349,7 +349,7 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
     }
 }
 
-fn shape(s: &ShapeSpec) -> Shape {
+pub(super) fn shape(s: &ShapeSpec) -> Shape {
     match s {
         ShapeSpec::Box(h) => Shape::Box {
             half_extents_m: h.get(),
@@ -449,10 +449,16 @@ impl LoadedScene {
             .map_err(|e| self.build_error(&e))?;
         let model = builder.build().map_err(|e| self.build_error(&e))?;
         self.check_limits_at_q0(&model)?;
-        let penetration = s.solver.penetration_tolerance.as_ref().map_or(
-            crate::geometry::ContactSettings::default().penetration_tolerance_m,
-            |x| *x.get_ref(),
-        );
+        let mut contact = crate::geometry::ContactSettings::default();
+        if let Some(d) = &s.solver.contact_distance {
+            contact.contact_distance_m = *d.get_ref();
+        }
+        self.check_crowding(&model, &contact)?;
+        let penetration = s
+            .solver
+            .penetration_tolerance
+            .as_ref()
+            .map_or(contact.penetration_tolerance_m, |x| *x.get_ref());
         let semantic = self.compile_semantic(&model, penetration)?;
         let holds = self.compile_holds(&model);
 
@@ -659,9 +665,11 @@ impl LoadedScene {
             }
             Owner::Objective(name) => {
                 let specs: Vec<ObjectiveSpec> = s.objectives.iter().map(objective_spec).collect();
-                let k = (0..specs.len())
+                let named: Vec<usize> = (0..specs.len())
                     .filter(|&k| &crate::objective::display_name(&specs, k) == name)
-                    .nth(usize::from(matches!(e, BuildError::DuplicateName { .. })));
+                    .collect();
+                let dup = usize::from(matches!(e, BuildError::DuplicateName { .. }));
+                let k = named.get(dup).or(named.last()).copied();
                 k.map_or(whole, |k| objective_field(&s.objectives[k], e))
             }
             Owner::Inequality(_) => whole,
@@ -754,6 +762,7 @@ fn objective_field(o: &ObjectiveSection, e: &BuildError) -> Range<usize> {
         BuildError::UnknownJoint { joint, .. } | BuildError::NoLimits { joint, .. } => {
             or_head(in_list(&o.joints, joint))
         }
+        BuildError::BadObjective { field: "kind", .. } => o.kind.span(),
         BuildError::BadObjective { field, .. } | BuildError::NonFinite { field, .. } => {
             let span = o
                 .keys()

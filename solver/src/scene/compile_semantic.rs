@@ -91,6 +91,7 @@ impl LoadedScene {
         let at_scene = |msg: String| self.error_at(s.scene.name.span(), msg);
         let mut scene = SemanticScene::from_model(model, model.q0(), &spec)
             .map_err(|e| at_scene(e.to_string()))?;
+        self.check_inclusion_rows(&scene)?;
         scene.satisfy_aligned();
         let joined: Vec<[BodyId; 2]> = jointed_pairs(model)
             .into_iter()

@@ -24,6 +24,11 @@ pub struct Flagged {
     /// Lines (1-based, end exclusive) of each `--objective`'s table, and the
     /// flag's value.
     objective_lines: Vec<(Range<usize>, String)>,
+    /// Per appended line (1-based line number): for each character of the
+    /// line, the character of the flag's value it came from (`kind = "…"`
+    /// lines and the quotes added around bare words map to their
+    /// neighbours), so an error's column becomes the flag's.
+    columns: Vec<(usize, Vec<usize>)>,
 }
 
 fn flag_error(flag: &str, value: &str, at: usize, message: impl Into<String>) -> SceneError {
@@ -34,6 +39,46 @@ fn flag_error(flag: &str, value: &str, at: usize, message: impl Into<String>) ->
         message: message.into(),
         source_line: value.to_string(),
     }
+}
+
+/// A joint kind as a scene spells it.
+fn kind_name(k: JointKindSpec) -> &'static str {
+    match k {
+        JointKindSpec::Spherical => "spherical",
+        JointKindSpec::Revolute => "revolute",
+        JointKindSpec::Universal => "universal",
+        JointKindSpec::Prismatic => "prismatic",
+        JointKindSpec::Fixed => "fixed",
+        JointKindSpec::Distance => "distance",
+        JointKindSpec::Perpendicular => "perpendicular",
+        JointKindSpec::PointOnPlane => "point_on_plane",
+        JointKindSpec::OnSurface => "on_surface",
+        JointKindSpec::Rolling => "rolling",
+    }
+}
+
+/// Characters of `s` before byte `at`.
+fn chars_before(s: &str, at: usize) -> usize {
+    s[..at.min(s.len())].chars().count()
+}
+
+/// For each character of `quoted` (`original` with `"` inserted around bare
+/// words by [`quote_words`]), the index of the character of `original` it
+/// is or stands next to.
+fn inserted_map(original: &str, quoted: &str) -> Vec<usize> {
+    let orig: Vec<char> = original.chars().collect();
+    let mut j = 0;
+    quoted
+        .chars()
+        .map(|c| {
+            if orig.get(j) == Some(&c) {
+                j += 1;
+                j - 1
+            } else {
+                j.min(orig.len().saturating_sub(1))
+            }
+        })
+        .collect()
 }
 
 /// Splits `a=1,b=[x,y]` at the commas outside brackets and quotes.
@@ -57,12 +102,15 @@ fn split_pairs(s: &str) -> Vec<(usize, &str)> {
 
 /// Quotes bare words in a TOML value (`[base, upper]` → `["base", "upper"]`)
 /// so names need no shell-escaped quotes; numbers, booleans and quoted
-/// strings are left alone.
+/// strings are left alone. A word is any run of characters other than
+/// whitespace and TOML's `[ ] { } , = "` (so `bäse` and `arm→2` are names
+/// too, not syntax errors).
 fn quote_words(v: &str) -> String {
     let mut out = String::with_capacity(v.len() + 8);
     let chars: Vec<char> = v.chars().collect();
     let (mut i, mut quoted) = (0, false);
-    let word = |c: char| c.is_alphanumeric() || matches!(c, '_' | '-' | '.' | '#');
+    let word =
+        |c: char| !(c.is_whitespace() || matches!(c, '[' | ']' | '{' | '}' | ',' | '=' | '"'));
     while i < chars.len() {
         let c = chars[i];
         if c == '"' {
@@ -71,26 +119,26 @@ fn quote_words(v: &str) -> String {
             i += 1;
             continue;
         }
-        let starts = !quoted
-            && (c.is_alphabetic() || c == '_' || c == '#')
-            && (i == 0 || !(word(chars[i - 1]) || chars[i - 1] == '+'));
-        if starts {
-            let end = (i..chars.len())
-                .find(|&j| !word(chars[j]))
-                .unwrap_or(chars.len());
-            let w: String = chars[i..end].iter().collect();
-            if matches!(w.as_str(), "true" | "false" | "inf" | "nan") {
-                out.push_str(&w);
-            } else {
-                out.push('"');
-                out.push_str(&w);
-                out.push('"');
-            }
-            i = end;
-        } else {
+        if quoted || !word(c) {
             out.push(c);
             i += 1;
+            continue;
         }
+        let end = (i..chars.len())
+            .find(|&j| !word(chars[j]))
+            .unwrap_or(chars.len());
+        let w: String = chars[i..end].iter().collect();
+        let bare = w.trim_start_matches(['+', '-']);
+        let numeric = w.replace('_', "").parse::<f64>().is_ok()
+            && bare.starts_with(|c: char| c.is_ascii_digit() || c == '.');
+        if numeric || matches!(w.as_str(), "true" | "false") || matches!(bare, "inf" | "nan") {
+            out.push_str(&w);
+        } else {
+            out.push('"');
+            out.push_str(&w);
+            out.push('"');
+        }
+        i = end;
     }
     out
 }
@@ -102,6 +150,7 @@ impl LoadedScene {
     pub fn with_flags(self, free: &[String], objectives: &[String]) -> Result<Flagged, SceneError> {
         let mut text = self.text.clone();
         let mut objective_lines = Vec::new();
+        let mut columns = Vec::new();
         for value in objectives {
             let (kind, rest) = value.split_once(':').unwrap_or((value.as_str(), ""));
             if kind.trim().is_empty() {
@@ -116,16 +165,20 @@ impl LoadedScene {
                 text.push('\n');
             }
             let first = text.lines().count() + 1;
+            let kind_line = format!("kind = \"{}\"", kind.trim());
             text.push_str(&format!(
-                "\n# --objective {value}\n[[objective]]\nkind = \"{}\"\n",
-                kind.trim()
+                "\n# --objective {value}\n[[objective]]\n{kind_line}\n"
             ));
+            // The `kind` line: every column at the kind's first character.
+            let kind_at = chars_before(value, value.len() - value.trim_start().len());
+            columns.push((first + 3, vec![kind_at; kind_line.chars().count() + 1]));
+            let mut keys: Vec<&str> = Vec::new();
             for (at, pair) in split_pairs(rest)
                 .into_iter()
                 .filter(|(_, p)| !p.trim().is_empty())
             {
+                let at = kind.len() + 1 + at;
                 let Some((key, v)) = pair.split_once('=') else {
-                    let at = kind.len() + 1 + at;
                     return Err(flag_error(
                         "--objective",
                         value,
@@ -133,19 +186,53 @@ impl LoadedScene {
                         format!("`{}` is not key=value", pair.trim()),
                     ));
                 };
-                text.push_str(&format!("{} = {}\n", key.trim(), quote_words(v.trim())));
+                let key_at = at + (key.len() - key.trim_start().len());
+                if keys.contains(&key.trim()) {
+                    return Err(flag_error(
+                        "--objective",
+                        value,
+                        key_at,
+                        format!("key `{}` is given twice", key.trim()),
+                    ));
+                }
+                keys.push(key.trim());
+                let v_at = at + key.len() + 1 + (v.len() - v.trim_start().len());
+                let quoted = quote_words(v.trim());
+                let line = format!("{} = {quoted}", key.trim());
+                let mut map = Vec::with_capacity(line.chars().count() + 1);
+                let key_col = chars_before(value, key_at);
+                map.extend(std::iter::repeat_n(key_col, key.trim().chars().count() + 3));
+                let v_col = chars_before(value, v_at);
+                map.extend(
+                    inserted_map(v.trim(), &quoted)
+                        .into_iter()
+                        .map(|k| v_col + k),
+                );
+                map.push(map.last().copied().unwrap_or(0) + 1);
+                text.push_str(&line);
+                text.push('\n');
+                columns.push((text.lines().count(), map));
             }
             objective_lines.push((first..text.lines().count() + 1, value.clone()));
         }
         let mut flagged = Flagged {
             loaded: self.clone(),
             objective_lines,
+            columns,
         };
         if !objectives.is_empty() {
             flagged.loaded = super::parse(&self.file, &text, self.dir.as_deref())
                 .map_err(|e| flagged.attribute(e))?;
         }
-        for value in free {
+        for (k, value) in free.iter().enumerate() {
+            if free[..k].contains(value) {
+                return Err(flag_error(
+                    "--free",
+                    value,
+                    0,
+                    format!("`--free {value}` is given twice"),
+                ));
+            }
             flagged.free(value)?;
         }
         Ok(flagged)
@@ -160,13 +247,21 @@ impl Flagged {
             .iter()
             .find(|(r, _)| r.contains(&e.line))
         {
-            Some((_, value)) => SceneError {
-                file: "--objective".into(),
-                line: 1,
-                column: 1,
-                message: e.message,
-                source_line: value.clone(),
-            },
+            Some((_, value)) => {
+                let column = self
+                    .columns
+                    .iter()
+                    .find(|(line, _)| *line == e.line)
+                    .and_then(|(_, map)| map.get(e.column.saturating_sub(1)).copied())
+                    .unwrap_or(0);
+                SceneError {
+                    file: "--objective".into(),
+                    line: 1,
+                    column: column + 1,
+                    message: e.message,
+                    source_line: value.clone(),
+                }
+            }
             None => e,
         }
     }
@@ -216,9 +311,13 @@ impl Flagged {
                     ),
                 ));
             }
-            if !b.free.iter().any(|f| *f.get_ref() == param) {
-                b.free.push(Spanned::new(b.name.span(), param));
+            if b.free.iter().any(|f| *f.get_ref() == param) {
+                return Err(err(
+                    0,
+                    format!("`{value}` is already free in the scene file"),
+                ));
             }
+            b.free.push(Spanned::new(b.name.span(), param));
             return Ok(());
         }
         let names: Vec<String> = spec
@@ -253,14 +352,18 @@ impl Flagged {
                 at,
                 format!(
                     "joint `{owner}` ({}) has no design variable `{var}`; it has {has}",
-                    format!("{kind:?}").to_lowercase()
+                    kind_name(kind)
                 ),
             ));
         }
-        if !j.free.iter().any(|f| *f.get_ref() == param) {
-            let span = j.name.as_ref().map_or(j.kind.span(), Spanned::span);
-            j.free.push(Spanned::new(span, param));
+        if j.free.iter().any(|f| *f.get_ref() == param) {
+            return Err(err(
+                0,
+                format!("`{value}` is already free in the scene file"),
+            ));
         }
+        let span = j.name.as_ref().map_or(j.kind.span(), Spanned::span);
+        j.free.push(Spanned::new(span, param));
         Ok(())
     }
 }
@@ -286,6 +389,11 @@ mod tests {
         assert_eq!(
             quote_words("[{body=link1,point=[0.1,0,0]}]"),
             r#"[{"body"="link1","point"=[0.1,0,0]}]"#
+        );
+        // Names that are not ASCII letters are names too.
+        assert_eq!(
+            quote_words("[bäse, arm→2, 2nd]"),
+            r#"["bäse", "arm→2", "2nd"]"#
         );
     }
 

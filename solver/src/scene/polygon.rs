@@ -31,6 +31,23 @@ pub(super) fn check(pts: &[Vec3]) -> Result<(), String> {
     if pts.iter().flatten().any(|x| !x.is_finite()) {
         return Err("polygon has a non-finite coordinate".into());
     }
+    // A repeated vertex is named as such (the crossing test below would
+    // report it as two edges crossing). Sorted, so O(n log n).
+    let mut order: Vec<usize> = (0..pts.len()).collect();
+    order.sort_by(|&a, &b| {
+        pts[a]
+            .partial_cmp(&pts[b])
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    if let Some(w) = order.windows(2).find(|w| pts[w[0]] == pts[w[1]]) {
+        let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
+        return Err(format!(
+            "polygon repeats a vertex: vertices {} and {} are both {:?}",
+            a + 1,
+            b + 1,
+            pts[a]
+        ));
+    }
     let diameter = pts
         .iter()
         .flat_map(|a| {
@@ -140,5 +157,9 @@ mod tests {
         let line = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         assert!(check(&line).unwrap_err().contains("zero area"));
         assert!(check(&sq[..2]).unwrap_err().contains("at least 3"));
+        // A repeated vertex is named, not reported as crossing edges.
+        let rep = [sq[0], sq[1], sq[2], sq[3], sq[1]];
+        let e = check(&rep).unwrap_err();
+        assert!(e.contains("vertices 2 and 5"), "{e}");
     }
 }

@@ -60,6 +60,7 @@ impl Checker<'_> {
     }
 
     fn nonzero_vec(&self, v: Vec3, span: Range<usize>, what: &str) -> Check {
+        let v = v.get();
         let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         if !n.is_finite() {
             return Err(self.err(span, format!("{what} {v:?} is not finite")));
@@ -81,6 +82,7 @@ impl Checker<'_> {
             self.finite(g, "gravity")?;
         }
         self.solver(s)?;
+        self.limits(s)?;
         for b in &s.bodies {
             if let Some(shape) = &b.shape {
                 self.shape(shape)?;
@@ -108,6 +110,8 @@ impl Checker<'_> {
         for o in &s.objectives {
             self.objective(o)?;
         }
+        self.magnitudes(s)?;
+        self.no_effect(s)?;
         self.labels(s)?;
         self.semantic(s)
     }
@@ -340,9 +344,10 @@ impl Checker<'_> {
         let bad = |msg: String| Err(self.err(shape.span(), msg));
         let ok = |x: f64| x.is_finite() && x > 0.0;
         match shape.get_ref() {
-            ShapeSpec::Box(h) if !h.iter().all(|&x| ok(x)) => {
-                bad(format!("box half extents {h:?} must be finite and > 0"))
-            }
+            ShapeSpec::Box(h) if !h.iter().all(|&x| ok(x)) => bad(format!(
+                "box half extents {:?} must be finite and > 0",
+                h.get()
+            )),
             ShapeSpec::Sphere(r) if !ok(*r) => {
                 bad(format!("sphere radius {r} must be finite and > 0"))
             }
@@ -352,12 +357,19 @@ impl Checker<'_> {
             } if !(ok(*radius) && half_height.is_finite() && *half_height >= 0.0) => bad(format!(
                 "capsule half_height {half_height} / radius {radius} must be finite, radius > 0"
             )),
-            ShapeSpec::Convex(pts)
-                if pts.len() < 4 || pts.iter().flatten().any(|x| !x.is_finite()) =>
-            {
+            ShapeSpec::Convex(pts) if pts.len() < 4 => bad(format!(
+                "convex shape needs at least 4 points, got {}",
+                pts.len()
+            )),
+            ShapeSpec::Convex(pts) if pts.iter().flatten().any(|x| !x.is_finite()) => {
+                let k = pts
+                    .iter()
+                    .position(|p| p.iter().any(|x| !x.is_finite()))
+                    .unwrap_or(0);
                 bad(format!(
-                    "convex shape needs at least 4 finite points, got {}",
-                    pts.len()
+                    "convex shape point {} is {:?}; expected finite numbers",
+                    k + 1,
+                    pts[k].get()
                 ))
             }
             _ => Ok(()),
@@ -575,44 +587,40 @@ impl Checker<'_> {
                     .push((v.get_ref(), v.span()));
             }
         }
-        // Depth-first search with colours; report the edge that closes a cycle.
+        // Depth-first search with colours, iterative (a chain of labels is as
+        // deep as it is long); report the edge that closes a cycle.
         let mut state: HashMap<&str, u8> = HashMap::new();
-        fn visit<'s>(
-            n: &'s str,
-            edges: &BTreeMap<&'s str, Vec<(&'s str, Range<usize>)>>,
-            state: &mut HashMap<&'s str, u8>,
-            path: &mut Vec<&'s str>,
-        ) -> Option<(Vec<&'s str>, Range<usize>)> {
-            state.insert(n, 1);
-            path.push(n);
-            for (m, span) in edges.get(n).map(Vec::as_slice).unwrap_or(&[]) {
+        let none: &[(&str, Range<usize>)] = &[];
+        for &root in edges.keys() {
+            if state.get(root).copied().unwrap_or(0) != 0 {
+                continue;
+            }
+            state.insert(root, 1);
+            let mut path: Vec<(&str, usize)> = vec![(root, 0)];
+            while let Some(&mut (n, ref mut k)) = path.last_mut() {
+                let out = edges.get(n).map_or(none, Vec::as_slice);
+                let Some((m, span)) = out.get(*k) else {
+                    state.insert(n, 2);
+                    path.pop();
+                    continue;
+                };
+                *k += 1;
                 match state.get(m).copied().unwrap_or(0) {
                     1 => {
-                        let start = path.iter().position(|p| p == m).unwrap_or(0);
-                        let mut cycle = path[start..].to_vec();
+                        let start = path.iter().position(|(p, _)| p == m).unwrap_or(0);
+                        let mut cycle: Vec<&str> = path[start..].iter().map(|(p, _)| *p).collect();
                         cycle.push(m);
-                        return Some((cycle, span.clone()));
+                        return Err(self.err(
+                            span.clone(),
+                            format!("label order has a cycle: {}", cycle.join(" ≤ ")),
+                        ));
                     }
                     0 => {
-                        if let Some(c) = visit(m, edges, state, path) {
-                            return Some(c);
-                        }
+                        state.insert(m, 1);
+                        path.push((m, 0));
                     }
                     _ => {}
                 }
-            }
-            path.pop();
-            state.insert(n, 2);
-            None
-        }
-        for &n in edges.keys() {
-            if state.get(n).copied().unwrap_or(0) == 0
-                && let Some((cycle, span)) = visit(n, &edges, &mut state, &mut Vec::new())
-            {
-                return Err(self.err(
-                    span,
-                    format!("label order has a cycle: {}", cycle.join(" ≤ ")),
-                ));
             }
         }
         Ok(())

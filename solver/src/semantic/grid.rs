@@ -48,9 +48,16 @@ impl Grid {
         (self.cell(lo), self.cell(hi))
     }
 
+    /// Cells in the range, saturating: a box loosened by a huge snap
+    /// distance spans more cells than an `i64` holds, and a wrapped product
+    /// (negative or small) would have looked like a small box and been
+    /// walked cell by cell.
     fn count(r: &(Cell, Cell)) -> i64 {
         let (a, b) = r;
-        (i64::from(b.0 - a.0) + 1) * (i64::from(b.1 - a.1) + 1) * (i64::from(b.2 - a.2) + 1)
+        let side = |lo: i32, hi: i32| i64::from(hi) - i64::from(lo) + 1;
+        side(a.0, b.0)
+            .saturating_mul(side(a.1, b.1))
+            .saturating_mul(side(a.2, b.2))
     }
 
     /// Puts entry `id` at the box `[lo, hi]` (moving it if present).
@@ -148,5 +155,36 @@ mod tests {
         g.remove(2);
         g.query(&v(5.0, 0.0, 0.0), &v(5.5, 0.5, 0.5), &mut out);
         assert_eq!(out, vec![0, 1]);
+    }
+
+    /// A box loosened by a snap distance of 5e5 m to 1e300 m spans more
+    /// cells than an i64 counts: it is a large entry (no cell is walked),
+    /// and a query that big answers every entry. The old product wrapped
+    /// and walked ~1e21 cells (`check` hung at gigabytes).
+    #[test]
+    fn huge_boxes_are_large_entries_not_cell_walks() {
+        let v = Vector3::new;
+        for reach in [5e5, 1e6, 1e9, 1e300] {
+            let mut g = Grid::new(0.04);
+            let (lo, hi) = (v(-reach, -reach, -reach), v(reach, reach, reach));
+            assert!(Grid::count(&g.range(&lo, &hi)) > MAX_CELLS, "reach {reach}");
+            g.set(0, &v(0.1, 0.1, 0.1), &v(0.2, 0.2, 0.2));
+            g.set(1, &v(-reach, -reach, -reach), &v(reach, reach, reach));
+            assert_eq!(g.large, vec![1], "reach {reach}");
+            assert!(
+                g.cells.len() <= 64,
+                "reach {reach}: {} cells",
+                g.cells.len()
+            );
+            let mut out = Vec::new();
+            g.query(
+                &v(-reach, -reach, -reach),
+                &v(reach, reach, reach),
+                &mut out,
+            );
+            assert_eq!(out, vec![0, 1], "reach {reach}");
+            g.remove(1);
+            assert!(g.large.is_empty());
+        }
     }
 }

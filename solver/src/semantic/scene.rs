@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 
 use super::area::{Area, AreaId};
 use super::grid::Grid;
-use super::labels::{LabelCycle, LabelOrder};
+use super::labels::{Label, LabelCycle, LabelOrder};
 use super::spec::{AreaKind, SemanticSettings, SemanticSpec};
 use crate::geometry::convert::to_na;
 use crate::geometry::{Collider, Pose3};
@@ -164,6 +164,16 @@ impl SemanticScene {
             }
             areas.push(area);
         }
+        let mut order = order;
+        let labels_of = |kind: AreaKind| -> Vec<Label> {
+            areas
+                .iter()
+                .filter(|a: &&Area| a.kind == kind)
+                .map(|a| a.label)
+                .collect()
+        };
+        let (from, to) = (labels_of(AreaKind::Binding), labels_of(AreaKind::Offer));
+        order.precompute(&from, &to);
         let cell = grid_cell(&objects);
         let n = objects.len();
         let mut scene = Self {

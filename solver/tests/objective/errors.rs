@@ -155,10 +155,15 @@ fn a_name_is_used_once_and_builtin_weights_once() {
     b.objective(dexterity(&["base", "turret"]));
     b.objective(dexterity(&["turret", "upper"]));
     assert!(matches!(b.build().unwrap_err(), E::DuplicateName { .. }));
+    // A second `finger` objective is refused at its kind (one per scene),
+    // not as a name used twice (it has no name of its own).
     let mut b = arm(1.0);
     b.objective(ObjectiveSpec::Finger { weight: 1.0 });
     b.objective(ObjectiveSpec::Finger { weight: 2.0 });
-    assert!(matches!(b.build().unwrap_err(), E::DuplicateName { .. }));
+    assert!(matches!(
+        b.build().unwrap_err(),
+        E::BadObjective { field: "kind", .. }
+    ));
     let e = err(ObjectiveSpec::LeastAstonishment {
         weight: 0.0,
         design_weight: 1.0,
