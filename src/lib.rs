@@ -21,3 +21,4 @@ pub mod report;
 pub mod scenes;
 pub mod session;
 pub mod sweep;
+pub mod view;

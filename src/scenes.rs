@@ -4,7 +4,7 @@
 
 pub mod generated;
 
-use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel};
+use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel, VIRTUAL_MODEL};
 use haptloop_solver::scene::{self, CompiledScene, HandPath, LoadedScene, SceneError};
 use std::path::Path;
 
@@ -166,6 +166,28 @@ pub struct Scene {
     pub traces: Vec<Option<HandTrace>>,
 }
 
+impl Scene {
+    /// The scene with every device replaced by `model` (`--device`): a
+    /// known model, else an error listing them. A virtual device drops its
+    /// scripted hand (the live page moves it).
+    pub fn with_device_model(mut self, model: &str) -> Result<Scene, String> {
+        if model != VIRTUAL_MODEL && PhantomModel::by_name(model).is_err() {
+            return Err(format!(
+                "--device: unknown device model `{model}`; known models: {}, {VIRTUAL_MODEL}",
+                KNOWN_MODELS.join(", ")
+            ));
+        }
+        for (d, trace) in self.compiled.devices.iter_mut().zip(&mut self.traces) {
+            d.model = model.to_owned();
+            if model == VIRTUAL_MODEL {
+                d.hand.path = HandPath::Still;
+                *trace = None;
+            }
+        }
+        Ok(self)
+    }
+}
+
 /// Resolves `arg` (a built-in name, a path, or a generated name such as
 /// `lattice-8x32`), then parses, validates and compiles it, checks device
 /// models and loads hand traces. Every error names the file, line and column.
@@ -217,13 +239,22 @@ pub fn check_loaded(loaded: LoadedScene) -> Result<Scene, SceneError> {
     let compiled = loaded.compile()?;
     let mut traces = Vec::with_capacity(compiled.devices.len());
     for d in &compiled.devices {
-        if PhantomModel::by_name(&d.model).is_err() {
+        if d.model != VIRTUAL_MODEL && PhantomModel::by_name(&d.model).is_err() {
             return Err(loaded.error_at(
                 d.model_span.clone(),
                 format!(
-                    "unknown device model `{}`; known models: {}",
+                    "unknown device model `{}`; known models: {}, {VIRTUAL_MODEL}",
                     d.model,
                     KNOWN_MODELS.join(", ")
+                ),
+            ));
+        }
+        if d.model == VIRTUAL_MODEL && d.hand.path != HandPath::Still {
+            return Err(loaded.error_at(
+                d.model_span.clone(),
+                format!(
+                    "device `{}` is virtual: the live page's mouse moves it, not a scripted `hand` (remove `hand`, or use a PHANToM model)",
+                    d.name
                 ),
             ));
         }

@@ -3,7 +3,8 @@
 //! `phantom-omni` / `phantom-touch`), the simulated [`Hand`] that holds them,
 //! the [`SafeDevice`] safety layer every device sits behind, injected faults,
 //! [`Mount`]s that place several devices in one scene, and trace
-//! record ([`TraceRecorder`]) / replay ([`ReplayDevice`]).
+//! record ([`TraceRecorder`]) / replay ([`ReplayDevice`]), and the
+//! [`VirtualDevice`] a person moves with the mouse through a [`Pointer`].
 //!
 //! Data flow, once per tick and per device (all `Copy` values, no allocation):
 //!
@@ -37,11 +38,13 @@ pub mod hand_trace;
 pub mod mount;
 pub mod passivity;
 pub mod phantom;
+pub mod pointer;
 pub mod replay;
 pub mod rig;
 pub mod safety;
 pub mod trace;
 mod trace_read;
+pub mod virtual_device;
 
 pub use device::{
     ARM_JOINTS, Device, DeviceFault, DeviceInfo, DeviceLimits, DeviceReading, MotorReport,
@@ -55,6 +58,7 @@ pub use mount::Mount;
 pub use phantom::{
     KNOWN_MODELS, MotorDrive, OMNI, PREMIUM_1_5, PhantomModel, SimOptions, SimPhantom,
 };
+pub use pointer::{POINTER_RANGE_M, POINTER_RESOLUTION_M, Pointer};
 pub use replay::{ReplayCheck, ReplayDevice};
 pub use rig::{DynDevice, MountedDevice, SceneReading};
 pub use safety::{
@@ -65,3 +69,4 @@ pub use trace::{
     MAX_COMMAND_N, MAX_TRACE_BYTES, MAX_TRACE_ROWS, Trace, TraceHeader, TraceRecorder, TraceRow,
     TraceStream,
 };
+pub use virtual_device::{VIRTUAL_MODEL, VirtualDevice, VirtualParams};

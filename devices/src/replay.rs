@@ -4,7 +4,8 @@
 //!
 //! `read(now)` returns the reading built from the counts and gimbal
 //! orientation of the last row whose time is ≤ `now` (the same conversion a
-//! live device uses: [`crate::PhantomModel::reading_from_counts`]); before the
+//! live device uses: [`crate::PhantomModel::reading_from_counts`], or
+//! [`crate::VirtualParams::reading_from_counts`] for a `virtual` trace); before the
 //! first row it reports [`DeviceFault::Dropped`], and more than one period
 //! past the last row [`DeviceFault::Disconnected`]: a trace that ends is a
 //! device that went away, so the safety layer latches and cuts force.
@@ -29,6 +30,16 @@ use crate::device::{Device, DeviceFault, DeviceInfo, DeviceReading, MotorReport}
 use crate::error::DeviceError;
 use crate::phantom::{MotorDrive, PhantomModel};
 use crate::trace::Trace;
+use crate::virtual_device::{VIRTUAL_MODEL, VirtualParams};
+
+/// How recorded counts become a reading.
+#[derive(Debug, Clone, Copy)]
+enum Counts {
+    /// A PHANToM's joint encoders.
+    Phantom(&'static PhantomModel),
+    /// A virtual device's tip in micrometres.
+    Virtual(VirtualParams),
+}
 
 /// How a replay's forces compared with the recording's.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -47,11 +58,13 @@ pub struct ReplayCheck {
 /// A device that replays recorded encoder counts.
 #[derive(Debug, Clone)]
 pub struct ReplayDevice {
-    model: &'static PhantomModel,
+    model: Counts,
     info: DeviceInfo,
     trace: Trace,
     cursor: usize,
-    drive: MotorDrive,
+    /// The arm's motor model (a virtual device has none: it clamps to its
+    /// peak, [`VirtualParams::applied`]).
+    drive: Option<MotorDrive>,
     /// Jacobian at the angles of the counts read last.
     sensed_jacobian: Matrix3<f64>,
     /// The row whose recorded force the last write was compared with.
@@ -60,16 +73,33 @@ pub struct ReplayDevice {
 }
 
 impl ReplayDevice {
-    /// A replay of `trace`; its header's model must be a known model.
+    /// A replay of `trace`; its header's model must be a known model (a
+    /// PHANToM or `virtual`).
     pub fn new(trace: Trace) -> Result<Self, DeviceError> {
-        let model = PhantomModel::by_name(&trace.header.model)?;
-        let sensed_jacobian = model.geometry.jacobian(&Vector3::zeros());
+        let (model, info, drive, sensed_jacobian) = if trace.header.model == VIRTUAL_MODEL {
+            let params = VirtualParams::for_rate_hz(trace.header.rate_hz);
+            (
+                Counts::Virtual(params),
+                params.info(),
+                None,
+                Matrix3::identity(),
+            )
+        } else {
+            let m = PhantomModel::by_name(&trace.header.model)?;
+            let j = m.geometry.jacobian(&Vector3::zeros());
+            (
+                Counts::Phantom(m),
+                m.info(),
+                Some(MotorDrive::new(m, true, true)),
+                j,
+            )
+        };
         Ok(Self {
             model,
-            info: model.info(),
+            info,
             trace,
             cursor: 0,
-            drive: MotorDrive::new(model, true, true),
+            drive,
             sensed_jacobian,
             compared_row: None,
             check: ReplayCheck::default(),
@@ -141,8 +171,14 @@ impl Device for ReplayDevice {
                 Err(DeviceFault::Disconnected)
             }
             Some(row) if row.time <= now => {
-                let mut r = self.model.reading_from_counts(&row.counts, now);
-                self.sensed_jacobian = self.model.geometry.jacobian(&r.joint_angles_rad);
+                let mut r = match self.model {
+                    Counts::Phantom(m) => {
+                        let r = m.reading_from_counts(&row.counts, now);
+                        self.sensed_jacobian = m.geometry.jacobian(&r.joint_angles_rad);
+                        r
+                    }
+                    Counts::Virtual(_) => VirtualParams::reading_from_counts(&row.counts, now),
+                };
                 let [w, x, y, z] = row.orientation_wxyz;
                 r.orientation_device = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
                 Ok(r)
@@ -157,10 +193,16 @@ impl Device for ReplayDevice {
         now: Duration,
     ) -> Result<MotorReport, DeviceFault> {
         self.compare(&force_n_device, now);
-        Ok(self.drive.write(force_n_device, &self.sensed_jacobian, now))
+        Ok(match (&mut self.drive, self.model) {
+            (Some(d), _) => d.write(force_n_device, &self.sensed_jacobian, now),
+            (None, Counts::Virtual(p)) => p.applied(force_n_device),
+            (None, Counts::Phantom(_)) => MotorReport::off(),
+        })
     }
 
     fn motors_off(&mut self, now: Duration) {
-        self.drive.off(now);
+        if let Some(d) = &mut self.drive {
+            d.off(now);
+        }
     }
 }

@@ -9,9 +9,11 @@ use std::time::Duration;
 
 use nalgebra::Vector3;
 
+use crate::device::DeviceInfo;
 use crate::error::{TraceError, check_not_truncated, next_line, open_limited, quote};
 use crate::phantom::PhantomModel;
 use crate::trace::{COLUMNS, FIELDS, MAGIC, Trace, TraceHeader, TraceRow};
+use crate::virtual_device::{VIRTUAL_MODEL, VirtualParams};
 
 impl Trace {
     /// Reads a trace file of at most [`MAX_TRACE_BYTES`], streaming (the
@@ -70,7 +72,7 @@ impl Trace {
                     match k.trim() {
                         "scene" => scene = Some(v.to_owned()),
                         "model" => {
-                            let m = PhantomModel::by_name(v).map_err(|e| err(n, e.to_string()))?;
+                            let m = model_info(v).map_err(|e| err(n, e))?;
                             model = Some((v.to_owned(), m));
                         }
                         "rate_hz" => {
@@ -109,7 +111,7 @@ impl Trace {
                             .into(),
                     ));
                 };
-                check = Some(RowCheck::new(m, r));
+                check = Some(RowCheck::new(*m, r));
                 continue;
             }
             let Some(c) = check.as_ref() else { continue };
@@ -165,14 +167,25 @@ pub const MAX_TRACE_ROWS: usize = 1 << 21;
 /// the file is not a recording.
 pub const MAX_COMMAND_N: f64 = 1e6;
 
+/// The description of a trace's `model`: a PHANToM, or `virtual` (whose
+/// counts are the tip's micrometres, within its notional half turn).
+fn model_info(name: &str) -> Result<DeviceInfo, String> {
+    if name == VIRTUAL_MODEL {
+        return Ok(VirtualParams::default().info());
+    }
+    PhantomModel::by_name(name)
+        .map(PhantomModel::info)
+        .map_err(|e| format!("{e} (or `{VIRTUAL_MODEL}`)"))
+}
+
 /// What every row of a trace of one model at one rate must satisfy.
 struct RowCheck {
-    model: &'static PhantomModel,
+    model: DeviceInfo,
     period_ns: u64,
 }
 
 impl RowCheck {
-    fn new(model: &'static PhantomModel, rate_hz: u32) -> Self {
+    fn new(model: DeviceInfo, rate_hz: u32) -> Self {
         Self {
             model,
             period_ns: 1_000_000_000 / u64::from(rate_hz),
@@ -187,11 +200,13 @@ impl RowCheck {
                 self.period_ns
             ));
         }
-        let half_turn = i64::from(self.model.counts_per_rev / 2);
-        if let Some(j) = (0..3).find(|&j| i64::from(r.counts[j]).abs() > half_turn) {
+        let half_turn = |j: usize| i64::from(self.model.counts_per_rev[j] / 2);
+        if let Some(j) = (0..3).find(|&j| i64::from(r.counts[j]).abs() > half_turn(j)) {
             return Err(format!(
-                "c{j} = {} is more than half a turn ({half_turn} counts of the {})",
-                r.counts[j], self.model.name
+                "c{j} = {} is more than half a turn ({} counts of the {})",
+                r.counts[j],
+                half_turn(j),
+                self.model.model
             ));
         }
         let columns = COLUMNS.split(',').collect::<Vec<_>>();
@@ -225,12 +240,12 @@ impl RowCheck {
             ));
         }
         let out = r.output_n_device.norm();
-        let peak = self.model.peak_force_n;
+        let peak = self.model.limits.peak_force_n;
         if out > peak * (1.0 + 1e-9) {
             return Err(format!(
                 "the force sent out_* has magnitude {out} N, above the {}'s peak of {peak} N \
                  (the safety layer clamps to it)",
-                self.model.name
+                self.model.model
             ));
         }
         let norm = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();

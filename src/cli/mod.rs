@@ -14,6 +14,7 @@ mod scenes;
 mod signals;
 mod sweep;
 mod values;
+mod view;
 
 pub use run::EXIT_FAILED_TICKS;
 pub use signals::EXIT_SIGNAL;
@@ -87,6 +88,13 @@ enum Command {
     /// write, bookkeeping, the whole tick and the tick without the device
     /// stages; then the slow loop's step time and the constraint violation.
     Bench(bench::BenchArgs),
+    /// Write RUN_DIR/view.html: a run in 3-D, one file that opens from disk.
+    ///
+    /// Orbit, pan and zoom; a timeline with play, pause and speed; the
+    /// bodies (shapes, or links between joint anchors), fingers, force
+    /// arrows, contact points and normals; force, violation and penetration
+    /// plots; the semantic events on the timeline. `run` writes it too.
+    View(view::ViewArgs),
     /// List the built-in scenes, one line each.
     Scenes,
     /// Write a scene in another program's format: `export mjcf SCENE`.
@@ -146,6 +154,7 @@ pub fn run() -> Result<ExitCode> {
         Some(Command::Run(args)) => run::run(&args, &stop),
         Some(Command::Sweep(args)) => sweep::run(&args, &stop),
         Some(Command::Place(args)) => place::run(&args),
+        Some(Command::View(args)) => view::run(&args),
         // The main job: the default scene on a simulated PHANToM, with a report.
         None => run::run(&run::RunArgs::default(), &stop),
     }

@@ -6,6 +6,7 @@ use super::values;
 use crate::report::{plots, scene_plot, session as text, summary::Summary};
 use crate::scenes::{DEFAULT_SCENE, Scene, check_loaded, resolve};
 use crate::session::{self, Plan, SessionOptions};
+use crate::view::{self, SceneInfo, live::LiveServer};
 use anyhow::Result;
 use clap::Args;
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, StopFlag};
@@ -100,6 +101,19 @@ pub struct RunArgs {
     /// `NAME@SECONDS`.
     #[arg(long, value_name = "NAME@SECONDS")]
     pub design_on: Vec<String>,
+    /// Serve a live 3-D view on http://127.0.0.1:PORT/ (never another
+    /// interface) and stream the run to it; the run starts when the page
+    /// connects. Virtual devices are dragged there with the mouse.
+    #[arg(long, conflicts_with = "deterministic")]
+    pub live: bool,
+    /// The live view's port (0: any free one).
+    #[arg(long, default_value_t = 8470, requires = "live")]
+    pub port: u16,
+    /// Replace every device of the scene with this model (`virtual`: moved
+    /// by the mouse in the live view, its scripted hand dropped; or a
+    /// PHANToM model).
+    #[arg(long, value_name = "MODEL")]
+    pub device: Option<String>,
 }
 
 impl Default for RunArgs {
@@ -125,6 +139,9 @@ impl Default for RunArgs {
             objective: Vec::new(),
             design_off: Vec::new(),
             design_on: Vec::new(),
+            live: false,
+            port: 8470,
+            device: None,
         }
     }
 }
@@ -175,6 +192,27 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
     };
+    let scene = match &args.device {
+        Some(model) => match scene.with_device_model(model) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("haptloop: {e}");
+                return Ok(ExitCode::from(2));
+            }
+        },
+        None => scene,
+    };
+    // The live view listens before anything is claimed or built: a port in
+    // use is said at once.
+    let server = if args.live {
+        Some(LiveServer::bind(args.port)?)
+    } else {
+        None
+    };
+    let live = match &server {
+        Some(s) => Some(s.hook(SceneInfo::of(&scene))?),
+        None => None,
+    };
     let options = SessionOptions {
         seconds: args.seconds,
         rate_hz: args.rate,
@@ -193,6 +231,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         spin: args.rt.spin(),
         thread: args.rt.thread(),
         reference_every: None,
+        live,
     };
     // Everything a flag can get wrong is said before the output directory
     // is claimed.
@@ -216,6 +255,22 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         )))?),
     };
     plan.out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
+    let virtuals = scene
+        .compiled
+        .devices
+        .iter()
+        .filter(|d| d.model == haptloop_devices::VIRTUAL_MODEL)
+        .count();
+    if let Some(s) = &server {
+        eprintln!(
+            "haptloop: live view at {} : open it in a browser; the run starts when it connects",
+            s.url()
+        );
+    } else if virtuals > 0 {
+        eprintln!(
+            "haptloop: {virtuals} virtual device(s) and no --live: nothing will move them (pass --live to drag them)"
+        );
+    }
     eprintln!(
         "haptloop: running `{}` for {:.1} s at {} Hz{}; Ctrl-C stops cleanly",
         plan.scene,
@@ -238,10 +293,35 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         None if !quiet => eprintln!("{line}"),
         None => {}
     };
-    let outcome = session::run(&scene, plan, stop, &mut status)?;
+    let outcome = session::run(&scene, plan, stop, &mut status);
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    if let Some(s) = server {
+        let st = s.finish();
+        let moves: Vec<String> = st
+            .pointer_moves
+            .iter()
+            .map(|(d, n)| format!("{d} {n}"))
+            .collect();
+        eprintln!(
+            "haptloop: live view: {} page(s) served, {} viewer(s), {} frames sent{}{}",
+            st.pages,
+            st.viewers,
+            st.frames,
+            if moves.is_empty() {
+                String::new()
+            } else {
+                format!("; pointer moves: {}", moves.join(", "))
+            },
+            if st.bad_messages > 0 {
+                format!("; {} messages not understood (ignored)", st.bad_messages)
+            } else {
+                String::new()
+            }
+        );
+    }
+    let outcome = outcome?;
     let summary = Summary::of(&outcome);
     let fingers: Vec<(String, String)> = outcome
         .fingers
@@ -253,7 +333,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         super::emit(&text::render(&summary, &fingers));
     }
     if let Some(dir) = run_dir {
-        write_files(dir.path(), &outcome, &summary)?;
+        write_files(dir.path(), &scene, &outcome, &summary)?;
         dir.release()?;
     }
     Ok(exit_status(&summary))
@@ -372,7 +452,12 @@ pub fn with_design_switches(
     Ok(scene)
 }
 
-fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Result<()> {
+fn write_files(
+    dir: &Path,
+    scene: &Scene,
+    o: &session::SessionOutcome,
+    summary: &Summary,
+) -> Result<()> {
     let write = |name: &str, text: String| write_atomic(&dir.join(name), text.as_bytes());
     write(
         "summary.json",
@@ -411,22 +496,30 @@ fn write_files(dir: &Path, o: &session::SessionOutcome, summary: &Summary) -> Re
     };
     produce_atomic(&dir.join("latency.svg"), |p| plots::latency(p, o))?;
     produce_atomic(&dir.join("force.svg"), |p| plots::force(p, o))?;
-    produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
     let mut extra = String::new();
-    if let Some(track) = &o.track {
-        write("bodies.csv", track.csv())?;
+    // No empty plots: a scene without joint rows has no violation to draw.
+    if o.joint_rows > 0 {
+        produce_atomic(&dir.join("violation.svg"), |p| plots::violation(p, o))?;
+        extra += ", violation.svg";
+    }
+    if o.track.bodies.iter().any(|b| b.shape.is_some()) {
         produce_atomic(&dir.join("contact.svg"), |p| {
-            scene_plot::contact(p, &o.plan.scene, track)
+            scene_plot::contact(p, &o.plan.scene, &o.track)
         })?;
-        extra += ", bodies.csv, contact.svg";
+        extra += ", contact.svg";
     }
     // Joint torques alone (the last columns) are not plotted.
     if o.recorder.design_names.len() > o.recorder.design_torques {
         produce_atomic(&dir.join("design.svg"), |p| plots::design(p, o))?;
         extra += ", design.svg";
     }
+    for (name, text) in view::files::contents(&SceneInfo::of(scene), o)? {
+        write(name, text)?;
+    }
+    view::write_page(dir, write_atomic)?;
+    extra += ", scene.json, bodies.csv, fingers.csv, contacts.csv, view.html";
     super::emit(&format!(
-        "wrote {}/: summary.json, trace.csv, {timing_files}, latency.svg, force.svg, violation.svg{extra}",
+        "wrote {}/: summary.json, trace.csv, {timing_files}, latency.svg, force.svg{extra}",
         dir.display()
     ));
     Ok(())

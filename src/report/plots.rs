@@ -94,7 +94,7 @@ pub fn latency(path: &Path, o: &SessionOutcome) -> Result<()> {
         .y_label_area_size(60)
         .build_cartesian_2d(
             (1.0..xmax * 1.5).log_scale(),
-            (0.01..ymax * 2.0).log_scale(),
+            (0.01..ymax * 30.0).log_scale(),
         )
         .map_err(err)?;
     chart
@@ -122,20 +122,26 @@ pub fn latency(path: &Path, o: &SessionOutcome) -> Result<()> {
     root.present().map_err(err)
 }
 
+/// Series over time, with optional horizontal limit lines (name, value,
+/// colour). The y axis leaves headroom above the data for the legend, which
+/// sits in the upper right: it never covers a curve.
 fn time_plot(
     path: &Path,
     title: &str,
     y_desc: &str,
-    series: &[(&str, &Series)],
+    series: &[(String, &Series, RGBColor, u32)],
+    limits: &[(String, f64, RGBColor)],
     log_y: bool,
 ) -> Result<()> {
     let tmax = series
         .iter()
-        .flat_map(|(_, s)| s.points.iter().map(|p| p.0))
+        .flat_map(|(_, s, ..)| s.points.iter().map(|p| p.0))
         .fold(1e-3, f64::max);
     let ymax = series
         .iter()
-        .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
+        .flat_map(|(_, s, ..)| s.points.iter().map(|p| p.1))
+        .chain(limits.iter().map(|l| l.1))
+        .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
@@ -149,7 +155,7 @@ fn time_plot(
     // drawn on the floor).
     let floor = series
         .iter()
-        .flat_map(|(_, s)| s.points.iter().map(|p| p.1))
+        .flat_map(|(_, s, ..)| s.points.iter().map(|p| p.1))
         .filter(|v| *v > 0.0)
         .fold(f64::INFINITY, f64::min)
         .min(ymax)
@@ -175,21 +181,37 @@ fn time_plot(
                 })
                 .draw()
                 .map_err(err)?;
-            for (k, (name, s)) in series.iter().enumerate() {
-                let c = COLOURS[k % COLOURS.len()];
+            for (name, s, c, w) in series.iter() {
+                let (c, w) = (*c, *w);
                 chart
                     .draw_series(LineSeries::new(
                         s.points.iter().map($map),
+                        c.stroke_width(w),
+                    ))
+                    .map_err(err)?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w + 1))
+                    });
+            }
+            for (name, v, c) in limits.iter() {
+                let c = *c;
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        [(0.0, *v), (tmax, *v)].iter().map($map),
+                        6,
+                        4,
                         c.stroke_width(1),
                     ))
                     .map_err(err)?
-                    .label(*name)
+                    .label(name.as_str())
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
                     });
             }
             chart
                 .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
                 .background_style(WHITE.mix(0.9))
                 .border_style(BLACK)
                 .draw()
@@ -200,34 +222,81 @@ fn time_plot(
         let chart = builder
             .build_cartesian_2d(
                 0.0..tmax,
-                (floor..(ymax * 2.0).max(floor * 10.0)).log_scale(),
+                (floor..(ymax * 1e3).max(floor * 1e4)).log_scale(),
             )
             .map_err(err)?;
         draw!(chart, |&(t, v): &(f64, f64)| (t, v.max(floor)));
     } else {
         let chart = builder
-            .build_cartesian_2d(0.0..tmax, 0.0..(ymax * 1.1).max(1e-3))
+            .build_cartesian_2d(0.0..tmax, 0.0..(ymax * 1.6).max(1e-3))
             .map_err(err)?;
         draw!(chart, |&(t, v): &(f64, f64)| (t, v));
     }
     root.present().map_err(err)
 }
 
-/// |force| rendered on each finger over time.
+/// Each finger's force over time: what the device rendered (after the
+/// safety layer and its own limits; every tick) and what the solver asked
+/// for (the slow loop's snapshots, 100 Hz), with each device model's peak
+/// and continuous force as dashed lines.
 pub fn force(path: &Path, o: &SessionOutcome) -> Result<()> {
-    let series: Vec<(&str, &Series)> = o
-        .fingers
-        .iter()
-        .map(String::as_str)
-        .zip(&o.recorder.force)
+    let asked: Vec<Series> = (0..o.fingers.len())
+        .map(|i| {
+            let mut s = Series::default();
+            s.points = o
+                .track
+                .samples
+                .iter()
+                .filter_map(|(t, x)| x.asked_n.get(i).map(|f| (t, norm(f))))
+                .collect();
+            s
+        })
         .collect();
+    let mut series: Vec<(String, &Series, RGBColor, u32)> = Vec::new();
+    for (i, name) in o.fingers.iter().enumerate() {
+        let c = COLOURS[i % COLOURS.len()];
+        series.push((format!("{name}: rendered"), &o.recorder.force[i], c, 2));
+        // The asked force in a lighter shade of the finger's colour.
+        let light = RGBColor(c.0 / 2 + 127, c.1 / 2 + 127, c.2 / 2 + 127);
+        series.push((format!("{name}: asked"), &asked[i], light, 1));
+    }
+    let mut limits = Vec::new();
+    let mut models: Vec<&str> = o.finger_devices.iter().map(String::as_str).collect();
+    models.dedup();
+    for m in models {
+        let (peak, continuous) = limits_of(m);
+        limits.push((format!("{m} peak {peak} N"), peak, RGBColor(170, 40, 40)));
+        if continuous < peak {
+            limits.push((
+                format!("{m} continuous {continuous} N"),
+                continuous,
+                RGBColor(200, 130, 0),
+            ));
+        }
+    }
     time_plot(
         path,
-        &format!("{}: force rendered on each finger", o.plan.scene),
+        &format!("{}: force on each finger", o.plan.scene),
         "|F|, N",
         &series,
+        &limits,
         false,
     )
+}
+
+fn norm(f: &[f64; 3]) -> f64 {
+    (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
+}
+
+/// A device model's peak and continuous force, N.
+fn limits_of(model: &str) -> (f64, f64) {
+    if model == haptloop_devices::VIRTUAL_MODEL {
+        let p = haptloop_devices::VirtualParams::default();
+        return (p.peak_force_n, p.peak_force_n);
+    }
+    haptloop_devices::PhantomModel::by_name(model).map_or((f64::NAN, f64::NAN), |m| {
+        (m.peak_force_n, m.continuous_force_n)
+    })
 }
 
 /// The largest constraint violation over time, log scale.
@@ -236,7 +305,13 @@ pub fn violation(path: &Path, o: &SessionOutcome) -> Result<()> {
         path,
         &format!("{}: largest constraint violation per tick", o.plan.scene),
         "violation, m",
-        &[("max |C| (length rows)", &o.recorder.violation)],
+        &[(
+            "max |C| (length rows)".into(),
+            &o.recorder.violation,
+            COLOURS[0],
+            1,
+        )],
+        &[],
         true,
     )
 }

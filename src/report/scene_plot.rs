@@ -1,7 +1,8 @@
 //! `contact.svg`: the shaped bodies of a contact scene drawn in two
-//! projections (side x–z, top x–y, scene frame) at six instants of the run,
-//! fixed bodies in grey, each moving body in its own colour, later instants
-//! darker; fingertip paths as lines. A silhouette is the 2-D convex hull of
+//! projections (side x–z, top x–y, scene frame) at six instants of the run
+//! (their times in the title), fixed bodies in grey, each moving body in its
+//! own colour, later instants darker, every body named where it ended up;
+//! fingertip paths as lines. A silhouette is the 2-D convex hull of
 //! the shape's projected outline points.
 
 use crate::session::BodyTrack;
@@ -103,10 +104,20 @@ fn pose_of(r: &[f64; 3], q: &[f64; 4]) -> Pose3 {
 
 /// Draws `contact.svg` (see the module docs).
 pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
-    let outlines: Vec<Vec<Vector3<f64>>> = t.shapes.iter().map(outline).collect();
-    let fixed: Vec<(Vec<Vector3<f64>>, Pose3)> =
-        t.fixed.iter().map(|(_, s, p)| (outline(s), *p)).collect();
-    let n = t.samples.len();
+    // The shaped moving bodies: (index into the track's bodies, outline).
+    let shaped: Vec<(usize, Vec<Vector3<f64>>)> = t
+        .bodies
+        .iter()
+        .enumerate()
+        .filter_map(|(k, b)| b.shape.as_ref().map(|s| (k, outline(s))))
+        .collect();
+    let fixed: Vec<(&str, Vec<Vector3<f64>>, Pose3)> = t
+        .fixed
+        .iter()
+        .filter_map(|(n, s, p)| s.as_ref().map(|s| (n.as_str(), outline(s), *p)))
+        .collect();
+    let samples: Vec<(f64, &crate::session::TrackSample)> = t.samples.iter().collect();
+    let n = samples.len();
     let picks: Vec<usize> = if n == 0 {
         Vec::new()
     } else {
@@ -114,34 +125,20 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
             .map(|k| k * (n - 1) / (INSTANTS - 1).max(1))
             .collect()
     };
-    // World outline points of everything drawn, for the axes' extent.
-    let mut all: Vec<Vector3<f64>> = Vec::new();
-    for (o, p) in &fixed {
-        all.extend(o.iter().map(|v| p.point(v)));
-    }
-    for &k in &picks {
-        for (b, (r, q)) in t.samples[k].poses.iter().enumerate() {
-            let p = pose_of(r, q);
-            all.extend(outlines[b].iter().map(|v| p.point(v)));
-        }
-    }
+    let world = |k: usize, b: usize, o: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+        let (r, q) = &samples[k].1.poses[b];
+        let p = pose_of(r, q);
+        o.iter().map(|v| p.point(v)).collect()
+    };
     // Keep the moving bodies in view: a large table must not shrink them to
     // dots. The window covers the moving bodies with a 50 % margin.
     let moving: Vec<Vector3<f64>> = picks
         .iter()
-        .flat_map(|&k| {
-            t.samples[k]
-                .poses
-                .iter()
-                .enumerate()
-                .flat_map(|(b, (r, q))| {
-                    let p = pose_of(r, q);
-                    outlines[b]
-                        .iter()
-                        .map(move |v| p.point(v))
-                        .collect::<Vec<_>>()
-                })
-        })
+        .flat_map(|&k| shaped.iter().flat_map(move |(b, o)| world(k, *b, o)))
+        .collect();
+    let all: Vec<Vector3<f64>> = fixed
+        .iter()
+        .flat_map(|(_, o, p)| o.iter().map(|v| p.point(v)).collect::<Vec<_>>())
         .collect();
     let focus = if moving.is_empty() { &all } else { &moving };
     let lo = focus
@@ -150,12 +147,19 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
     let hi = focus
         .iter()
         .fold(Vector3::repeat(f64::NEG_INFINITY), |a, v| a.sup(v));
+    let times: Vec<String> = picks
+        .iter()
+        .map(|&k| format!("{:.2}", samples[k].0))
+        .collect();
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let root = root
         .titled(
-            &format!("{scene}: shaped bodies at {INSTANTS} instants (later = darker)"),
-            ("sans-serif", 20),
+            &format!(
+                "{scene}: shaped bodies at t = {} s (lighter → darker)",
+                times.join(", ")
+            ),
+            ("sans-serif", 18),
         )
         .map_err(err)?;
     let panels = root.split_evenly((1, 2));
@@ -185,40 +189,76 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
             .y_label_formatter(&|v| format!("{v:.3}"))
             .draw()
             .map_err(err)?;
-        let project = |v: Vector3<f64>| (v[ax], v[ay]);
-        for (o, p) in &fixed {
-            let h = hull(o.iter().map(|v| project(p.point(v))).collect());
+        let project = |v: &Vector3<f64>| (v[ax], v[ay]);
+        let centre = |h: &[(f64, f64)]| {
+            let k = h.len().max(1) as f64;
+            (
+                h.iter().map(|p| p.0).sum::<f64>() / k,
+                h.iter().map(|p| p.1).sum::<f64>() / k,
+            )
+        };
+        let inside = |p: (f64, f64)| (p.0 - cx).abs() < half && (p.1 - cy).abs() < half;
+        let label = |name: &str, at: (f64, f64), c: RGBColor| {
+            Text::new(
+                name.to_string(),
+                at,
+                ("sans-serif", 13).into_font().color(&c),
+            )
+        };
+        for (name, o, p) in &fixed {
+            let h = hull(o.iter().map(|v| project(&p.point(v))).collect());
+            // A fixed body's name at the upper left of the part of it in
+            // view, clear of the moving bodies at the centre.
+            let (x0, y1) = h
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.0), b.max(p.1))
+                });
+            let at = (
+                x0.max(cx - half * 0.95),
+                y1.min(cy + half * 0.95) - half * 0.06,
+            );
             chart
                 .draw_series(std::iter::once(Polygon::new(
                     h,
                     RGBColor(170, 170, 170).mix(0.5),
                 )))
                 .map_err(err)?;
+            if inside(at) {
+                chart
+                    .draw_series(std::iter::once(label(name, at, RGBColor(90, 90, 90))))
+                    .map_err(err)?;
+            }
         }
         for (step, &k) in picks.iter().enumerate() {
             let alpha = 0.15 + 0.6 * step as f64 / (INSTANTS - 1).max(1) as f64;
-            for (b, (r, q)) in t.samples[k].poses.iter().enumerate() {
-                let p = pose_of(r, q);
-                let h = hull(outlines[b].iter().map(|v| project(p.point(v))).collect());
+            for (b, o) in &shaped {
+                let h = hull(world(k, *b, o).iter().map(&project).collect());
                 let c = COLOURS[b % COLOURS.len()];
                 let mut closed = h.clone();
                 if let Some(f) = h.first() {
                     closed.push(*f);
                 }
+                let at = centre(&h);
                 chart
                     .draw_series(std::iter::once(Polygon::new(h, c.mix(alpha * 0.5))))
                     .map_err(err)?;
                 chart
                     .draw_series(std::iter::once(PathElement::new(closed, c.mix(alpha))))
                     .map_err(err)?;
+                // Names at the last instant, where the bodies ended up.
+                if step + 1 == picks.len() {
+                    chart
+                        .draw_series(std::iter::once(label(&t.bodies[*b].name, at, BLACK)))
+                        .map_err(err)?;
+                }
             }
         }
-        for &f in &t.fingertips {
+        for (f, _) in shaped.iter().filter(|(b, _)| t.bodies[*b].fingertip) {
             let c = COLOURS[f % COLOURS.len()];
-            let path: Vec<(f64, f64)> = t
-                .samples
+            let path: Vec<(f64, f64)> = samples
                 .iter()
-                .map(|s| project(Vector3::from(s.poses[f].0)))
+                .map(|s| project(&Vector3::from(s.1.poses[*f].0)))
                 .collect();
             chart
                 .draw_series(std::iter::once(PathElement::new(path, c.stroke_width(1))))

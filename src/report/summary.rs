@@ -493,6 +493,9 @@ pub struct Summary {
     /// otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy: Option<super::energy::Energy>,
+    /// What each virtual device did (`model = "virtual"`, `--device virtual`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub virtual_devices: Vec<crate::session::VirtualOutcome>,
     /// Trace samples dropped (queue full).
     pub trace_dropped: u64,
     /// What the OS granted the fast thread (real-time mode).
@@ -705,6 +708,7 @@ impl Summary {
             }),
             semantic: o.semantic.as_ref().map(Into::into),
             energy: super::energy::Energy::of(o),
+            virtual_devices: o.virtual_devices.clone(),
             trace_dropped: o.trace_dropped,
             granted: o.granted.clone(),
             stopped_early: o.stopped_early,

@@ -422,7 +422,8 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
 /// `front.svg`: every point that ran cleanly (CPU load against the
 /// accuracy axis, log-log), the front joined, the recommendation ringed.
 pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
-    let pts: Vec<(f64, f64, bool, bool)> = s
+    // (load %, accuracy, on the front, recommended, the table's row number).
+    let pts: Vec<(f64, f64, bool, bool, usize)> = s
         .points
         .iter()
         .enumerate()
@@ -434,6 +435,7 @@ pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
                 y.max(1e-15),
                 p.pareto,
                 s.recommended == Some(i),
+                i,
             ))
         })
         .collect();
@@ -450,10 +452,12 @@ pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
     } else {
         (x0 / 2.0, x1 * 2.0)
     };
+    // Headroom above the points for the legend (upper right), so it never
+    // covers one.
     let (y0, y1) = if pts.is_empty() {
         (1e-9, 1.0)
     } else {
-        (y0 / 3.0, y1 * 3.0)
+        (y0 / 3.0, y1 * 30.0)
     };
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -499,6 +503,23 @@ pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
     chart
         .draw_series(front.iter().map(|&p| Circle::new(p, 4, blue.filled())))
         .map_err(err)?;
+    // Each front point named by its row in the printed table and its knobs.
+    chart
+        .draw_series(pts.iter().filter(|p| p.2).map(|p| {
+            let k = &s.points[p.4].knobs;
+            Text::new(
+                format!(
+                    "#{} {} ×{} {} Hz",
+                    p.4,
+                    rule(k.update),
+                    k.iterations,
+                    k.rate_hz
+                ),
+                (p.0 * 1.06, p.1 * 1.15),
+                ("sans-serif", 12).into_font().color(&blue),
+            )
+        }))
+        .map_err(err)?;
     if let Some(p) = pts.iter().find(|p| p.3) {
         chart
             .draw_series(std::iter::once(Circle::new(
@@ -512,6 +533,7 @@ pub fn front_svg(path: &Path, s: &Sweep) -> Result<()> {
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
         .draw()

@@ -29,7 +29,7 @@ use haptloop_solver::geometry::{ContactSettings, Cycle};
 use haptloop_solver::{Model, Program, SolverSettings};
 
 use super::slow::{Correction, Handover};
-use super::track::BodyTrack;
+use super::track::{ContactPoint, contact_points};
 
 /// The witness table of one model, published by the slow loop.
 #[derive(Debug, Clone, Default)]
@@ -109,7 +109,7 @@ impl std::fmt::Display for Interpenetration {
 impl std::error::Error for Interpenetration {}
 
 /// The slow loop's contact state: the solver's [`ContactManager`] plus the
-/// exchange with the fast loop, timing and the body track.
+/// exchange with the fast loop and timing.
 pub struct ContactLoop {
     manager: ContactManager,
     /// The scene's penetration tolerance, m.
@@ -117,7 +117,6 @@ pub struct ContactLoop {
     frames: MailboxWriter<WitnessFrame>,
     generation: u64,
     stats: ContactSlowStats,
-    track: BodyTrack,
 }
 
 impl ContactLoop {
@@ -129,7 +128,6 @@ impl ContactLoop {
         contact: ContactSettings,
         frames: MailboxWriter<WitnessFrame>,
     ) -> Option<Self> {
-        let track = BodyTrack::of_model(&base);
         let manager = ContactManager::new(base, settings, contact)?;
         Some(Self {
             manager,
@@ -137,7 +135,6 @@ impl ContactLoop {
             frames,
             generation: 0,
             stats: ContactSlowStats::default(),
-            track,
         })
     }
 
@@ -164,7 +161,6 @@ impl ContactLoop {
             .into());
         }
         self.note(&cycle, (clock.now() - start).0);
-        self.track.offer(0.0, self.manager.poses());
         Ok(program)
     }
 
@@ -173,9 +169,9 @@ impl ContactLoop {
         self.stats
     }
 
-    /// The sampled poses of the shaped bodies.
-    pub fn track(&self) -> &BodyTrack {
-        &self.track
+    /// The active contact points of the last cycle, appended to `out`.
+    pub fn contacts(&self, out: &mut Vec<ContactPoint>) {
+        contact_points(&self.manager, out);
     }
 
     /// Keeps a program the fast loop handed back for reuse (the cache by
@@ -218,7 +214,6 @@ impl ContactLoop {
         &mut self,
         q: &[f64],
         snapshot_tick: u64,
-        t_s: f64,
         solved: bool,
         programs: &mut ProgramSender<Handover>,
     ) -> bool {
@@ -227,7 +222,6 @@ impl ContactLoop {
         let may_send = programs.in_flight() == 0;
         let (cycle, update) = self.manager.step(q, solved, may_send);
         self.note(&cycle, (clock.now() - start).0);
-        self.track.offer(t_s, self.manager.poses());
         match update {
             ContactUpdate::None => false,
             ContactUpdate::Table => {

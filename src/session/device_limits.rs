@@ -50,7 +50,7 @@ impl DeviceLimitTicks {
                     continuous_force_n: info.limits.continuous_force_n,
                     replay: match d.device.device() {
                         SessionDevice::Replay(r) => Some(r.check()),
-                        SessionDevice::Sim(_) => None,
+                        SessionDevice::Sim(_) | SessionDevice::Virtual(_) => None,
                     },
                 }
             })

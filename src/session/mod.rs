@@ -16,6 +16,7 @@ mod design;
 mod device_limits;
 pub mod energy;
 mod fast;
+mod live;
 mod plan;
 mod recorder;
 mod reference;
@@ -25,31 +26,32 @@ mod semantic;
 mod slow;
 mod stats;
 pub mod timing;
-mod track;
+pub mod track;
 
 pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;
 pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
+pub use live::{FingerFrame, LiveFrame, LiveHook, LivePointer, LiveSources};
 pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
 pub use reference::{
     REFERENCE_GAIN, REFERENCE_MAX_ITERATIONS, REFERENCE_TOLERANCE_M, ReferenceCapture,
     ReferenceCheck, ReferenceSample, ReferenceStats,
 };
-pub use rig::{Rig, SessionDevice, device_trajectory};
+pub use rig::{Rig, SessionDevice, VirtualOutcome, device_trajectory};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
 pub use slow::{Correction, Handover, SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
 pub use timing::{Stage, StageClock, StageTimes};
-pub use track::{BodyTrack, TrackSample};
+pub use track::{BodyTrack, FingerTrack, TrackSample};
 
 use crate::scenes::Scene;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
 use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
 use haptloop_rt::clock::{Clock, MockClock, MonotonicClock, Nanos};
-use haptloop_rt::exchange::{mailbox, program_channel};
+use haptloop_rt::exchange::{MailboxWriter, mailbox, program_channel};
 use haptloop_rt::schedule::{
     IntervalReceiver, LoopHistograms, LoopReport, Periodic, RunLimit, StopFlag, Tick, TickBody,
     TickStatus, spawn_loop,
@@ -111,8 +113,8 @@ pub struct SessionOutcome {
     /// Wall-clock seconds the run took (the only field that differs between
     /// two deterministic runs).
     pub wall_clock_s: f64,
-    /// Sampled poses of the shaped bodies (scenes with contact).
-    pub track: Option<BodyTrack>,
+    /// Every body's pose, the contacts and the violation over the run.
+    pub track: BodyTrack,
     /// Translational joint rows of the model (0: a scene of free bodies,
     /// whose joint violation cannot be measured).
     pub joint_rows: usize,
@@ -120,6 +122,8 @@ pub struct SessionOutcome {
     pub design: DesignStats,
     /// Semantic events and the grouping graph (scenes with areas or holds).
     pub semantic: Option<SemanticReport>,
+    /// What each virtual device did (scenes with any).
+    pub virtual_devices: Vec<VirtualOutcome>,
     /// Per device: its workspace stops, clamps, saturations and thermal cuts
     /// (and a replay's comparison with its recording).
     pub device_limits: Vec<DeviceLimitTicks>,
@@ -141,6 +145,8 @@ pub struct Built<C: Clock> {
     /// The reporter's end of the design-variable trace (scenes with design
     /// variables or objectives).
     pub design: Option<DesignColumns>,
+    /// The live viewer's ends (`--live`) and the reporter's finger end.
+    live: Option<(LiveSources, MailboxWriter<FingerFrame>)>,
 }
 
 /// Builds the program (and assembles the scene), the devices (registered on
@@ -318,7 +324,23 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         rendered: vec![Vector3::zeros(); fingers],
         commanded: vec![Vector3::zeros(); fingers],
     };
+    // The live viewer's exchange: the slow loop and the reporter write, the
+    // viewer reads; the fast loop takes no part.
+    let (live_frames, live) = match &plan.live {
+        None => (None, None),
+        Some(_) => {
+            let pointers = fast_pointers(&fast.rig, scene);
+            let (sinks, sources) = live::exchange(pointers);
+            (Some(sinks.frames), Some((sources, sinks.fingers)))
+        }
+    };
     let slow = SlowLoop {
+        track: track::BodyTrack::of_model(&model),
+        track_model: model.clone(),
+        poses: Vec::new(),
+        contact_points: Vec::new(),
+        live: live_frames,
+        fresh: false,
         snapshots,
         programs: programs_tx,
         refresh: refresh_tx,
@@ -339,6 +361,15 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         semantic,
         step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
+    // The track starts at the assembled configuration, at t = 0.
+    let mut slow = slow;
+    track::poses_at(&model, &q, &mut slow.poses);
+    if let Some(c) = &slow.contact {
+        c.contacts(&mut slow.contact_points);
+    }
+    let at_rest = vec![[0.0; 3]; n_fingers];
+    slow.track
+        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
     Ok(Built {
         fast,
         slow,
@@ -346,7 +377,48 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         trace,
         assembly,
         design: design_columns,
+        live,
     })
+}
+
+/// The pointers of the virtual devices, with the mounts they were
+/// registered with.
+fn fast_pointers(rig: &Rig, scene: &Scene) -> Vec<LivePointer> {
+    rig.pointers
+        .iter()
+        .zip(&rig.devices)
+        .zip(&scene.compiled.devices)
+        .filter_map(|((p, d), decl)| {
+            p.as_ref().map(|p| LivePointer {
+                device: decl.name.clone(),
+                pointer: p.clone(),
+                mount: d.mount,
+            })
+        })
+        .collect()
+}
+
+/// Hands the viewer its ends of the exchange and the reporter its finger
+/// end (live sessions).
+fn start_live(
+    plan: &Plan,
+    live: Option<(LiveSources, MailboxWriter<FingerFrame>)>,
+    recorder: &mut Recorder,
+) {
+    if let (Some(hook), Some((sources, fingers))) = (&plan.live, live) {
+        recorder.attach_live(fingers);
+        (hook.0)(sources);
+    }
+}
+
+impl<C: Clock> Built<C> {
+    /// Starts the live exchange of a built session (`plan.live`): hands the
+    /// hook the viewer's ends and `recorder` the reporter's (what `run`
+    /// does when the loops start; public for tests that drive the loops
+    /// themselves).
+    pub fn start_live(&mut self, plan: &Plan, recorder: &mut Recorder) {
+        start_live(plan, self.live.take(), recorder);
+    }
 }
 
 /// Sessions whose loops are running, process-wide. While none is (a session
@@ -449,6 +521,12 @@ fn finish<C: Clock>(
             (d.name.clone(), t)
         })
         .collect();
+    let force_max: Vec<f64> = recorder
+        .force
+        .iter()
+        .map(|f| f.points.iter().map(|p| p.1).fold(0.0, f64::max))
+        .collect();
+    let virtual_devices = fast.rig().virtual_outcomes(&recorder.latest, &force_max);
     Ok(SessionOutcome {
         torque_at_exit_nm,
         stopped_early: stop.is_requested(),
@@ -474,6 +552,7 @@ fn finish<C: Clock>(
         joint_rows: joint_length_rows(&scene.compiled.model),
         design: fast.design_stats(),
         semantic,
+        virtual_devices,
         device_limits: DeviceLimitTicks::of(fast.rig()),
     })
 }
@@ -505,7 +584,7 @@ type Finished<C> = (
     SlowStats,
     Option<SolveInfo>,
     u64,
-    Option<BodyTrack>,
+    BodyTrack,
     Option<SemanticReport>,
 );
 
@@ -555,6 +634,7 @@ fn run_deterministic(
     let mut built = build(scene, plan, clock.clone())?;
     recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
     recorder.attach_design(built.design.take())?;
+    start_live(plan, built.live.take(), recorder);
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
     let _running = LoopsRunning::start();
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
@@ -605,9 +685,11 @@ fn run_real_time(
         device_traces,
         assembly,
         design,
+        live,
     } = built;
     recorder.attach_device_traces(device_traces);
     recorder.attach_design(design)?;
+    start_live(plan, live, recorder);
     let _running = LoopsRunning::start();
     let handle = spawn_loop(
         &plan.schedule(),
@@ -670,8 +752,15 @@ fn report_live(
     on_status: &mut dyn FnMut(&str),
 ) -> Result<()> {
     let mut misses = 0u64;
+    // A live viewer shows the fingers as the reporter drains them: at
+    // display rate then, else ten times a second.
+    let every = if plan.live.is_some() {
+        Duration::from_millis(10)
+    } else {
+        Duration::from_millis(100)
+    };
     while !finished() {
-        std::thread::sleep(Duration::from_millis(100));
+        std::thread::sleep(every);
         recorder.drain(trace, names)?;
         while let Some(iv) = intervals.try_recv() {
             misses += iv.misses.total();

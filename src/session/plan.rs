@@ -59,6 +59,9 @@ pub struct SessionOptions {
     /// Compare one tick in this many with the converged reference (`None`:
     /// [`DEFAULT_REFERENCE_EVERY`]; zero: every tick).
     pub reference_every: Option<Duration>,
+    /// Stream the run to a live viewer (`--live`): called with the viewer's
+    /// ends of the exchange when the loops start.
+    pub live: Option<super::LiveHook>,
 }
 
 /// How often a session compares the fast loop's force with the converged
@@ -84,6 +87,7 @@ impl Default for SessionOptions {
             spin: Duration::ZERO,
             thread: ThreadConfig::default(),
             reference_every: None,
+            live: None,
         }
     }
 }
@@ -125,6 +129,8 @@ pub struct Plan {
     /// Translational joint rows (violation is measured on these; 0: the
     /// status line and report say there is nothing to violate).
     pub joint_rows: usize,
+    /// The live viewer's hook (`--live`).
+    pub live: Option<super::LiveHook>,
 }
 
 impl Plan {
@@ -237,6 +243,7 @@ impl Plan {
             .round()
             .max(1.0) as u64,
             joint_rows: super::joint_length_rows(&scene.compiled.model),
+            live: options.live.clone(),
         })
     }
 

@@ -6,9 +6,12 @@
 
 use super::design::DesignColumns;
 use super::fast::TraceSample;
+use super::live::FingerFrame;
+use super::track::FingerTrack;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
 use haptloop_devices::TraceStream;
+use haptloop_rt::exchange::MailboxWriter;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -79,6 +82,10 @@ pub struct Recorder {
     device_traces: Vec<TraceStream>,
     /// Device-trace rows dropped because a queue was full (known at finish).
     pub device_trace_dropped: u64,
+    /// Every finger's device point, fingertip and force at 100 Hz.
+    pub fingers: FingerTrack,
+    /// The live viewer's finger frame (`--live`).
+    live: Option<MailboxWriter<FingerFrame>>,
 }
 
 impl Recorder {
@@ -114,7 +121,15 @@ impl Recorder {
             samples: 0,
             device_traces: Vec::new(),
             device_trace_dropped: 0,
+            fingers: FingerTrack::new(fingers),
+            live: None,
         })
+    }
+
+    /// Publishes the newest figures of every finger to a live viewer after
+    /// each [`drain`](Self::drain).
+    pub(super) fn attach_live(&mut self, live: MailboxWriter<FingerFrame>) {
+        self.live = Some(live);
     }
 
     /// Takes over the device-trace streams of a recording session; they are
@@ -205,8 +220,18 @@ impl Recorder {
             if i == 0 && !s.failed {
                 self.violation.push(s.t_s, s.violation_m);
             }
+            self.fingers.push(&s);
             self.latest[i] = s;
             self.samples += 1;
+        }
+        if let Some(live) = &mut self.live {
+            let latest = &self.latest;
+            live.publish_with(|f| {
+                f.t_s = latest.first().map_or(0.0, |s| s.t_s);
+                f.fingers.clear();
+                f.fingers
+                    .extend(latest.iter().map(super::track::FingerSample::from));
+            });
         }
         Ok(())
     }

@@ -6,7 +6,8 @@ use crate::scenes::Scene;
 use anyhow::{Context, Result, bail};
 use haptloop_devices::{
     Device, DeviceFault, DeviceInfo, DeviceReading, Grip, Hand, MotorReport, Mount, MountedDevice,
-    ReplayDevice, SafetyConfig, SimOptions, SimPhantom, Trace, Trajectory,
+    Pointer, ReplayDevice, SafetyConfig, SimOptions, SimPhantom, Trace, Trajectory, VIRTUAL_MODEL,
+    VirtualDevice, VirtualParams,
 };
 use haptloop_solver::scene::HandPath;
 use haptloop_solver::{FingerId, FingerTarget, Grasp};
@@ -23,6 +24,8 @@ pub enum SessionDevice {
     Sim(Box<SimPhantom>),
     /// A trace recorded by `--record`, played back tick by tick.
     Replay(Box<ReplayDevice>),
+    /// A virtual device, moved by a person through the live viewer.
+    Virtual(Box<VirtualDevice>),
 }
 
 impl SessionDevice {
@@ -32,6 +35,8 @@ impl SessionDevice {
         match self {
             SessionDevice::Sim(s) => s.hand().trajectory.sample(now).offset_m,
             SessionDevice::Replay(_) => Vector3::zeros(),
+            // The pointer's target: the virtual device starts at its origin.
+            SessionDevice::Virtual(v) => v.target_m_device(),
         }
     }
 }
@@ -41,12 +46,14 @@ impl Device for SessionDevice {
         match self {
             SessionDevice::Sim(d) => d.info(),
             SessionDevice::Replay(d) => d.info(),
+            SessionDevice::Virtual(d) => d.info(),
         }
     }
     fn read(&mut self, now: Duration) -> Result<DeviceReading, DeviceFault> {
         match self {
             SessionDevice::Sim(d) => d.read(now),
             SessionDevice::Replay(d) => d.read(now),
+            SessionDevice::Virtual(d) => d.read(now),
         }
     }
     fn write(
@@ -57,24 +64,28 @@ impl Device for SessionDevice {
         match self {
             SessionDevice::Sim(d) => d.write(force_n_device, now),
             SessionDevice::Replay(d) => d.write(force_n_device, now),
+            SessionDevice::Virtual(d) => d.write(force_n_device, now),
         }
     }
     fn motors_off(&mut self, now: Duration) {
         match self {
             SessionDevice::Sim(d) => d.motors_off(now),
             SessionDevice::Replay(d) => d.motors_off(now),
+            SessionDevice::Virtual(d) => d.motors_off(now),
         }
     }
     fn set_hardware_watchdog(&mut self, timeout: Option<Duration>) -> bool {
         match self {
             SessionDevice::Sim(d) => d.set_hardware_watchdog(timeout),
             SessionDevice::Replay(d) => d.set_hardware_watchdog(timeout),
+            SessionDevice::Virtual(d) => d.set_hardware_watchdog(timeout),
         }
     }
     fn applied_torque_nm(&self) -> Option<Vector3<f64>> {
         match self {
             SessionDevice::Sim(d) => d.applied_torque_nm(),
             SessionDevice::Replay(d) => d.applied_torque_nm(),
+            SessionDevice::Virtual(d) => d.applied_torque_nm(),
         }
     }
 }
@@ -93,6 +104,9 @@ pub struct Rig {
     pub registered: Vec<Option<DeviceReading>>,
     /// For each model finger: point or rigid.
     pub grasp: Vec<Grasp>,
+    /// For each device: the pointer that moves it, if it is virtual (the
+    /// live viewer sets it; nothing else does).
+    pub pointers: Vec<Option<Pointer>>,
 }
 
 /// The hand's trajectory in the device frame (offsets from the home pose),
@@ -209,6 +223,7 @@ impl Rig {
         let model = &c.model;
         let q0 = model.q0();
         let mut devices = Vec::with_capacity(c.devices.len());
+        let mut pointers = Vec::with_capacity(c.devices.len());
         let mut finger_device = vec![0; model.fingers().len()];
         for f in &c.fingers {
             finger_device[f.finger.index()] = f.device;
@@ -223,6 +238,14 @@ impl Rig {
                         .with_context(|| format!("replaying device `{}`", d.name))?;
                     check_replay(&trace, &path, &c.name, &d.model, rate_hz, duration)?;
                     SessionDevice::Replay(Box::new(ReplayDevice::new(trace)?))
+                }
+                None if d.model == VIRTUAL_MODEL => {
+                    let pointer = Pointer::new();
+                    pointers.push(Some(pointer.clone()));
+                    let params = VirtualParams::for_rate_hz(rate_hz);
+                    let device = VirtualDevice::new(params, pointer)
+                        .with_context(|| format!("device `{}`", d.name))?;
+                    SessionDevice::Virtual(Box::new(device))
                 }
                 None => {
                     // The grip is the user's hand on the physical stylus: its
@@ -246,6 +269,7 @@ impl Rig {
                 loop_period: Duration::from_nanos(1_000_000_000 / u64::from(rate_hz)),
                 ..SafetyConfig::default()
             };
+            pointers.resize(devices.len() + 1, None);
             devices.push(MountedDevice::new(d.name.clone(), device, safety, mount)?);
         }
         let mut rig = Rig {
@@ -254,6 +278,7 @@ impl Rig {
             finger_device,
             grasp_offset: vec![UnitQuaternion::identity(); model.fingers().len()],
             grasp: model.fingers().iter().map(|f| f.grasp).collect(),
+            pointers,
         };
         // Register (clutch): each tip maps onto its finger's initial position,
         // and a rigid grasp remembers the body's orientation relative to the
@@ -288,5 +313,63 @@ impl Rig {
             position_m: tip_m_scene,
             orientation: sensed_scene * self.grasp_offset[i],
         }
+    }
+}
+
+/// What a virtual device did over a run, scene frame (`summary.json` →
+/// `virtual_devices`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct VirtualOutcome {
+    /// Device name.
+    pub device: String,
+    /// Where its tip started (registered on its finger), m.
+    pub tip_start_m: [f64; 3],
+    /// Its tip as sensed at the last tick, m.
+    pub tip_end_m: [f64; 3],
+    /// Where the mouse last put its target, m (the start if never moved).
+    pub pointer_end_m: [f64; 3],
+    /// The pointer was moved at least once.
+    pub pointer_moved: bool,
+    /// The force rendered on it at the last tick, N.
+    pub force_end_n: [f64; 3],
+    /// The largest force rendered on it, N.
+    pub force_max_n: f64,
+    /// The pointer spring in the scene frame, N/m (k_p / scale²): at rest,
+    /// tip = pointer + force / this.
+    pub pointer_stiffness_n_per_m: f64,
+}
+
+impl Rig {
+    /// Each virtual device's outcome, from its state now and its first
+    /// finger's last trace sample (`last[i]` for model finger i) and
+    /// largest force.
+    pub fn virtual_outcomes(
+        &self,
+        last: &[super::TraceSample],
+        force_max_n: &[f64],
+    ) -> Vec<VirtualOutcome> {
+        let mut out = Vec::new();
+        for (d, dev) in self.devices.iter().enumerate() {
+            let SessionDevice::Virtual(v) = dev.device.device() else {
+                continue;
+            };
+            let Some(i) = self.finger_device.iter().position(|&k| k == d) else {
+                continue;
+            };
+            let m = &dev.mount;
+            let s = last.get(i).copied().unwrap_or_default();
+            out.push(VirtualOutcome {
+                device: dev.name.clone(),
+                tip_start_m: m.point_to_scene(&Vector3::zeros()).into(),
+                tip_end_m: s.target_m,
+                pointer_end_m: m.point_to_scene(&v.target_m_device()).into(),
+                pointer_moved: v.pointer().get().is_some(),
+                force_end_n: s.force_n,
+                force_max_n: force_max_n.get(i).copied().unwrap_or(f64::NAN),
+                pointer_stiffness_n_per_m: v.params().pointer_stiffness_n_per_m
+                    / (m.scale * m.scale),
+            });
+        }
+        out
     }
 }

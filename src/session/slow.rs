@@ -129,6 +129,17 @@ pub struct SlowLoop {
     pub(super) semantic: Option<super::semantic::SemanticLoop>,
     /// Wall time of each step, ns.
     pub(super) step_times: LatencyHistogram,
+    /// What the run looked like, sampled from the snapshots.
+    pub(super) track: super::track::BodyTrack,
+    /// The scene's model, whose q layout every snapshot shares (poses).
+    pub(super) track_model: Arc<Model>,
+    /// Scratch: every body's pose, the contact points.
+    pub(super) poses: Vec<haptloop_solver::geometry::Pose3>,
+    pub(super) contact_points: Vec<super::track::ContactPoint>,
+    /// The live viewer's frame (`--live`).
+    pub(super) live: Option<haptloop_rt::exchange::MailboxWriter<super::live::LiveFrame>>,
+    /// This step read a new snapshot.
+    pub(super) fresh: bool,
 }
 
 impl SlowLoop {
@@ -138,8 +149,52 @@ impl SlowLoop {
     pub fn step(&mut self) {
         let clock = MonotonicClock::new();
         let start = clock.now();
+        self.fresh = false;
         self.step_untimed();
+        self.observe();
         self.step_times.record((clock.now() - start).0);
+    }
+
+    /// Samples the newest snapshot into the track and, live, into the
+    /// viewer's frame: poses of every body, the active contacts, the
+    /// largest violation since the last look.
+    fn observe(&mut self) {
+        let snap = self.snapshots.latest();
+        let t_s = snap.time.as_secs_f64();
+        if !self.fresh || !(self.track.wants(t_s) || self.live.is_some()) {
+            return;
+        }
+        let violation = if snap.solved {
+            snap.peak_violation_m.max(snap.max_violation_m)
+        } else {
+            f64::NAN
+        };
+        super::track::poses_at(&self.track_model, &snap.q, &mut self.poses);
+        self.contact_points.clear();
+        if let Some(c) = &self.contact {
+            c.contacts(&mut self.contact_points);
+        }
+        let snap = self.snapshots.latest();
+        self.track.offer(
+            t_s,
+            &self.poses,
+            &self.contact_points,
+            violation,
+            &snap.finger_force_n,
+        );
+        if let Some(live) = &mut self.live {
+            let sample = self
+                .track
+                .sample(&self.poses, &self.contact_points, violation);
+            let events = self.semantic.as_ref().map_or(&[][..], |s| s.events());
+            live.publish_with(|f| {
+                f.t_s = t_s;
+                f.sample = sample;
+                if f.events.len() != events.len() {
+                    f.events = events.to_vec();
+                }
+            });
+        }
     }
 
     fn step_untimed(&mut self) {
@@ -154,6 +209,7 @@ impl SlowLoop {
         if !self.snapshots.refresh() {
             return;
         }
+        self.fresh = true;
         self.stats.fresh_snapshots += 1;
         if let Some(r) = &mut self.refresh {
             let snap = self.snapshots.latest();
@@ -168,9 +224,8 @@ impl SlowLoop {
         let snap = self.snapshots.latest();
         if let Some(c) = &mut self.contact {
             let q = snap.q.clone();
-            let t_s = snap.time.as_secs_f64();
             c.set_speeds(&snap.speeds);
-            if c.step(&q, snap.tick, t_s, snap.solved, &mut self.programs) {
+            if c.step(&q, snap.tick, snap.solved, &mut self.programs) {
                 return;
             }
         }
@@ -307,9 +362,9 @@ impl SlowLoop {
             .map(super::semantic::SemanticLoop::report)
     }
 
-    /// The sampled poses of the shaped bodies (scenes with contact).
-    pub fn track(&self) -> Option<super::track::BodyTrack> {
-        self.contact.as_ref().map(|c| c.track().clone())
+    /// What the run looked like (every body, contacts, violation).
+    pub fn track(&self) -> super::track::BodyTrack {
+        self.track.clone()
     }
 
     /// What it saw and did.

@@ -1,7 +1,7 @@
 //! The built-in contact scenes, run end to end on simulated arms
 //! (deterministic sessions): each does what its file says, without a failed
 //! tick, a backup or a penetration beyond its tolerance. Poses come from the
-//! session's body track (one sample per slow-loop cycle, every 5 ms).
+//! session's body track (a sample every 10 ms of session time).
 
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{Scene, check_loaded, resolve};
@@ -38,14 +38,14 @@ fn poses(t: &BodyTrack, body: &str) -> Vec<(f64, Vector3<f64>, UnitQuaternion<f6
     let k = t
         .bodies
         .iter()
-        .position(|(_, n)| n == body)
+        .position(|b| b.name == body)
         .unwrap_or_else(|| panic!("no body {body}"));
     t.samples
         .iter()
-        .map(|s| {
+        .map(|(t_s, s)| {
             let (r, q) = s.poses[k];
             (
-                s.t_s,
+                t_s,
                 Vector3::from(r),
                 UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3])),
             )
@@ -68,7 +68,7 @@ fn at(
 fn the_pyramid_tilts_onto_a_side_face() {
     let scene = resolve("pyramid-tilt").unwrap();
     let (o, _) = run(&scene, 4.0);
-    let p = poses(o.track.as_ref().unwrap(), "pyramid");
+    let p = poses(&o.track, "pyramid");
     let (r, q) = at(&p, 4.0);
     let corners = [
         [0.02, 0.02, 0.01],
@@ -98,7 +98,7 @@ fn the_pyramid_tilts_onto_a_side_face() {
 fn the_box_slides_tips_over_the_edge_and_lands_on_the_floor() {
     let scene = resolve("box-slide").unwrap();
     let (o, s) = run(&scene, 6.0);
-    let p = poses(o.track.as_ref().unwrap(), "box");
+    let p = poses(&o.track, "box");
     // Still on the table, sliding, at 2 s.
     let (r, q) = at(&p, 2.0);
     assert!((r.z - 0.03).abs() < 1e-4 && r.x > 0.03, "at 2 s: {r}");
@@ -124,7 +124,7 @@ fn the_box_slides_tips_over_the_edge_and_lands_on_the_floor() {
 fn the_stack_slides_as_a_column() {
     let scene = resolve("stack").unwrap();
     let (o, s) = run(&scene, 4.0);
-    let t = o.track.as_ref().unwrap();
+    let t = &o.track;
     let moved: Vec<(f64, f64)> = ["bottom", "middle", "top"]
         .iter()
         .map(|b| {
@@ -152,7 +152,7 @@ fn the_stack_slides_as_a_column() {
 fn the_peg_goes_into_the_hole() {
     let scene = resolve("peg-in-hole").unwrap();
     let (o, _) = run(&scene, 6.0);
-    let p = poses(o.track.as_ref().unwrap(), "peg");
+    let p = poses(&o.track, "peg");
     // Resting on the right wall's top at 1 s: its bottom at the block's top.
     let (r, _) = at(&p, 1.0);
     assert!(
@@ -199,11 +199,8 @@ fn the_peg_goes_into_the_hole() {
 fn the_pinch_lifts_only_with_friction() {
     let scene = resolve("pinch-lift").unwrap();
     let (o, s) = run(&scene, 6.0);
-    let p = poses(o.track.as_ref().unwrap(), "box");
-    let tips = [
-        poses(o.track.as_ref().unwrap(), "thumb.tip"),
-        poses(o.track.as_ref().unwrap(), "index.tip"),
-    ];
+    let p = poses(&o.track, "box");
+    let tips = [poses(&o.track, "thumb.tip"), poses(&o.track, "index.tip")];
     let held: Vec<(f64, f64)> = p
         .iter()
         .filter(|(t, ..)| (2.25..=4.25).contains(t))
@@ -248,7 +245,7 @@ fn the_pinch_lifts_only_with_friction() {
     .unwrap();
     let slippery = check_loaded(loaded).unwrap();
     let (o, _) = run(&slippery, 3.0);
-    let top = poses(o.track.as_ref().unwrap(), "box")
+    let top = poses(&o.track, "box")
         .iter()
         .map(|s| s.1.z)
         .fold(f64::NEG_INFINITY, f64::max);
@@ -264,14 +261,14 @@ fn the_pinch_lifts_only_with_friction() {
 fn three_fingers_lift_the_cylinder() {
     let scene = resolve("grasp-3-contact").unwrap();
     let (o, s) = run(&scene, 6.0);
-    let p = poses(o.track.as_ref().unwrap(), "cylinder");
+    let p = poses(&o.track, "cylinder");
     let held_low = p
         .iter()
         .filter(|(t, ..)| (2.25..=4.25).contains(t))
         .map(|s| s.1.z)
         .fold(f64::INFINITY, f64::min);
     assert!(held_low - 0.03 > 0.04, "held only {} m up", held_low - 0.03);
-    let tip = poses(o.track.as_ref().unwrap(), "thumb.tip");
+    let tip = poses(&o.track, "thumb.tip");
     let rel: Vec<f64> = p
         .iter()
         .filter(|(t, ..)| (2.25..=4.25).contains(t))
@@ -296,7 +293,7 @@ fn three_fingers_lift_the_cylinder() {
 fn the_dragged_box_pushes_the_clutter_aside() {
     let scene = resolve("cluttered").unwrap();
     let (o, s) = run(&scene, 9.0);
-    let t = o.track.as_ref().unwrap();
+    let t = &o.track;
     let dragged = poses(t, "dragged");
     assert!(
         at(&dragged, 9.0).0.x > 0.08,
@@ -304,7 +301,7 @@ fn the_dragged_box_pushes_the_clutter_aside() {
         at(&dragged, 9.0).0.x
     );
     let mut pushed = 0;
-    for (_, name) in &t.bodies {
+    for name in t.bodies.iter().map(|b| &b.name) {
         if !name.starts_with("object") {
             continue;
         }

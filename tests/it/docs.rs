@@ -205,4 +205,21 @@ fn the_device_table_is_the_models_figures() {
             "{row}"
         );
     }
+    // The virtual device's row: its own defaults.
+    let v = haptloop_devices::VirtualParams::default();
+    let row = doc
+        .lines()
+        .find(|l| l.starts_with("| `virtual` |"))
+        .expect("no row for virtual");
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    assert_eq!(cells[3], format!("{} N", v.peak_force_n), "{row}");
+    assert!(
+        cells[4].starts_with(&format!("{} N", v.peak_force_n)),
+        "{row}"
+    );
+    let h = v.workspace_half_extent_m;
+    assert!(
+        cells[5].starts_with(&format!("±{h} × ±{h} × ±{h} m")),
+        "{row}"
+    );
 }

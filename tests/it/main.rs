@@ -6,6 +6,7 @@
 static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::CountingAllocator;
 
 mod bench;
+mod browser;
 mod contact;
 mod design;
 mod design_flags;
@@ -33,3 +34,4 @@ mod stability;
 mod sweep;
 mod torque;
 mod trust;
+mod view;

@@ -181,6 +181,11 @@ impl SemanticLoop {
         }
     }
 
+    /// Every event so far, in time order.
+    pub fn events(&self) -> &[Event] {
+        &self.report.events
+    }
+
     /// What it saw and did so far, with the graph as it stands.
     pub fn report(&self) -> SemanticReport {
         let mut r = self.report.clone();
