@@ -86,7 +86,8 @@ enum Command {
     /// write, bookkeeping, the whole tick and the tick without the device
     /// stages; then the slow loop's step time and the constraint violation.
     Bench(bench::BenchArgs),
-    /// List the built-in scenes, one line each.
+    /// List the built-in scenes, one line each, grouped by the paper and
+    /// figure they show.
     Scenes,
     /// Write a scene in another program's format: `export mjcf SCENE`.
     ///

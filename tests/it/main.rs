@@ -13,6 +13,7 @@ mod exits;
 mod export;
 mod limits;
 mod messages;
+mod papers;
 mod preflight;
 mod reference;
 mod replay;
