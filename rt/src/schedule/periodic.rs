@@ -307,22 +307,6 @@ fn slots_behind(now: Nanos, next: Nanos, late_bound: Nanos, period: Nanos) -> u6
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::slots_behind;
-    use crate::clock::Nanos;
-
-    #[test]
-    fn slots_behind_counts_only_slots_that_cannot_start_in_time() {
-        let (p, b) = (Nanos(1000), Nanos(500));
-        assert_eq!(slots_behind(Nanos(1500), Nanos(1000), b, p), 0);
-        assert_eq!(slots_behind(Nanos(1501), Nanos(1000), b, p), 1);
-        assert_eq!(slots_behind(Nanos(2500), Nanos(1000), b, p), 1);
-        assert_eq!(slots_behind(Nanos(2501), Nanos(1000), b, p), 2);
-        assert_eq!(slots_behind(Nanos(6200), Nanos(1000), b, p), 5);
-    }
-}
-
 /// How many slots from `index` on still belong to a run with this limit: the
 /// slot count's rest and the slots whose deadline is not past `end_at`.
 fn slots_left(
@@ -341,4 +325,20 @@ fn slots_left(
         }
     });
     by_count.min(by_time)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slots_behind;
+    use crate::clock::Nanos;
+
+    #[test]
+    fn slots_behind_counts_only_slots_that_cannot_start_in_time() {
+        let (p, b) = (Nanos(1000), Nanos(500));
+        assert_eq!(slots_behind(Nanos(1500), Nanos(1000), b, p), 0);
+        assert_eq!(slots_behind(Nanos(1501), Nanos(1000), b, p), 1);
+        assert_eq!(slots_behind(Nanos(2500), Nanos(1000), b, p), 1);
+        assert_eq!(slots_behind(Nanos(2501), Nanos(1000), b, p), 2);
+        assert_eq!(slots_behind(Nanos(6200), Nanos(1000), b, p), 5);
+    }
 }
