@@ -1,7 +1,9 @@
 //! Built-in scenes (embedded, so `haptloop run four-bar` works from any
 //! directory), generated ones (`lattice-8x32`: [`generated`]) and resolution
-//! of a `SCENE|FILE` argument into a checked scene.
+//! of a `SCENE|FILE` argument into a checked scene. [`catalog`] says which
+//! paper and figure each built-in scene shows.
 
+pub mod catalog;
 pub mod generated;
 
 use haptloop_devices::{HandTrace, KNOWN_MODELS, PhantomModel, VIRTUAL_MODEL};

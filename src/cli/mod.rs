@@ -95,7 +95,8 @@ enum Command {
     /// arrows, contact points and normals; force, violation and penetration
     /// plots; the semantic events on the timeline. `run` writes it too.
     View(view::ViewArgs),
-    /// List the built-in scenes, one line each.
+    /// List the built-in scenes, one line each, grouped by the paper and
+    /// figure they show.
     Scenes,
     /// Write a scene in another program's format: `export mjcf SCENE`.
     ///

@@ -18,6 +18,7 @@ mod limits;
 mod load_bounds;
 mod matvec;
 mod messages;
+mod papers;
 mod physics;
 mod place;
 mod preflight;

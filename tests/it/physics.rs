@@ -83,14 +83,14 @@ fn mean(rows: &[Row], a: f64, b: f64, f: impl Fn(&Row) -> f64) -> f64 {
 
 /// (t, position, orientation) of `body` per slow-loop sample.
 fn poses(o: &SessionOutcome, body: &str) -> Vec<(f64, Vector3<f64>, UnitQuaternion<f64>)> {
-    let t = o.track.as_ref().expect("a contact scene tracks its bodies");
-    let k = t.bodies.iter().position(|(_, n)| n == body).unwrap();
+    let t = &o.track;
+    let k = t.bodies.iter().position(|b| b.name == body).unwrap();
     t.samples
         .iter()
-        .map(|s| {
+        .map(|(t_s, s)| {
             let (r, q) = s.poses[k];
             let q = Quaternion::new(q[0], q[1], q[2], q[3]);
-            (s.t_s, Vector3::from(r), UnitQuaternion::from_quaternion(q))
+            (t_s, Vector3::from(r), UnitQuaternion::from_quaternion(q))
         })
         .collect()
 }
