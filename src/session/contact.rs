@@ -28,7 +28,7 @@ use haptloop_solver::contact::{ContactManager, ContactUpdate};
 use haptloop_solver::geometry::{ContactSettings, Cycle};
 use haptloop_solver::{Model, Program, SolverSettings};
 
-use super::slow::{Correction, Handover};
+use super::messages::{Correction, Handover};
 use super::track::{ContactPoint, contact_points};
 
 /// The witness table of one model, published by the slow loop.

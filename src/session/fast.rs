@@ -17,8 +17,8 @@
 //! reporter drains (a full queue drops and counts rows). Its run time is
 //! bounded by the program's fixed iteration count and the devices' sub-steps.
 
+use super::messages::{Handover, Snapshot};
 use super::rig::Rig;
-use super::slow::Handover;
 use super::stats::{FingerStats, RunStats};
 use super::timing::{Stage, StageClock};
 use crossbeam::queue::ArrayQueue;
@@ -30,34 +30,6 @@ use haptloop_solver::{FingerTarget, Program, TickOutcome};
 use nalgebra::Vector3;
 use std::sync::Arc;
 use std::time::Duration;
-
-/// What the fast loop hands the slow loop every tick (newest wins).
-#[derive(Debug, Clone, Default)]
-pub struct Snapshot {
-    /// Grid slot of the tick.
-    pub tick: u64,
-    /// Session time, grid-aligned.
-    pub time: Duration,
-    /// Configuration after the tick (program layout).
-    pub q: Vec<f64>,
-    /// Largest length-row violation, m.
-    pub max_violation_m: f64,
-    /// Largest angle-row violation, rad.
-    pub max_violation_rad: f64,
-    /// False if the tick's solve failed or the mechanism came apart.
-    pub solved: bool,
-    /// Each finger's force as the solver computed it (on the finger, N,
-    /// scene frame; before the safety layer): what the hand pulls with.
-    pub finger_force_n: Vec<[f64; 3]>,
-    /// Largest length-row violation of every tick since the snapshot the
-    /// slow loop last took, this one's included, m: the slow loop looks
-    /// every few ticks, and a violation that comes and goes with its period
-    /// must not slip between its looks.
-    pub peak_violation_m: f64,
-    /// Per model body: speed (m/s) and angular speed (rad/s) over the tick
-    /// (the contact cycle tracks pairs as far ahead as they will move).
-    pub speeds: Vec<[f64; 2]>,
-}
 
 /// One finger at one tick, for `trace.csv` and the plots.
 #[derive(Debug, Clone, Copy, Default)]

@@ -17,6 +17,7 @@ mod device_limits;
 pub mod energy;
 mod fast;
 mod live;
+mod messages;
 mod plan;
 mod recorder;
 mod reference;
@@ -31,8 +32,9 @@ pub mod track;
 pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;
-pub use fast::{FastLoop, SessionFault, Snapshot, TraceSample};
+pub use fast::{FastLoop, SessionFault, TraceSample};
 pub use live::{FingerFrame, LiveFrame, LiveHook, LivePointer, LiveSources};
+pub use messages::{Correction, Handover, Snapshot};
 pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
 pub use reference::{
@@ -41,7 +43,7 @@ pub use reference::{
 };
 pub use rig::{Rig, SessionDevice, VirtualOutcome, device_trajectory};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
-pub use slow::{Correction, Handover, SlowLoop, SlowStats};
+pub use slow::{SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
 pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, FingerTrack, TrackSample};

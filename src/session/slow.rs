@@ -5,65 +5,12 @@
 //! loop hands back. It never blocks the fast loop: it only polls the mailbox
 //! and the queue.
 
-use super::fast::Snapshot;
+use super::messages::{Correction, Handover, Snapshot};
 use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
 use haptloop_rt::hist::{LatencyHistogram, Summary};
 use haptloop_solver::{Model, Placement, Program, SolveInfo, SolveStatus, SolverSettings};
 use std::sync::Arc;
-
-/// How a handed-over program corrects the configuration it adopts.
-#[derive(Debug, Clone)]
-pub enum Correction {
-    /// Keep the adopted q (a structure change).
-    None,
-    /// Add this displacement to the adopted q, keeping velocities: a
-    /// re-projection computed for a snapshot a few ticks old.
-    Shift(Vec<f64>),
-    /// Replace q and restart the motion at rest: recovery from a broken
-    /// configuration, placed from the last good one.
-    Reset(Vec<f64>),
-}
-
-/// What the slow loop sends the fast loop.
-pub struct Handover {
-    /// The program to run from now on.
-    pub program: Program,
-    /// What to do with the adopted configuration.
-    pub correction: Correction,
-    /// Grid slot of the snapshot it answers (contact changes: the latency
-    /// from a witness change to the fast loop using it is measured from it).
-    pub snapshot_tick: Option<u64>,
-}
-
-impl Handover {
-    /// A program without a correction (the initial one).
-    pub fn new(program: Program) -> Self {
-        Handover {
-            program,
-            correction: Correction::None,
-            snapshot_tick: None,
-        }
-    }
-
-    /// Called on the fast thread when `self` replaces `old`: carries the
-    /// running state over, then applies the correction.
-    ///
-    /// # Real-time
-    /// No allocation (the correction vector was allocated by the slow loop).
-    pub fn take_over(&mut self, old: &Handover) {
-        self.program.adopt_state(&old.program);
-        match &self.correction {
-            Correction::None => {}
-            Correction::Shift(dq) => {
-                let _ = self.program.shift_q(dq);
-            }
-            Correction::Reset(q) => {
-                let _ = self.program.set_q(q);
-            }
-        }
-    }
-}
 
 /// What the slow loop saw and did.
 #[derive(Debug, Clone, Copy, Default)]

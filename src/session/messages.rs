@@ -1,0 +1,89 @@
+//! What the two loops send each other: the fast loop's [`Snapshot`] (every
+//! tick, newest wins) and the slow loop's [`Handover`] (a program and how it
+//! corrects the configuration it adopts). Both loops and the contact loop
+//! depend on this module and on no other loop's, so `fast`, `slow` and
+//! `contact` form no import cycle.
+
+use haptloop_solver::Program;
+use std::time::Duration;
+
+/// How a handed-over program corrects the configuration it adopts.
+#[derive(Debug, Clone)]
+pub enum Correction {
+    /// Keep the adopted q (a structure change).
+    None,
+    /// Add this displacement to the adopted q, keeping velocities: a
+    /// re-projection computed for a snapshot a few ticks old.
+    Shift(Vec<f64>),
+    /// Replace q and restart the motion at rest: recovery from a broken
+    /// configuration, placed from the last good one.
+    Reset(Vec<f64>),
+}
+
+/// What the slow loop sends the fast loop.
+pub struct Handover {
+    /// The program to run from now on.
+    pub program: Program,
+    /// What to do with the adopted configuration.
+    pub correction: Correction,
+    /// Grid slot of the snapshot it answers (contact changes: the latency
+    /// from a witness change to the fast loop using it is measured from it).
+    pub snapshot_tick: Option<u64>,
+}
+
+impl Handover {
+    /// A program without a correction (the initial one).
+    pub fn new(program: Program) -> Self {
+        Handover {
+            program,
+            correction: Correction::None,
+            snapshot_tick: None,
+        }
+    }
+
+    /// Called on the fast thread when `self` replaces `old`: carries the
+    /// running state over, then applies the correction.
+    ///
+    /// # Real-time
+    /// No allocation (the correction vector was allocated by the slow loop).
+    pub fn take_over(&mut self, old: &Handover) {
+        self.program.adopt_state(&old.program);
+        match &self.correction {
+            Correction::None => {}
+            Correction::Shift(dq) => {
+                let _ = self.program.shift_q(dq);
+            }
+            Correction::Reset(q) => {
+                let _ = self.program.set_q(q);
+            }
+        }
+    }
+}
+
+/// What the fast loop hands the slow loop every tick (newest wins).
+#[derive(Debug, Clone, Default)]
+pub struct Snapshot {
+    /// Grid slot of the tick.
+    pub tick: u64,
+    /// Session time, grid-aligned.
+    pub time: Duration,
+    /// Configuration after the tick (program layout).
+    pub q: Vec<f64>,
+    /// Largest length-row violation, m.
+    pub max_violation_m: f64,
+    /// Largest angle-row violation, rad.
+    pub max_violation_rad: f64,
+    /// False if the tick's solve failed or the mechanism came apart.
+    pub solved: bool,
+    /// Each finger's force as the solver computed it (on the finger, N,
+    /// scene frame; before the safety layer): what the hand pulls with.
+    pub finger_force_n: Vec<[f64; 3]>,
+    /// Largest length-row violation of every tick since the snapshot the
+    /// slow loop last took, this one's included, m: the slow loop looks
+    /// every few ticks, and a violation that comes and goes with its period
+    /// must not slip between its looks.
+    pub peak_violation_m: f64,
+    /// Per model body: speed (m/s) and angular speed (rad/s) over the tick
+    /// (the contact cycle tracks pairs as far ahead as they will move).
+    pub speeds: Vec<[f64; 2]>,
+}
