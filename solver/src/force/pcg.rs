@@ -43,6 +43,8 @@ pub(crate) struct Pcg {
     /// Largest relative residual ‖b − A x‖ / ‖b‖ over the columns after
     /// the last solve.
     pub residual: f64,
+    /// Solves that stopped at the cap with a column above the tolerance.
+    pub unconverged: u64,
 }
 
 impl Pcg {
@@ -61,6 +63,7 @@ impl Pcg {
             max_iterations,
             iterations: 0,
             residual: 0.0,
+            unconverged: 0,
         }
     }
 
@@ -116,7 +119,11 @@ impl Pcg {
                 all &= self.done[c];
             }
             self.residual = worst;
-            if all || self.iterations >= self.max_iterations {
+            if all {
+                break;
+            }
+            if self.iterations >= self.max_iterations {
+                self.unconverged += 1;
                 break;
             }
             self.iterations += 1;
@@ -195,6 +202,8 @@ pub(crate) struct Bordered {
     max_iterations: u32,
     /// Iterations of the last solve.
     pub iterations: u32,
+    /// Solves that stopped at the cap above the tolerance.
+    pub unconverged: u64,
 }
 
 impl Bordered {
@@ -207,6 +216,7 @@ impl Bordered {
             ap: vec![0.0; n],
             max_iterations,
             iterations: 0,
+            unconverged: 0,
         }
     }
 
@@ -258,6 +268,9 @@ impl Bordered {
             for i in 0..x.len() {
                 self.p[i] = self.z[i] + beta * self.p[i];
             }
+        }
+        if rz > 0.0 && norm(&self.r) > TOLERANCE * bnorm {
+            self.unconverged += 1;
         }
         true
     }
