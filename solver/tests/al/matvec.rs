@@ -318,3 +318,111 @@ fn probe_matvec_failures() {
         }
     }
 }
+
+/// `cargo test --release -p haptloop-solver --test al probe_matvec_scaling -- --ignored --nocapture`:
+/// cost against size, the Cholesky tick and the matvec tick (a factor
+/// refreshed every 5 ticks, the refresh not timed: the slow thread's), on
+/// the lattice at 32 / 128 / 512 bars and the sphere toy at 33 / 132 / 400
+/// bodies; median tick (wall clock) of 3 interleaved rounds, and the fitted
+/// exponent of each family (prints).
+#[test]
+#[ignore]
+fn probe_matvec_scaling() {
+    use haptloop_solver::mechanisms::{
+        lattice_shape, lattice_sized, sphere_toy_shape, sphere_toy_sized,
+    };
+    use std::time::Instant;
+    let families: [(&str, Vec<(usize, Model)>); 2] = [
+        (
+            "lattice",
+            [32, 128, 512]
+                .iter()
+                .map(|&b| {
+                    let (r, c) = lattice_shape(b).unwrap();
+                    let m = lattice_sized(r, c).build().unwrap();
+                    (m.bodies().len(), m)
+                })
+                .collect(),
+        ),
+        (
+            "sphere toy",
+            [33, 132, 400]
+                .iter()
+                .map(|&b| {
+                    let (r, c) = sphere_toy_shape(b).unwrap();
+                    let m = sphere_toy_sized(r, c).build().unwrap();
+                    (m.bodies().len(), m)
+                })
+                .collect(),
+        ),
+    ];
+    for (family, sizes) in families {
+        let mut pts = Vec::new();
+        for (bodies, model) in sizes {
+            let model = Arc::new(model);
+            let s = SolverSettings {
+                iterations: 4,
+                force_solver: ForceSolver::MATVEC,
+                ..SolverSettings::default()
+            };
+            let e = SolverSettings {
+                force_solver: ForceSolver::Cholesky,
+                ..s
+            };
+            let mut fast = Program::new(model.clone(), s).unwrap();
+            let mut exact = Program::new(model.clone(), e).unwrap();
+            let mut refresher = fast.factor_refresher().unwrap();
+            let mut f = refresher.buffer();
+            let ticks = 40;
+            let (mut t_mv, mut t_ch) = (Vec::new(), Vec::new());
+            let (mut cg, mut k_all) = (0u64, 0usize);
+            for round in 0..3 {
+                for k in 0..ticks {
+                    let kk = round * ticks + k;
+                    let t = moved(&model, 0.005 * (kk as f64 * 0.05).sin());
+                    if kk % 5 == 0 {
+                        assert!(refresher.refresh(fast.q(), &mut f));
+                        fast.adopt_factor(&mut f);
+                    }
+                    let s0 = Instant::now();
+                    assert_eq!(fast.tick(&t, DT).status, TickOutcome::Ok);
+                    t_mv.push(s0.elapsed().as_secs_f64());
+                    cg += u64::from(fast.force_cg_iterations());
+                    let s0 = Instant::now();
+                    assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok);
+                    t_ch.push(s0.elapsed().as_secs_f64());
+                    k_all += 1;
+                }
+            }
+            let med = |v: &mut Vec<f64>| {
+                v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                v[v.len() / 2] * 1e6
+            };
+            let (mv, ch) = (med(&mut t_mv), med(&mut t_ch));
+            println!(
+                "{family} {bodies} bodies ({} rows, factor {} values): cholesky {ch:.1} µs, matvec {mv:.1} µs ({:.2}×), force CG {:.1} it./tick, solves at the cap {:.2}/tick",
+                model.n_rows(),
+                exact.force_factor_nnz(),
+                mv / ch,
+                cg as f64 / k_all as f64,
+                fast.matvec_unconverged() as f64 / k_all as f64
+            );
+            pts.push((bodies as f64, ch, mv));
+        }
+        let fit = |y: &dyn Fn(&(f64, f64, f64)) -> f64| {
+            let n = pts.len() as f64;
+            let (mx, my) = (
+                pts.iter().map(|p| p.0.ln()).sum::<f64>() / n,
+                pts.iter().map(|p| y(p).ln()).sum::<f64>() / n,
+            );
+            let sxy: f64 = pts.iter().map(|p| (p.0.ln() - mx) * (y(p).ln() - my)).sum();
+            let sxx: f64 = pts.iter().map(|p| (p.0.ln() - mx).powi(2)).sum();
+            sxy / sxx
+        };
+        println!(
+            "{family}: exponent cholesky {:.2}, matvec {:.2}",
+            fit(&|p| p.1),
+            fit(&|p| p.2)
+        );
+    }
+}
