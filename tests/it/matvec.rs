@@ -141,6 +141,41 @@ fn the_cli_takes_the_matvec_force_solver() {
         "{err}"
     );
 
+    // Jacobi CG (`cg:N`, the sweep's comparison) parses; a bad cap is
+    // refused by name, and the projected update refuses it for want of a
+    // factor.
+    let o = haptloop()
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "cg:0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("cg:0"), "{err}");
+    let o = haptloop()
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "cg:8",
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("force_solver") && err.contains("Cholesky factor"),
+        "{err}"
+    );
+
     let o = haptloop()
         .args([
             "bench",
