@@ -358,7 +358,8 @@ fn the_arm_pushes_the_box_across_the_table() {
 /// catches up. About a quarter of the ticks push, so the mean felt push is
 /// 0.13 N, while the box, moving steadily, gets its μ m g: the push
 /// ticks' positional projection gives it more momentum than Eq. 7's
-/// filtered M q̈ renders to the hand. Not the sticking ticks: taking a
+/// M q̈ renders to the hand (with the velocity filter off, 0.27 N and
+/// ±4 N spikes; more AL iterations change nothing). Not the sticking ticks: taking a
 /// sticking body pair's stick-row forces into Eq. 7's balance instead of
 /// its rows (tried) left the run bit-identical. The 1–3 N spikes are a
 /// second effect of the box-shaped link: once the box has turned, the
