@@ -445,7 +445,16 @@ impl Run<'_> {
         let turns = self.path.as_ref().is_some_and(|path| path.turns());
         let orientation = turns.then_some(r);
         let q_ref = blocked_reference(self.model, saved, self.body, p, orientation);
-        let (status, more) = self.solve_blocked(q, &q_ref, fine)?;
+        let (mut status, mut more) = self.solve_blocked(q, &q_ref, fine)?;
+        if status != SolveStatus::Converged && fine {
+            // A final goal against a contact face with many rows active
+            // at once (a figure's pelvis and thighs on a seat) may not
+            // reach the placement's 1 nm within the cap; it ends at the
+            // intermediate tolerance instead (1 µm by default).
+            q.copy_from_slice(saved);
+            let (s, m) = self.solve_blocked(q, &q_ref, false)?;
+            (status, more) = (s, more + m);
+        }
         if status != SolveStatus::Converged {
             q.copy_from_slice(saved);
             return Ok(None);
