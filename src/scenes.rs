@@ -93,6 +93,10 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/arm-push.toml"),
     },
     Builtin {
+        name: "sit-on-chair",
+        text: include_str!("../scenes/sit-on-chair.toml"),
+    },
+    Builtin {
         name: "four-bar-design",
         text: include_str!("../scenes/four-bar-design.toml"),
     },

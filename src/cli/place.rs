@@ -49,6 +49,11 @@ pub struct PlaceArgs {
     /// Newton iterations per step past which a subgoal is split, 1–10000.
     #[arg(long, default_value_t = 8, value_parser = super::values::iterations)]
     pub max_iterations: u32,
+    /// Ignore contact between shaped bodies (by default a placement holds
+    /// their non-penetration inequalities: a body stops against what it
+    /// meets).
+    #[arg(long)]
+    pub no_contact: bool,
     /// Where to write the placed scene (default: placed-<scene>.toml).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -101,6 +106,7 @@ pub fn run(a: &PlaceArgs) -> Result<ExitCode> {
             ModeArg::Solve => Mode::Solve,
         },
         pull_step_m: a.step,
+        contact: !a.no_contact,
         placement: haptloop_solver::PlacementOptions {
             max_iterations: a.max_iterations,
             ..haptloop_solver::PlacementOptions::default()
@@ -154,17 +160,33 @@ fn report(a: &PlaceArgs, p: &Placed, out: &std::path::Path) -> String {
         ModeArg::Pull => "pull",
         ModeArg::Solve => "solve",
     };
+    let blocked = p.reached == 1.0 && !p.at_goal();
     let verdict = match p.at_goal() {
         true => "placed at the goal".to_owned(),
+        false if blocked => format!(
+            "BLOCKED by contact: the body rests {:.3} mm from its goal, against what it met",
+            1e3 * p.goal_gap_m
+        ),
         false => format!(
             "NOT REACHED: stopped at {:.1} % of the path (last solve {:?}); the file holds the last converged subgoal",
             100.0 * p.reached,
             p.last_status
         ),
     };
-    let iters: Vec<String> = p.steps.iter().map(|s| s.iterations.to_string()).collect();
+    let iters: Vec<String> = p
+        .steps
+        .iter()
+        .map(|s| format!("{}{}", s.iterations, if s.blocked { "b" } else { "" }))
+        .collect();
+    let contact = match &p.contact {
+        None => "none (fewer than two shaped bodies, or --no-contact)".to_owned(),
+        Some(c) => format!(
+            "{} pairs tracked at the end, {} backups, {} blocked steps (b), deepest penetration {:.2e} m",
+            c.tracked_pairs, c.backups, c.blocked, c.max_penetration_m
+        ),
+    };
     format!(
-        "place {} body {} mode {mode}: {verdict}\n  assembly     {} Newton iterations\n  steps        {} accepted, {} split (subgoal subdivision)\n  iterations   mean {:.2} per step, max {} (Choi & Cremer: fewer than 3 per drag step)\n  per step     {}\n  written      {}",
+        "place {} body {} mode {mode}: {verdict}\n  assembly     {} Newton iterations\n  steps        {} accepted, {} split (subgoal subdivision)\n  iterations   mean {:.2} per step, max {} (Choi & Cremer: fewer than 3 per drag step)\n  per step     {}\n  contact      {contact}\n  written      {}",
         a.scene,
         a.body,
         p.assembly_iterations,

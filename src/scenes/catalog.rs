@@ -91,6 +91,7 @@ pub const CATALOG: &[Entry] = &[
     entry("cluttered", ChoiCremer, "§1 (cluttered scenes)"),
     entry("pyramid-tilt", ChoiCremer, "§3.2.1, Fig. 6"),
     entry("box-slide", ChoiCremer, "§3.1–3.2 (witness changes)"),
+    entry("sit-on-chair", ChoiCremer, "Fig. 1 (a figure onto a chair)"),
     entry("room", GoseleStuerzlinger, "Fig. 1, 3, 4 (§3–5)"),
     entry("sphere-toy-400", Own, "Fig. 1's toy at 400 bodies"),
     entry("bennett", Own, "overconstrained loop"),

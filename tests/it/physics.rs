@@ -367,6 +367,20 @@ fn the_arm_pushes_the_box_across_the_table() {
 /// moment swings the last link about the tip (the arm's free motion); a
 /// capsule end centred on the finger point removes the spikes and the
 /// turn (0.005 rad), not the alternation (0.14 N).
+///
+/// Measured since (per tick): the hand-link does not move at the hand's
+/// 20 mm/s but in steps, about 30 µm on some ticks and 0 on others
+/// (whether the device target steps so is not checked yet), so each step
+/// strikes the box to about
+/// 30 mm/s for one tick and it coasts. Eq. 7 balances the *filtered* q̈:
+/// the strike's acceleration arrives over the next τ + τ_a while the
+/// contact row is open, so the box's m a is left unbalanced and never
+/// reaches the finger. Keeping a contact row that pushed in Eq. 7 for
+/// 3 (τ + τ_a) after its last push (force solve only, the step's factor
+/// without it) raised the felt mean to 0.19 N, but the larger felt force
+/// moves the simulated hand, the last link whips about the tip and kicks
+/// the box 1 cm ahead twice (moved 6.1 cm, turned 0.32 rad: the test
+/// above fails). Not merged.
 #[test]
 #[ignore = "open (issue 19): the box coasts ahead of the link between pushes; the hand feels 0.13 N of 0.49 N"]
 fn the_arm_push_is_felt_at_mu_m_g() {

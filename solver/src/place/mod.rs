@@ -22,14 +22,24 @@
 //! The written configuration always satisfies the mechanism's rows to the
 //! placement tolerance (it is a converged solve); an unreachable goal ends
 //! at the last converged subgoal and says so.
+//!
+//! With two or more shaped bodies, every solve also holds the
+//! non-penetration inequalities of the pairs the active set tracks
+//! (`contact.rs`): a step that penetrates is backed up and solved again with
+//! the pairs it met, and a goal inside another body ends against it.
 
+mod contact;
 mod path;
 
+pub use contact::ContactReport;
 pub use path::{Goal, GoalPath};
+
+use crate::geometry::ContactSettings;
+use contact::{Contact, blocked_reference};
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::placement::{Placement, PlacementError, PlacementOptions, SolveStatus};
+use crate::placement::{PlacementCache, PlacementError, PlacementOptions, SolveStatus};
 use crate::{BodyId, BuildError, FingerSpec, FingerTarget, Model, ModelBuilder};
 
 /// The two modes of §4.3 besides dragging.
@@ -61,7 +71,25 @@ pub struct PlaceOptions {
     /// more accurate solution at the end of move". Default 1e-6 (a
     /// micrometre, below a PHANToM's encoder resolution).
     pub intermediate_tolerance: f64,
+    /// Respect contact between shaped bodies (on by default; off, bodies
+    /// pass through each other as in a mechanism without shapes).
+    pub contact: bool,
+    /// Penetration (the narrow phase's, metres) above which a solved step
+    /// is backed up and solved again with the pairs it met. Default 1e-6:
+    /// a converged solve holds its witness rows to the placement tolerance,
+    /// so more than a micrometre means a pair or feature was missing.
+    pub penetration_tolerance_m: f64,
+    /// Pairs get rows once their surfaces are closer than this plus twice
+    /// the step (m; `[solver] contact_distance`'s default, 5 mm).
+    pub contact_distance_m: f64,
 }
+
+/// Backups of one step at most before it counts as failed (and is split).
+const MAX_BACKUPS: u32 = 3;
+
+/// Newton iterations a blocked step may take (at least; the per-step cap
+/// when that is higher): the placement's default cap.
+const BLOCKED_ITERATIONS: u32 = 50;
 
 impl Default for PlaceOptions {
     fn default() -> Self {
@@ -75,6 +103,9 @@ impl Default for PlaceOptions {
                 ..PlacementOptions::default()
             },
             intermediate_tolerance: 1e-6,
+            contact: true,
+            penetration_tolerance_m: 1e-6,
+            contact_distance_m: ContactSettings::default().contact_distance_m,
         }
     }
 }
@@ -89,6 +120,9 @@ pub struct Step {
     pub iterations: u32,
     /// How many halvings led to it.
     pub depth: u32,
+    /// The goal lay inside another body: the step ended against it
+    /// (`iterations` counts both solves, the goal's and the blocked one's).
+    pub blocked: bool,
 }
 
 /// What a placement did.
@@ -109,12 +143,18 @@ pub struct Placed {
     /// How the last attempted solve ended (`Converged` when the goal was
     /// placed).
     pub last_status: SolveStatus,
+    /// What contact did (`None`: fewer than two shaped bodies, or contact
+    /// off).
+    pub contact: Option<ContactReport>,
+    /// Distance from the body's origin to the goal position at the end, m.
+    pub goal_gap_m: f64,
 }
 
 impl Placed {
-    /// True when the body is at its goal.
+    /// True when the body is at its goal (the whole path solved, the last
+    /// step not blocked by contact).
     pub fn at_goal(&self) -> bool {
-        self.reached == 1.0
+        self.reached == 1.0 && !self.steps.last().is_some_and(|s| s.blocked)
     }
 
     /// Mean Newton iterations per accepted step (NaN without steps).
@@ -156,6 +196,16 @@ const GOAL_FINGER: &str = "goal";
 /// `rigid`): the same q layout as `builder.build_joints_only()` for scenes
 /// without contact fingers.
 pub fn goal_model(builder: &ModelBuilder, body: &str, rigid: bool) -> Result<Model, PlaceError> {
+    Ok(mechanism(builder, body, Some(rigid))?.build()?)
+}
+
+/// `builder`'s bodies and joints (and a goal finger on `body` when `goal`
+/// says point or rigid).
+fn mechanism(
+    builder: &ModelBuilder,
+    body: &str,
+    goal: Option<bool>,
+) -> Result<ModelBuilder, PlaceError> {
     let moving: Vec<&str> = builder
         .body_specs()
         .iter()
@@ -173,11 +223,13 @@ pub fn goal_model(builder: &ModelBuilder, body: &str, rigid: bool) -> Result<Mod
     for j in builder.joint_specs() {
         b.joint(j.clone());
     }
-    b.finger(match rigid {
-        true => FingerSpec::rigid(GOAL_FINGER, body, [0.0; 3]),
-        false => FingerSpec::point(GOAL_FINGER, body, [0.0; 3]),
-    });
-    Ok(b.build()?)
+    if let Some(rigid) = goal {
+        b.finger(match rigid {
+            true => FingerSpec::rigid(GOAL_FINGER, body, [0.0; 3]),
+            false => FingerSpec::point(GOAL_FINGER, body, [0.0; 3]),
+        });
+    }
+    Ok(b)
 }
 
 /// Places `body` of `builder`'s mechanism at `goal` (see the module docs).
@@ -188,20 +240,19 @@ pub fn place(
     opts: &PlaceOptions,
 ) -> Result<Placed, PlaceError> {
     goal.check()?;
-    let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !(positive(opts.pull_step_m) && positive(opts.pull_step_rad)) || opts.max_depth > 20 {
-        return Err(PlaceError::Invalid(
-            "pull steps must be finite and > 0, max_depth at most 20",
-        ));
-    }
-    if !positive(opts.intermediate_tolerance) {
-        return Err(PlaceError::Invalid(
-            "intermediate_tolerance must be finite and > 0",
-        ));
-    }
+    check_options(opts)?;
     let model = goal_model(builder, body, goal.orientation.is_some())?;
+    let free = mechanism(builder, body, None)?.build()?;
     let id = model.body_id(body).expect("checked above");
-    let mut placement = Placement::analyze(&model, &opts.placement)?;
+    let settings = ContactSettings {
+        contact_distance_m: opts.contact_distance_m,
+        penetration_tolerance_m: opts.penetration_tolerance_m,
+        ..ContactSettings::default()
+    };
+    let contact = match opts.contact {
+        true => Contact::new(&model, &free, settings),
+        false => None,
+    };
     let coarse = PlacementOptions {
         tolerance: opts.intermediate_tolerance.max(opts.placement.tolerance),
         step_tolerance: opts
@@ -209,10 +260,37 @@ pub fn place(
             .max(opts.placement.step_tolerance),
         ..opts.placement.clone()
     };
-    let intermediate = Placement::analyze(&model, &coarse)?;
+    // A blocked step ends on a contact face, where several rows become
+    // active at once (a box's four corners): Newton identifies that set
+    // in a few iterations more than a free step; the per-step cap would
+    // split it for no gain.
+    let blocked = |o: &PlacementOptions| PlacementOptions {
+        max_iterations: o.max_iterations.max(BLOCKED_ITERATIONS),
+        ..o.clone()
+    };
+    let mut run = Run {
+        blocked_fine: PlacementCache::new(blocked(&opts.placement), 8),
+        blocked_coarse: PlacementCache::new(blocked(&coarse), 8),
+        fine: PlacementCache::new(opts.placement.clone(), 8),
+        coarse: PlacementCache::new(coarse, 8),
+        model: &model,
+        free: &free,
+        body: id,
+        path: None,
+        max_depth: opts.max_depth,
+        penetration_tolerance_m: opts.penetration_tolerance_m,
+        contact,
+        steps: Vec::new(),
+        splits: 0,
+        last: SolveStatus::Converged,
+    };
     let mut q = model.q0().to_vec();
     let start = pose(&model, &q, id);
-    let assembly = solve_at(&mut placement, &model, &mut q, &target(start.0, start.1))?;
+    if let Some(c) = &mut run.contact {
+        c.expect_motion(0.0);
+        c.cycle(&q)?;
+    }
+    let assembly = run.solve(&mut q, &target(start.0, start.1), true)?;
     if assembly.0 != SolveStatus::Converged {
         return Err(PlaceError::Assembly(assembly.0));
     }
@@ -222,16 +300,11 @@ pub fn place(
         Mode::Solve => 1,
         Mode::Pull => path.segments(opts.pull_step_m, opts.pull_step_rad),
     };
-    let mut run = Run {
-        placement,
-        intermediate,
-        model: &model,
-        path: &path,
-        max_depth: opts.max_depth,
-        steps: Vec::new(),
-        splits: 0,
-        last: SolveStatus::Converged,
-    };
+    if let Some(c) = &mut run.contact {
+        c.expect_motion(path.length_m() / segments as f64);
+        c.cycle(&q)?;
+    }
+    run.path = Some(path);
     let mut reached = 0.0;
     for k in 1..=segments {
         let b = k as f64 / segments as f64;
@@ -243,6 +316,7 @@ pub fn place(
             }
         }
     }
+    let goal_gap_m = (pose(&model, &q, id).0 - goal.position_m).norm();
     Ok(Placed {
         model: model.clone(),
         q,
@@ -251,18 +325,48 @@ pub fn place(
         splits: run.splits,
         reached,
         last_status: run.last,
+        contact: run.contact.map(|c| c.report),
+        goal_gap_m,
     })
+}
+
+fn check_options(opts: &PlaceOptions) -> Result<(), PlaceError> {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !(positive(opts.pull_step_m) && positive(opts.pull_step_rad)) || opts.max_depth > 20 {
+        return Err(PlaceError::Invalid(
+            "pull steps must be finite and > 0, max_depth at most 20",
+        ));
+    }
+    if !positive(opts.intermediate_tolerance) {
+        return Err(PlaceError::Invalid(
+            "intermediate_tolerance must be finite and > 0",
+        ));
+    }
+    if !(positive(opts.penetration_tolerance_m) && positive(opts.contact_distance_m)) {
+        return Err(PlaceError::Invalid(
+            "penetration_tolerance_m and contact_distance_m must be finite and > 0",
+        ));
+    }
+    Ok(())
 }
 
 /// The state of one placement along its path.
 struct Run<'a> {
-    /// The final goal's solver (full tolerance).
-    placement: Placement,
-    /// Intermediate goals' solver (`intermediate_tolerance`).
-    intermediate: Placement,
+    /// Solvers of final goals (full tolerance) and of intermediate ones
+    /// (`intermediate_tolerance`), by structure (contact rows change it).
+    fine: PlacementCache,
+    coarse: PlacementCache,
+    /// The same for blocked steps (a higher iteration cap).
+    blocked_fine: PlacementCache,
+    blocked_coarse: PlacementCache,
+    /// The mechanism with the goal finger, and without it.
     model: &'a Model,
-    path: &'a GoalPath,
+    free: &'a Model,
+    body: BodyId,
+    path: Option<GoalPath>,
     max_depth: u32,
+    penetration_tolerance_m: f64,
+    contact: Option<Contact>,
     steps: Vec<Step>,
     splits: u32,
     last: SolveStatus,
@@ -271,7 +375,8 @@ struct Run<'a> {
 impl Run<'_> {
     /// Solves from path fraction `a` (where q is) to `b`; on failure splits
     /// in two. False when a step at `max_depth` failed (q is then the last
-    /// converged configuration).
+    /// converged configuration). With contact, the active set's last cycle
+    /// is at q on entry and on return.
     fn segment(
         &mut self,
         q: &mut Vec<f64>,
@@ -280,18 +385,30 @@ impl Run<'_> {
         depth: u32,
     ) -> Result<bool, PlaceError> {
         let saved = q.clone();
-        let (p, r) = self.path.at(b);
-        let solver = match b >= 1.0 {
-            true => &mut self.placement,
-            false => &mut self.intermediate,
-        };
-        let (status, iterations) = solve_at(solver, self.model, q, &target(p, r))?;
-        self.last = status;
-        if status == SolveStatus::Converged {
+        let (p, r) = self.path.as_ref().expect("set before segments").at(b);
+        for _ in 0..=MAX_BACKUPS {
+            let Some((iterations, blocked)) = self.attempt(q, &saved, p, r, b >= 1.0)? else {
+                break;
+            };
+            if let Some(c) = &mut self.contact {
+                let cycle = c.cycle(q)?;
+                if cycle.max_penetration_m > self.penetration_tolerance_m {
+                    // Backup (§3.2): back to the step's start, where the
+                    // pairs it met are now tracked, and again.
+                    c.report.backups += 1;
+                    q.copy_from_slice(&saved);
+                    c.cycle(q)?;
+                    continue;
+                }
+                c.report.max_penetration_m =
+                    c.report.max_penetration_m.max(cycle.max_penetration_m);
+                c.report.blocked += u32::from(blocked);
+            }
             self.steps.push(Step {
                 t: b,
                 iterations,
                 depth,
+                blocked,
             });
             return Ok(true);
         }
@@ -303,18 +420,98 @@ impl Run<'_> {
         let m = 0.5 * (a + b);
         Ok(self.segment(q, a, m, depth + 1)? && self.segment(q, m, b, depth + 1)?)
     }
-}
 
-/// One Newton-KKT solve from `q` with q_ref = q (least change, Eq. 4).
-fn solve_at(
-    placement: &mut Placement,
-    model: &Model,
-    q: &mut [f64],
-    target: &FingerTarget,
-) -> Result<(SolveStatus, u32), PlaceError> {
-    let q_ref = q.to_vec();
-    let info = placement.solve(model, q, &q_ref, std::slice::from_ref(target))?;
-    Ok((info.status, info.iterations))
+    /// One solve of a step from `saved` (= q) to the goal (p, r): the goal
+    /// as a row, or, when that fails while pairs are tracked, the blocked
+    /// form (the goal as the objective). Some((iterations, blocked)) when a
+    /// solve converged (q is its result), None otherwise (q is `saved`).
+    fn attempt(
+        &mut self,
+        q: &mut [f64],
+        saved: &[f64],
+        p: Vector3<f64>,
+        r: UnitQuaternion<f64>,
+        fine: bool,
+    ) -> Result<Option<(u32, bool)>, PlaceError> {
+        let (status, iterations) = self.solve(q, &target(p, r), fine)?;
+        self.last = status;
+        if status == SolveStatus::Converged {
+            return Ok(Some((iterations, false)));
+        }
+        q.copy_from_slice(saved);
+        if !self.contact.as_ref().is_some_and(|c| c.any_pairs()) {
+            return Ok(None);
+        }
+        let turns = self.path.as_ref().is_some_and(|path| path.turns());
+        let orientation = turns.then_some(r);
+        let q_ref = blocked_reference(self.model, saved, self.body, p, orientation);
+        let (mut status, mut more) = self.solve_blocked(q, &q_ref, fine)?;
+        if status != SolveStatus::Converged && fine {
+            // A final goal against a contact face with many rows active
+            // at once (a figure's pelvis and thighs on a seat) may not
+            // reach the placement's 1 nm within the cap; it ends at the
+            // intermediate tolerance instead (1 µm by default).
+            q.copy_from_slice(saved);
+            let (s, m) = self.solve_blocked(q, &q_ref, false)?;
+            (status, more) = (s, more + m);
+        }
+        if status != SolveStatus::Converged {
+            q.copy_from_slice(saved);
+            return Ok(None);
+        }
+        self.last = status;
+        let gap = (pose(self.model, q, self.body).0 - p).norm();
+        Ok(Some((
+            iterations + more,
+            gap > self.penetration_tolerance_m,
+        )))
+    }
+
+    /// One Newton-KKT solve from `q` with q_ref = q (least change, Eq. 4),
+    /// the goal finger at `target`, the contact rows where there are any.
+    fn solve(
+        &mut self,
+        q: &mut [f64],
+        target: &FingerTarget,
+        fine: bool,
+    ) -> Result<(SolveStatus, u32), PlaceError> {
+        let (model, table) = match &self.contact {
+            Some(c) => (c.goal_model(), c.table()),
+            None => (self.model, &[][..]),
+        };
+        let cache = if fine {
+            &mut self.fine
+        } else {
+            &mut self.coarse
+        };
+        let placement = cache.get(model)?;
+        placement.set_witnesses(model, table)?;
+        let q_ref = q.to_vec();
+        let info = placement.solve(model, q, &q_ref, std::slice::from_ref(target))?;
+        Ok((info.status, info.iterations))
+    }
+
+    /// The blocked form: min ½‖q − q_ref‖² subject to the joints and the
+    /// contact rows, no goal row.
+    fn solve_blocked(
+        &mut self,
+        q: &mut [f64],
+        q_ref: &[f64],
+        fine: bool,
+    ) -> Result<(SolveStatus, u32), PlaceError> {
+        let (model, table) = match &self.contact {
+            Some(c) => (c.free_model(), c.table()),
+            None => (self.free, &[][..]),
+        };
+        let cache = match fine {
+            true => &mut self.blocked_fine,
+            false => &mut self.blocked_coarse,
+        };
+        let placement = cache.get(model)?;
+        placement.set_witnesses(model, table)?;
+        let info = placement.solve(model, q, q_ref, &[])?;
+        Ok((info.status, info.iterations))
+    }
 }
 
 fn target(p: Vector3<f64>, r: UnitQuaternion<f64>) -> FingerTarget {

@@ -71,6 +71,11 @@ impl GoalPath {
         (n as usize).max(1)
     }
 
+    /// Whether the goal has an orientation (a rigid goal).
+    pub fn turns(&self) -> bool {
+        self.r1.is_some()
+    }
+
     /// Length of the point's path, metres.
     pub fn length_m(&self) -> f64 {
         (self.p1 - self.p0).norm()

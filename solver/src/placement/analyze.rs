@@ -183,6 +183,25 @@ impl Placement {
         &self.history
     }
 
+    /// Sets the witness table of `model`'s contact rows (its first
+    /// `table.len()` slots, [`Evaluation::witnesses`]) for the next
+    /// [`solve`](Self::solve) on `model`: a placement that respects
+    /// non-penetration (Choi & Cremer §3.2 inside §4.3's modes,
+    /// `crate::place`). Binds to `model` first (same structure required).
+    pub fn set_witnesses(
+        &mut self,
+        model: &Model,
+        table: &[crate::constraint::witness::Witness],
+    ) -> Result<(), PlacementError> {
+        self.bind(model)?;
+        let slots = self.eval.witnesses_mut();
+        if table.len() > slots.len() {
+            return Err(PlacementError::StructureMismatch);
+        }
+        slots[..table.len()].copy_from_slice(table);
+        Ok(())
+    }
+
     /// Binds to `model`: same structure required; a different model object of
     /// that structure (e.g. a contact set that changed back) gets a fresh
     /// [`Evaluation`] (one allocation, not per iteration).

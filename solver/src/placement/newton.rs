@@ -136,7 +136,7 @@ impl Placement {
                     nu = nu * 100.0 + opt.damping;
                     regularised = true;
                 } else {
-                    step = norm_inf(&self.dq).max(norm_inf(&self.dy));
+                    step = norm_inf(&self.dq).max(self.slack_step());
                     if least_squares {
                         let psi = (theta, f, opt.damping);
                         if let Some(rho) = self.lm_trial(model, q, q_ref, targets, psi) {
@@ -216,6 +216,20 @@ impl Placement {
         self.update_residual();
         let damping = if least_squares { opt.damping + nu } else { mu };
         Ok(self.info(model, status, iterations, step, regularised, damping))
+    }
+
+    /// The slack step in the rows' own units: the largest change of Y_j²
+    /// (what C_j is compared with), |(Y_j + δY_j)² − Y_j²|. δY itself is in
+    /// √metres: a row resting at its bound with no load (Y at `Y_FLOOR`,
+    /// λ = 0) has Newton halve Y each iteration, so a step test on δY would
+    /// take ten iterations to see what Y² (1e-12 m) shows at once (a joint
+    /// limit placed exactly at the initial pose, Choi & Cremer Fig. 1's
+    /// figure, `scenes/sit-on-chair.toml`).
+    fn slack_step(&self) -> f64 {
+        self.y
+            .iter()
+            .zip(&self.dy)
+            .fold(0.0, |m, (y, d)| m.max(((y + d) * (y + d) - y * y).abs()))
     }
 
     /// ½‖q − q_ref‖²_W.

@@ -8,6 +8,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod alloc;
 mod cache;
 mod common;
+mod contact;
 mod convergence;
 mod dense_columns;
 mod inequalities;
