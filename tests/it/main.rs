@@ -25,6 +25,7 @@ mod place;
 mod preflight;
 mod reference;
 mod replay;
+mod resting;
 mod said;
 mod scene_format;
 mod scenes;

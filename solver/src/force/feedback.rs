@@ -63,8 +63,18 @@ pub(crate) struct Feedback {
     /// Per row: a friction stick row that is currently sticking (active).
     pub stick: Vec<bool>,
     /// Per row: an inequality row a step of this tick predicted would be
-    /// violated, kept active until the tick's force solve.
+    /// violated, kept active until the tick's force solve (and through it,
+    /// see `carry_forced`).
     pub forced: Vec<bool>,
+    /// Set by a tick whose last in-tick activation took no step after it
+    /// (out of refactorisations, or stopped): its forced rows have no
+    /// multiplier from a step yet, so the force solve at the tick's end keeps
+    /// them active (unless they pull) instead of dropping them. A resting
+    /// contact sits at gap 0 with λ = 0 then, and would be released and
+    /// activated again every tick (issue 23: a 4-layer pile needs four
+    /// activations, one per layer, and never got past three). Consumed by
+    /// the next `compute`.
+    pub carry_forced: bool,
     /// The fingertip pairs with friction rows.
     pub friction: Vec<FrictionPair>,
     /// Ticks on which a sticking pair left the Coulomb cone (slipped).
@@ -178,6 +188,7 @@ impl Feedback {
             releases: 0,
             stick: vec![false; model.n_rows()],
             forced: vec![false; model.n_rows()],
+            carry_forced: false,
             normal_force_n: vec![0.0; friction.len()],
             compliant: model
                 .rows()
@@ -365,6 +376,7 @@ impl Feedback {
         out: &mut Vec<f64>,
     ) -> Result<(), FactorError> {
         self.forced.fill(false);
+        self.carry_forced = false;
         // cy is scratch here: zero multipliers.
         self.cy.fill(0.0);
         let zero = std::mem::take(&mut self.cy);
@@ -457,8 +469,11 @@ impl Feedback {
         out: &mut [FingerOutput],
     ) -> Result<(), FactorError> {
         // Rows forced active by the tick's steps are decided afresh by their
-        // multipliers and values now.
-        self.forced.fill(false);
+        // multipliers and values now, unless no step gave them a multiplier
+        // (`carry_forced`): those stay active while they push.
+        if !std::mem::take(&mut self.carry_forced) {
+            self.forced.fill(false);
+        }
         if advance {
             self.motion.advance(&self.masses, q, dt_s);
         }
@@ -511,6 +526,7 @@ impl Feedback {
                 && self.solve.joint_multiplier(j) > 0.0
             {
                 self.scale[row] = 0.0;
+                self.forced[row] = false;
                 released = true;
             }
         }

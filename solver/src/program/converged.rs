@@ -197,6 +197,7 @@ impl Program {
             self.inertial.vel.copy_from(&before.vel);
         }
         self.feedback.forced.fill(false);
+        self.feedback.carry_forced = false;
         self.q.copy_from_slice(&before.q);
         self.lambda.copy_from_slice(&before.lambda);
         if before.last_targets.len() == self.last_targets.len() {

@@ -182,6 +182,22 @@ impl Program {
     /// Returns the number of steps applied: the projected rule stops early
     /// (refusing the offending step) when its chord iteration diverges.
     fn iterations(&mut self, targets: &[FingerTarget], n: u32) -> Result<u32, (TickOutcome, u32)> {
+        let mut pending = false;
+        let done = self.iterations_inner(targets, n, &mut pending);
+        // Rows activated after the last step taken have no multiplier from
+        // a step: the tick's force solve keeps them (`Feedback::carry_forced`).
+        self.feedback.carry_forced = pending;
+        done
+    }
+
+    /// [`iterations`](Self::iterations); `pending` tells whether rows were
+    /// activated after the last step taken.
+    fn iterations_inner(
+        &mut self,
+        targets: &[FingerTarget],
+        n: u32,
+        pending: &mut bool,
+    ) -> Result<u32, (TickOutcome, u32)> {
         let mut allowed = f64::INFINITY;
         self.activations = 0;
         // The contact speed limit is a budget for the whole tick: a
@@ -211,6 +227,7 @@ impl Program {
             };
             match done {
                 Ok(Step::Taken(size)) => {
+                    *pending = false;
                     allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
                     k += 1;
                     self.speed_limited |= self.projected.last_speed_limited();
@@ -222,6 +239,7 @@ impl Program {
                 }
                 Ok(Step::Activate) if self.activations < MAX_ACTIVATIONS => {
                     self.activations += 1;
+                    *pending = true;
                     if self
                         .feedback
                         .force_active(&self.scaling, &self.settings, &self.ev, &self.lambda)
@@ -234,6 +252,7 @@ impl Program {
                     // Out of refactorisations this tick: stop stepping rather
                     // than step through the contact; the force solve at the
                     // end of the tick activates the rows for the next one.
+                    *pending = true;
                     return Ok(k);
                 }
                 Ok(Step::Refused) => return Ok(k),
