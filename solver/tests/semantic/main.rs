@@ -11,6 +11,7 @@ mod algorithms;
 mod common;
 // The solver tests' finite differences, shared.
 mod fast;
+mod presence;
 #[allow(dead_code)]
 #[path = "../solver/fd.rs"]
 mod fd;
