@@ -92,6 +92,11 @@ pub const CATALOG: &[Entry] = &[
     entry("pyramid-tilt", ChoiCremer, "§3.2.1, Fig. 6"),
     entry("box-slide", ChoiCremer, "§3.1–3.2 (witness changes)"),
     entry("room", GoseleStuerzlinger, "Fig. 1, 3, 4 (§3–5)"),
+    entry(
+        "board-wall",
+        GoseleStuerzlinger,
+        "Fig. 5/6 (undirected cycle); §3.3 add/remove, §6 modes",
+    ),
     entry("sphere-toy-400", Own, "Fig. 1's toy at 400 bodies"),
     entry("bennett", Own, "overconstrained loop"),
     entry("lattice", Own, "64 loops"),

@@ -16,7 +16,8 @@
 //!             vector is −a's, then slid over a's plane on a grid of spots,
 //!             nearest first; the first spot with b included in a, no
 //!             collision, no directed cycle and every keep-out ball (the
-//!             fingertips) clear wins → satisfied(a, b) at once (aligned, not
+//!             fingertips) clear wins, refined by bisection towards the
+//!             wanted spot (so it ends where the valid region begins) → satisfied(a, b) at once (aligned, not
 //!             pending); an object without bindings goes where `near` is if
 //!             that is clear; other objects' free bindings then aligned with
 //!             its offers are satisfied (the loader's rule, nothing moves)
@@ -38,6 +39,15 @@ use crate::geometry::Pose3;
 /// Spots tried per offer area at most when adding (a grid over the offer
 /// polygon's bounding rectangle, nearest to the wanted place first).
 pub const ADD_SPOTS: usize = 4096;
+
+/// Spots along a side of an offer, at most (the grid's step is the
+/// larger of this fraction of the offer and a quarter of the binding's
+/// radius).
+pub const GRID_SIDE: usize = 64;
+
+/// Bisections refining the first valid grid spot towards the wanted place
+/// (the grid step over 2^24: well under a micrometre).
+pub const REFINE_STEPS: usize = 24;
 
 /// What a removal did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -254,33 +264,66 @@ impl SemanticScene {
             lo = lo.inf(&w);
             hi = hi.sup(&w);
         }
-        let step = (ab.radius_m / 4.0).max(1e-3);
-        let side = |l: f64, h: f64| ((h - l) / step).floor() as usize + 1;
-        let (nu, nv) = (side(lo.x, hi.x), side(lo.y, hi.y));
-        let mut spots: Vec<Vector3<f64>> = (0..nu * nv)
-            .map(|k| {
-                let (i, j) = (k % nu, k / nu);
-                origin + u * (lo.x + i as f64 * step) + v * (lo.y + j as f64 * step)
-            })
-            .chain(std::iter::once(want))
-            .collect();
+        // A quarter of the binding's radius, coarser on offers far larger
+        // than it (at most about GRID_SIDE² spots; the bisection refines).
+        let step = (ab.radius_m / 4.0)
+            .max((hi - lo).max() / GRID_SIDE as f64)
+            .max(1e-3);
+        // A grid through the wanted spot, over the offer's rectangle.
+        let w = want - origin;
+        let (wu, wv) = (w.dot(&u), w.dot(&v));
+        let range = |l: f64, h: f64, c: f64| {
+            ((l - c) / step).floor() as i64..=((h - c) / step).ceil() as i64
+        };
+        let (ri, rj) = (range(lo.x, hi.x, wu), range(lo.y, hi.y, wv));
+        let mut spots: Vec<Vector3<f64>> = Vec::new();
+        for i in ri {
+            for j in rj.clone() {
+                spots.push(want + u * (i as f64 * step) + v * (j as f64 * step));
+            }
+        }
         spots.sort_by(|x, y| (x - want).norm().total_cmp(&(y - want).norm()));
         spots.truncate(ADD_SPOTS);
         let saved = self.objects[o.index()].pose;
+        let at = |p: Vector3<f64>| Pose3 {
+            r: p - rot * c_local,
+            rot,
+        };
         let mut found = None;
         for p in spots {
-            let pose = Pose3 {
-                r: p - rot * c_local,
-                rot,
-            };
-            self.set_pose(o, pose);
-            if self.aligned(b, a, false) && self.clear_at(o, pose, keep_out) {
+            if self.valid_at(b, a, at(p), keep_out) {
+                // The grid's spot, refined towards the wanted one: the
+                // boundary of the valid region on the segment between them.
+                let (mut good, mut bad) = (p, want);
+                for _ in 0..REFINE_STEPS {
+                    let mid = (good + bad) / 2.0;
+                    if self.valid_at(b, a, at(mid), keep_out) {
+                        good = mid;
+                    } else {
+                        bad = mid;
+                    }
+                }
+                let pose = at(good);
                 found = Some(((pose.r - near.r).norm(), pose));
                 break;
             }
         }
         self.set_pose(o, saved);
         found
+    }
+
+    /// Whether binding `b`'s object at `pose` lies on offer `a` (aligned)
+    /// and clear of everything (leaves it there).
+    fn valid_at(
+        &mut self,
+        b: AreaId,
+        a: AreaId,
+        pose: Pose3,
+        keep_out: &[(Vector3<f64>, f64)],
+    ) -> bool {
+        let o = self.areas[b.index()].body;
+        self.set_pose(o, pose);
+        self.aligned(b, a, false) && self.clear_at(o, pose, keep_out)
     }
 
     /// Whether `o` at `pose` collides with nothing (touching is not
