@@ -289,23 +289,33 @@ impl SemanticScene {
             r: p - rot * c_local,
             rot,
         };
-        let mut found = None;
+        // The first valid spot and the valid ones up to two steps farther
+        // (a coarse grid may reach the region's nearest point along another
+        // ray), each refined towards the wanted spot by bisection: the
+        // boundary of the valid region on the segment between them.
+        let mut found: Option<(f64, Pose3)> = None;
+        let mut reach = f64::INFINITY;
         for p in spots {
-            if self.valid_at(b, a, at(p), keep_out) {
-                // The grid's spot, refined towards the wanted one: the
-                // boundary of the valid region on the segment between them.
-                let (mut good, mut bad) = (p, want);
-                for _ in 0..REFINE_STEPS {
-                    let mid = (good + bad) / 2.0;
-                    if self.valid_at(b, a, at(mid), keep_out) {
-                        good = mid;
-                    } else {
-                        bad = mid;
-                    }
-                }
-                let pose = at(good);
-                found = Some(((pose.r - near.r).norm(), pose));
+            if (p - want).norm() > reach {
                 break;
+            }
+            if !self.valid_at(b, a, at(p), keep_out) {
+                continue;
+            }
+            reach = reach.min((p - want).norm() + 2.0 * step);
+            let (mut good, mut bad) = (p, want);
+            for _ in 0..REFINE_STEPS {
+                let mid = (good + bad) / 2.0;
+                if self.valid_at(b, a, at(mid), keep_out) {
+                    good = mid;
+                } else {
+                    bad = mid;
+                }
+            }
+            let pose = at(good);
+            let cost = (pose.r - near.r).norm();
+            if found.as_ref().is_none_or(|f| cost < f.0) {
+                found = Some((cost, pose));
             }
         }
         self.set_pose(o, saved);
