@@ -45,6 +45,10 @@ pub const ADD_SPOTS: usize = 4096;
 /// radius).
 pub const GRID_SIDE: usize = 64;
 
+/// An added object overlaps nothing deeper than this, m (touching is
+/// allowed: round-off of exactly touching shapes stays far below it).
+pub const PLACE_OVERLAP_M: f64 = 1e-9;
+
 /// Bisections refining the first valid grid spot towards the wanted place
 /// (the grid step over 2^24: well under a micrometre).
 pub const REFINE_STEPS: usize = 24;
@@ -336,17 +340,37 @@ impl SemanticScene {
         self.aligned(b, a, false) && self.clear_at(o, pose, keep_out)
     }
 
-    /// Whether `o` at `pose` collides with nothing (touching is not
-    /// colliding) and keeps clear of every ball.
+    /// Whether `o` at `pose` overlaps nothing deeper than [`PLACE_OVERLAP_M`]
+    /// (stricter than the collision tolerance: an added object does not
+    /// start inside another, which the contact rows would then push apart)
+    /// and keeps clear of every ball.
     fn clear_at(&mut self, o: BodyId, pose: Pose3, keep_out: &[(Vector3<f64>, f64)]) -> bool {
         let saved = self.objects[o.index()].pose;
         self.set_pose(o, pose);
         let balls = keep_out
             .iter()
             .all(|(c, r)| self.ball_distance_m(o, c, *r) > 0.0);
-        let free = self.first_collision(&[o], &[pose], None).is_none();
+        let free = balls && self.overlaps(o, &pose).is_none();
         self.set_pose(o, saved);
-        balls && free
+        free
+    }
+
+    /// The first tested object `o` overlaps deeper than [`PLACE_OVERLAP_M`]
+    /// at `pose`.
+    fn overlaps(&self, o: BodyId, pose: &Pose3) -> Option<BodyId> {
+        let c = self.objects[o.index()].collider.as_ref()?;
+        let bb = c.full.compute_aabb(&pose.to_parry());
+        let (lo, hi) = super::scene::aabb(
+            [
+                crate::geometry::convert::to_na(bb.mins),
+                crate::geometry::convert::to_na(bb.maxs),
+            ]
+            .into_iter(),
+            self.settings.collision_tolerance_m,
+        );
+        self.objects_near(&lo, &hi).into_iter().map(BodyId).find(|&y| {
+            self.tested(o, y) && self.overlap_m(o, pose, y, &self.objects[y.index()].pose) > PLACE_OVERLAP_M
+        })
     }
 
     /// Takes object `o` and its offers out of the grids.
