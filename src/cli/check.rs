@@ -4,6 +4,7 @@ use crate::scenes::{Scene, resolve};
 use crate::session::{self, Plan, SessionOptions};
 use anyhow::Result;
 use haptloop_rt::clock::{MockClock, Nanos};
+use haptloop_rt::schedule::StopFlag;
 use haptloop_solver::scene::HandPath;
 use haptloop_solver::scene::SceneError;
 use haptloop_solver::{Grasp, RowUnit, Sense};
@@ -24,7 +25,9 @@ pub const EXIT_FINDINGS: u8 = 3;
 /// the workspace, a `trial_seconds` deterministic trial). Prints the
 /// compiled summary and the findings: exit 0 without a warning, 3 with
 /// one; the located error and exit 1 when the scene cannot run.
-pub fn run(arg: &str, trial_seconds: f64) -> Result<ExitCode> {
+/// A signal during the trial stops it; the command then says how far it
+/// got and exits 130 without findings.
+pub fn run(arg: &str, trial_seconds: f64, stop: &StopFlag) -> Result<ExitCode> {
     let scene = match resolve(arg) {
         Ok(scene) => scene,
         Err(e) => {
@@ -37,7 +40,14 @@ pub fn run(arg: &str, trial_seconds: f64) -> Result<ExitCode> {
         return Ok(ExitCode::from(1));
     }
     super::emit(summary(&scene).trim_end_matches('\n'));
-    let findings = match super::preflight::findings(&scene, trial_seconds) {
+    let findings = match super::preflight::findings(&scene, trial_seconds, stop) {
+        Ok(_) if stop.is_requested() => {
+            eprintln!(
+                "haptloop check: interrupted during the {trial_seconds} s trial: no preflight \
+                 findings (the scene loads and builds; `--seconds` shortens the trial)"
+            );
+            return Ok(ExitCode::from(super::EXIT_SIGNAL));
+        }
         Ok(f) => f,
         Err(e) => {
             let l = &scene.loaded;

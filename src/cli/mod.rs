@@ -149,7 +149,7 @@ pub fn run() -> Result<ExitCode> {
     match cli.command {
         Some(Command::Probe(args)) => probe::run(&args, &stop),
         Some(Command::Scenes) => scenes::run(),
-        Some(Command::Check { scene, seconds }) => check::run(&scene, seconds),
+        Some(Command::Check { scene, seconds }) => check::run(&scene, seconds, &stop),
         Some(Command::Bench(args)) => bench::run(&args, &stop),
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Run(args)) => run::run(&args, &stop),

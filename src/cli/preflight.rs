@@ -47,11 +47,16 @@ pub struct Finding {
 }
 
 /// Every finding, in the order above (empty when nothing was found).
-pub fn findings(scene: &Scene, trial_seconds: f64) -> anyhow::Result<Vec<Finding>> {
+/// `stop` (the command's signal flag) ends the trial at its next tick.
+pub fn findings(
+    scene: &Scene,
+    trial_seconds: f64,
+    stop: &StopFlag,
+) -> anyhow::Result<Vec<Finding>> {
     let mut out = Vec::new();
     out.extend(assembly(scene)?);
     out.extend(workspace(scene)?);
-    out.extend(trial(scene, trial_seconds)?);
+    out.extend(trial(scene, trial_seconds, stop)?);
     Ok(out)
 }
 
@@ -203,6 +208,35 @@ fn workspace(scene: &Scene) -> anyhow::Result<Vec<Finding>> {
     Ok(out)
 }
 
+/// The trial's tick against the period it must fit in real time (the
+/// monotonic clock's whole tick; the trial itself runs on a mock clock). A
+/// median over twice the period is a warning: most ticks of a real-time run
+/// would overrun, whatever the machine's load. The tail is not judged here:
+/// on a shared machine it measures the load, not the scene.
+fn tick_cost(scene: &Scene, o: &session::SessionOutcome, seconds: f64) -> Option<Finding> {
+    let t = o.stats.stages.tick.summary();
+    let period_us = 1e6 / f64::from(o.plan.rate_hz);
+    let p50 = t.p50 as f64 / 1e3;
+    if t.count == 0 || p50 <= 2.0 * period_us {
+        return None;
+    }
+    let span = match scene.loaded.text.find("[solver]") {
+        Some(at) => at..at + 1,
+        None => scene.loaded.spec.scene.name.span(),
+    };
+    Some(warning(
+        scene,
+        span,
+        format!(
+            "in a {seconds} s trial the tick costs {p50:.0} µs at the median, over twice the \
+             {period_us:.0} µs period at {} Hz: most ticks of a real-time run would overrun — \
+             lower `[solver] rate_hz` or `iterations`, or make the scene smaller (`haptloop \
+             run --deterministic` reports the tick's stages)",
+            o.plan.rate_hz
+        ),
+    ))
+}
+
 fn trial_options(seconds: f64) -> SessionOptions {
     SessionOptions {
         seconds,
@@ -212,12 +246,13 @@ fn trial_options(seconds: f64) -> SessionOptions {
 }
 
 /// A deterministic trial of the session.
-fn trial(scene: &Scene, seconds: f64) -> anyhow::Result<Vec<Finding>> {
+fn trial(scene: &Scene, seconds: f64, stop: &StopFlag) -> anyhow::Result<Vec<Finding>> {
     let plan = Plan::new(scene, &trial_options(seconds))?;
-    let o = session::run(scene, plan, &StopFlag::new(), &mut |_| {})?;
+    let o = session::run(scene, plan, stop, &mut |_| {})?;
     let mut out = Vec::new();
     let name_span = scene.loaded.spec.scene.name.span();
     let s = &o.stats;
+    out.extend(tick_cost(scene, &o, seconds));
     if s.solver_failures > 0 {
         let kinds: Vec<String> = session::FailureKind::ALL
             .iter()

@@ -41,9 +41,10 @@ pub struct RunArgs {
     /// Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
     /// default) or `matvec` (experimental: no factorisation in the tick,
     /// conjugate gradients preconditioned by a factor the slow loop
-    /// refreshes; not for contact; measured slower than `cholesky` and
-    /// failing ticks on the Bennett linkage and the lattice, BENCHMARKS.md),
-    /// `matvec:N` to cap its iterations at N (default 4).
+    /// refreshes, a solve that reaches the cap redone with a factorisation;
+    /// not for contact; measured slower than `cholesky` on every mechanism,
+    /// BENCHMARKS.md), `matvec:N` to cap its iterations at N (default 64),
+    /// `cg:N` (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the

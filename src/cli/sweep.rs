@@ -32,8 +32,10 @@ pub struct SweepArgs {
     /// Update rules: `projected`, `gradient`.
     #[arg(long, value_delimiter = ',', default_value = "gradient,projected", value_parser = values::update_rule)]
     pub update: Vec<UpdateRule>,
-    /// Eq. 7 solvers: `cholesky`, `matvec` (the matvec-only tick, at most 4
-    /// conjugate-gradient iterations a solve), `matvec:N`.
+    /// Eq. 7 solvers: `cholesky`, `matvec` (the matvec-only tick, each
+    /// conjugate-gradient solve to its tolerance within a cap of 64
+    /// iterations), `matvec:N`, `cg:N` (Jacobi-preconditioned, gradient
+    /// update only).
     #[arg(long, value_delimiter = ',', default_value = "cholesky", value_parser = values::force_solver)]
     pub force_solver: Vec<haptloop_solver::ForceSolver>,
     /// Constraint gains K (each finite, > 0). Default: the scene's.

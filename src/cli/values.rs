@@ -97,8 +97,10 @@ pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
 
 /// The Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
 /// default) or `matvec` (the matvec-only tick: conjugate gradients
-/// preconditioned by a factor the slow loop refreshes, at most 4 iterations
-/// a solve), `matvec:N` for a cap of N (1–1000).
+/// preconditioned by a factor the slow loop refreshes, each solve to its
+/// tolerance within a cap of 64 iterations), `matvec:N` for a cap of N
+/// (1–1000), `cg:N` (Jacobi-preconditioned conjugate gradients, at most N
+/// iterations per right-hand side, 1–1000; gradient update only).
 pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
     use haptloop_solver::ForceSolver;
     let s = s.trim();
@@ -111,8 +113,14 @@ pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
                 "`{n}` is not an iteration cap of 1–1000 (as in `matvec:8`)"
             )),
         },
+        Some(("cg", n)) => match n.trim().parse::<u32>() {
+            Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::ConjugateGradient { max_iterations }),
+            _ => Err(format!(
+                "`{n}` is not an iteration cap of 1–1000 (as in `cg:64`)"
+            )),
+        },
         _ => Err(format!(
-            "unknown force solver `{s}` (expected `cholesky`, `matvec` or `matvec:N`)"
+            "unknown force solver `{s}` (expected `cholesky`, `matvec`, `matvec:N` or `cg:N`)"
         )),
     }
 }

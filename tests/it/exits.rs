@@ -255,3 +255,40 @@ fn no_recommendation_says_why_for_each_point() {
     assert!(!table.contains("no point has"), "{table}");
     assert_eq!(json["stopped_early"], false);
 }
+
+/// Ctrl-C during `check`'s trial stops the trial at its next tick and exits
+/// 130 saying so (the trial used to ignore the signal: `timeout` could not
+/// stop a check of a 64-sphere pile for ten minutes).
+#[test]
+fn ctrl_c_stops_checks_trial() {
+    let mut child = haptloop()
+        .args(["check", "four-bar", "--seconds", "3600"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The build takes well under a second; the hour-long trial (minutes of
+    // work) is then running.
+    std::thread::sleep(Duration::from_secs(3));
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let mut waited = 0;
+    while child.try_wait().unwrap().is_none() && waited < 600 {
+        std::thread::sleep(Duration::from_millis(100));
+        waited += 1;
+    }
+    if waited == 600 {
+        child.kill().unwrap();
+    }
+    let o = child.wait_with_output().unwrap();
+    assert!(waited < 600, "check ran on for 60 s after Ctrl-C");
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("interrupted during the 3600 s trial"),
+        "{}",
+        text(&o)
+    );
+}

@@ -36,12 +36,10 @@ fn matvec(seconds: f64) -> SessionOptions {
 /// and no tick failed.
 #[test]
 fn the_matvec_fast_loop_allocates_nothing_while_factors_arrive() {
-    // Stewart only: on the Bennett linkage and the lattice the matvec tick
-    // fails ticks and the slow loop re-projects (BENCHMARKS.md, issue 23).
-    {
-        let name = "stewart";
+    // Bennett: where the old cap of 4 failed 661 of 1000 ticks.
+    for (name, seconds) in [("stewart", 3.0), ("bennett", 1.0)] {
         let scene = resolve(name).unwrap();
-        let plan = Plan::new(&scene, &matvec(3.0)).unwrap();
+        let plan = Plan::new(&scene, &matvec(seconds)).unwrap();
         let clock = MockClock::new(Nanos(0));
         let session::Built {
             mut fast,
@@ -143,6 +141,41 @@ fn the_cli_takes_the_matvec_force_solver() {
         "{err}"
     );
 
+    // Jacobi CG (`cg:N`, the sweep's comparison) parses; a bad cap is
+    // refused by name, and the projected update refuses it for want of a
+    // factor.
+    let o = haptloop()
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "cg:0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("cg:0"), "{err}");
+    let o = haptloop()
+        .args([
+            "bench",
+            "bennett",
+            "--ticks",
+            "10",
+            "--force-solver",
+            "cg:8",
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("force_solver") && err.contains("Cholesky factor"),
+        "{err}"
+    );
+
     let o = haptloop()
         .args([
             "bench",
@@ -215,4 +248,50 @@ fn the_sweep_measures_the_matvec_points_force_error() {
         csv.contains(",matvec,") && csv.contains(",matvec:200,"),
         "{csv}"
     );
+}
+
+/// The sweep's accuracy pass (the slow loop refreshing the factor every
+/// 5 ms beside the fast loop, the converged reference every 10 ms) on the
+/// two mechanisms where the old cap of 4 failed ticks: at the default cap
+/// no matvec tick fails and its force error against the converged
+/// reference is the Cholesky tick's to 1e-6 of the largest force.
+#[test]
+fn the_matvec_point_fails_no_tick_on_bennett_and_the_lattice() {
+    let seconds = if cfg!(debug_assertions) { 0.05 } else { 0.3 };
+    for name in ["bennett", "lattice"] {
+        let scene = resolve(name).unwrap();
+        let grid = Grid {
+            iterations: vec![4],
+            update: vec![UpdateRule::Projected],
+            force_solver: vec![ForceSolver::Cholesky, ForceSolver::MATVEC],
+            gain: vec![1000.0],
+            rate_hz: vec![1000],
+            velocity_filter_ms: vec![10.0],
+        };
+        let options = Options {
+            seconds,
+            reference_every: Duration::from_millis(10),
+            threads: 1,
+            force_tolerance: 0.01,
+        };
+        let s = sweep::run(&scene, &grid, &options, &StopFlag::new(), &|_| {}).unwrap();
+        let acc: Vec<_> = s
+            .points
+            .iter()
+            .map(|p| p.accuracy.clone().expect("every point ran"))
+            .collect();
+        for (p, a) in s.points.iter().zip(&acc) {
+            assert_eq!(a.failed_ticks, 0, "{name} {:?}", p.knobs);
+            assert!(a.reference_samples > 0, "{name} {:?}", p.knobs);
+        }
+        let (chol, mv) = (&acc[0], &acc[1]);
+        assert!(
+            (chol.force_error_n.max - mv.force_error_n.max).abs()
+                <= 1e-6 * chol.force_max_n.max(1e-3),
+            "{name}: Cholesky {} N against matvec {} N (largest force {} N)",
+            chol.force_error_n.max,
+            mv.force_error_n.max,
+            chol.force_max_n
+        );
+    }
 }

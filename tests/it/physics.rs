@@ -123,26 +123,46 @@ fn pushing_a_free_block_at_constant_acceleration_renders_m_a() {
     assert!(s.energy.is_some(), "the default mode is inertial here");
 }
 
-/// The block follows the hand's constant 0.2 m/s² (within 10 %). Open: the
-/// device point overshoots the hand (0.19 m of travel for the hand's 0.08 m
-/// by 1.9 s), the block is kicked off the fingertip twice and coasts
-/// (0.25 m/s, then 0.48 m/s) and its mean acceleration over 1.3–2.1 s is
-/// 0.174 m/s²; the m a check above holds over the same window.
+/// The block follows the hand's constant 0.2 m/s² (within 10 %) and the
+/// hand feels m a of that acceleration (within 5 %), at 1 kHz and at
+/// 250 Hz: the mean acceleration of the block over 1.3–2.1 s from its
+/// velocities at both ends, against the hand's closed form, and the mean
+/// push over the same time against the mass times it. (With the default
+/// pen-hold grip the hand–coupling chain is barely damped and the block
+/// was kicked off the fingertip and coasted: the scene file says why.)
 #[test]
-#[ignore = "open (issue 19): the pushed block does not follow the hand's constant acceleration"]
 fn a_block_pushed_at_constant_acceleration_follows_the_hand() {
-    let dir = tempfile::tempdir().unwrap();
-    let (o, _) = run(&data("push-accel"), 2.2, 1000, dir.path());
-    let block = poses(&o, "block");
-    let v = |t: f64| {
-        let k = block.partition_point(|s| s.0 <= t);
-        (block[k + 1].1.x - block[k - 1].1.x) / (block[k + 1].0 - block[k - 1].0)
-    };
-    let accel = (v(2.1) - v(1.3)) / 0.8;
-    assert!(
-        rel(accel, 0.2) < 0.1,
-        "the block accelerated at {accel} m/s²"
-    );
+    for rate in [1000, 250] {
+        let dir = tempfile::tempdir().unwrap();
+        let (o, _) = run(&data("push-accel"), 2.2, rate, dir.path());
+        let block = poses(&o, "block");
+        let v = |t: f64| {
+            let k = block.partition_point(|s| s.0 <= t);
+            (block[k + 1].1.x - block[k - 1].1.x) / (block[k + 1].0 - block[k - 1].0)
+        };
+        let (a, b) = (1.3, 2.1);
+        let accel = (v(b) - v(a)) / (b - a);
+        let rows = trace(dir.path(), "index");
+        let felt = mean(&rows, a, b, |r| -r.3.x);
+        let m = 1.0 + 0.002;
+        println!(
+            "push-accel at {rate} Hz: a = {accel:.4} m/s², felt {felt:.4} N, m a = {:.4} N",
+            m * accel
+        );
+        assert!(
+            rel(accel, 0.2) < 0.1,
+            "{rate} Hz: the block accelerated at {accel} m/s²"
+        );
+        assert!(
+            rel(felt, m * accel) < 0.05,
+            "{rate} Hz: felt {felt} N for m a = {} N",
+            m * accel
+        );
+        assert!(
+            rel(felt, m * 0.2) < 0.05,
+            "{rate} Hz: felt {felt} N for the hand's m a"
+        );
+    }
 }
 
 /// The weight of the pinched box (100 g), held still, through the two
@@ -329,11 +349,26 @@ fn the_arm_pushes_the_box_across_the_table() {
 
 /// The hand feels the box's sliding friction, μ m g, through the arm
 /// (joints without torque, a frictionless push along the box's centre
-/// line: the tip carries the whole push). Open: the link end kicks the box
-/// instead of pushing it steadily (1.3 N spikes, nearly nothing between)
-/// and the mean felt push is 0.13 N.
+/// line: the tip carries the whole push). Open: the felt push alternates
+/// between about 0.53 N (μ m g and the box's acceleration) on the ticks
+/// the link touches the box and about 0 on the ticks it does not: after
+/// each push the box runs ahead of the link and coasts (the link–box gap
+/// on the 0 N ticks, sampled every 10 ms: median 15 µm, up to 50 µm;
+/// closed on the 0.5 N ticks) until friction has slowed it and the link
+/// catches up. About a quarter of the ticks push, so the mean felt push is
+/// 0.13 N, while the box, moving steadily, gets its μ m g: the push
+/// ticks' positional projection gives it more momentum than Eq. 7's
+/// M q̈ renders to the hand (with the velocity filter off, 0.27 N and
+/// ±4 N spikes; more AL iterations change nothing). Not the sticking ticks: taking a
+/// sticking body pair's stick-row forces into Eq. 7's balance instead of
+/// its rows (tried) left the run bit-identical. The 1–3 N spikes are a
+/// second effect of the box-shaped link: once the box has turned, the
+/// flat end touches it at a corner 1 cm off the finger point, and that
+/// moment swings the last link about the tip (the arm's free motion); a
+/// capsule end centred on the finger point removes the spikes and the
+/// turn (0.005 rad), not the alternation (0.14 N).
 #[test]
-#[ignore = "open (issue 19): the arm kicks the box, the hand feels 0.13 N of its 0.49 N friction"]
+#[ignore = "open (issue 19): the box coasts ahead of the link between pushes; the hand feels 0.13 N of 0.49 N"]
 fn the_arm_push_is_felt_at_mu_m_g() {
     let dir = tempfile::tempdir().unwrap();
     run(&resolve("arm-push").unwrap(), 4.5, 1000, dir.path());

@@ -305,3 +305,51 @@ fn the_report_warns_of_the_thermal_cut_and_the_clamp() {
         text(&o)
     );
 }
+
+/// A scene whose tick cannot fit its period: the lattice (a few hundred µs
+/// a tick on any machine) asked to run at 20 kHz (a 50 µs period). `check`
+/// warns at `[solver]` with the trial's median tick and the period, and
+/// exits 3; a cheap scene (the four-bar, tens of µs a tick) at 1 kHz is not
+/// warned about.
+#[test]
+fn check_warns_when_the_tick_cannot_fit_the_period() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = edited(
+        dir.path(),
+        "fast.toml",
+        builtin("lattice"),
+        "[solver]\n",
+        "[solver]\nrate_hz = 20000\n",
+    );
+    let o = haptloop()
+        .args(["check", "--seconds", "0.05"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let at = format!(
+        "{}:{}:1: warning: in a 0.05 s trial the tick costs ",
+        path.display(),
+        line_of(&path, "[solver]")
+    );
+    assert!(err.contains(&at), "{}", text(&o));
+    let median: f64 = err[err.find(&at).unwrap() + at.len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(median > 100.0, "a 50 µs period warned at {median} µs");
+    assert!(
+        err.contains("over twice the 50 µs period at 20000 Hz"),
+        "{}",
+        text(&o)
+    );
+    let own = haptloop()
+        .args(["check", "--seconds", "0.05", "four-bar"])
+        .output()
+        .unwrap();
+    let own_err = String::from_utf8_lossy(&own.stderr);
+    assert!(!own_err.contains("the tick costs"), "{}", text(&own));
+}

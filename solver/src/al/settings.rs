@@ -31,7 +31,9 @@ pub enum ForceSolver {
         max_iterations: u32,
     },
     /// The matvec-only tick (`haptloop run --force-solver matvec`): no
-    /// numeric factorisation on the fast thread. Eq. 7's joint block is
+    /// numeric factorisation on the fast thread while the refreshed factor
+    /// preconditions well (a solve that reaches the cap unconverged is
+    /// redone with a factorisation of the tick's own A). Eq. 7's joint block is
     /// solved by conjugate gradients on the assembled C_q M⁻¹ C_qᵀ, all its
     /// right-hand sides in lockstep, warm-started from the previous tick's
     /// solutions and preconditioned by a Cholesky factor of the same matrix
@@ -45,7 +47,10 @@ pub enum ForceSolver {
     /// rows or design variables.
     Matvec {
         /// Cap on the conjugate-gradient iterations per force solve (all
-        /// right-hand sides step together) and per projected step.
+        /// right-hand sides step together) and per projected step; each
+        /// solve stops earlier at a relative residual of 1e-12. A solve
+        /// stopped by the cap is counted
+        /// ([`Program::matvec_unconverged`](crate::Program::matvec_unconverged)).
         max_iterations: u32,
     },
 }
@@ -62,9 +67,13 @@ impl ForceSolver {
         }
     }
 
-    /// The matvec-only tick with its default cap: 4 iterations (the
-    /// sweep's fronts, BENCHMARKS.md).
-    pub const MATVEC: ForceSolver = ForceSolver::Matvec { max_iterations: 4 };
+    /// The matvec-only tick with its default cap: 64 iterations, a safety
+    /// bound (each solve stops at its tolerance, 11–26 iterations on the
+    /// Bennett linkage and the lattice with a 5 ms old factor). The old
+    /// default of 4 truncated the projected steps' solves: inexact
+    /// Gauss–Newton steps let the violation grow until the tick's guard
+    /// failed it (661 of 1000 ticks on Bennett; BENCHMARKS.md, issue 23).
+    pub const MATVEC: ForceSolver = ForceSolver::Matvec { max_iterations: 64 };
 }
 
 /// Whether and how [`Program::new`](crate::Program::new) looks for redundant

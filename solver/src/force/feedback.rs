@@ -330,6 +330,11 @@ impl Feedback {
         self.solve.cg_iterations()
     }
 
+    /// See `MultiplierSolve::matvec_unconverged`.
+    pub fn matvec_unconverged(&self) -> u64 {
+        self.solve.matvec_unconverged()
+    }
+
     /// Identifies the force factor's pattern (see `MultiplierSolve::id`).
     pub fn factor_id(&self) -> u64 {
         self.solve.id()

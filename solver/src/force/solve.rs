@@ -187,6 +187,14 @@ impl MultiplierSolve {
         }
     }
 
+    /// Matvec-only tick: conjugate-gradient solves (force and projected
+    /// steps) that stopped at the cap above their tolerance, so far; each
+    /// was redone with a numeric factorisation in the tick.
+    pub fn matvec_unconverged(&self) -> u64 {
+        self.pcg.as_ref().map_or(0, |p| p.unconverged)
+            + self.bordered.as_ref().map_or(0, |b| b.unconverged)
+    }
+
     /// Number of stored values of the Cholesky factor L (its supernodes'
     /// dense blocks).
     pub fn factor_nnz(&self) -> usize {
@@ -220,8 +228,20 @@ impl MultiplierSolve {
         r: &[f64],
         known: &[Option<f64>],
     ) -> Result<(), FactorError> {
-        if self.cg.is_some() || (self.pcg.is_some() && self.seeded) {
+        if self.cg.is_some() {
             return self.solve_cg(gram, r, known);
+        }
+        if self.seeded
+            && let Some(before) = self.pcg.as_ref().map(|p| p.unconverged)
+        {
+            self.solve_cg(gram, r, known)?;
+            if self.pcg.as_ref().is_some_and(|p| p.unconverged == before) {
+                return Ok(());
+            }
+            // The refreshed factor no longer preconditions A well enough
+            // for the cap: factor A itself (then the preconditioner is
+            // exact until the next refresh) rather than render an
+            // unconverged force.
         }
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
         self.factor(gram)?;
@@ -412,6 +432,7 @@ impl MultiplierSolve {
             bordered,
             ..
         } = self;
+        let before = bordered.as_ref().map(|b| b.unconverged);
         let ok = match bordered {
             // The matvec-only tick: CG preconditioned by the refreshed
             // factor with its own Schur complement (a consistent one).
@@ -438,6 +459,13 @@ impl MultiplierSolve {
         if !ok {
             return Err(FactorError);
         }
+        if before.is_some() && self.bordered.as_ref().map(|b| b.unconverged) != before {
+            // CG stopped at the cap: an inexact Gauss–Newton step lets the
+            // violation grow tick after tick (the old cap of 4 failed 661
+            // of 1000 ticks on Bennett). Factor the step's A here and take
+            // the exact chord step with it.
+            self.refactor_for_step(gram, r, k_inv)?;
+        }
         for (j, &row) in gram.j_rows.iter().enumerate() {
             y[row] = self.x[j];
         }
@@ -445,6 +473,44 @@ impl MultiplierSolve {
             y[row] = self.x[n + f];
         }
         Ok(())
+    }
+
+    /// The matvec-only tick's fallback for a projected step whose CG hit
+    /// the cap: factors `gram`'s A (seeding the preconditioner with it) and
+    /// solves the step directly, as the Cholesky tick does.
+    fn refactor_for_step(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        k_inv: &[f64],
+    ) -> Result<(), FactorError> {
+        let m = gram.m_f;
+        self.factor(gram)?;
+        self.seeded = true;
+        let block = self.llt.tail_block();
+        for f in 0..m {
+            for g in 0..=f {
+                let v = block[f * m + g];
+                self.schur_keep[f * m + g] = v;
+                self.schur_keep[g * m + f] = v;
+            }
+        }
+        self.gather(gram, r);
+        let Self {
+            llt,
+            x,
+            schur_keep,
+            small,
+            ..
+        } = self;
+        let ok = llt.solve_with_tail(x, |_, s| {
+            small.copy_from_slice(schur_keep);
+            for f in 0..m {
+                small[f * m + f] += k_inv[f];
+            }
+            cholesky_solve(small, s)
+        });
+        if ok { Ok(()) } else { Err(FactorError) }
     }
 
     /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:

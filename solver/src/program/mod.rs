@@ -415,6 +415,16 @@ impl Program {
         self.feedback.cg_iterations()
     }
 
+    /// The matvec-only tick (`ForceSolver::Matvec`): conjugate-gradient
+    /// solves (the force solve's and the projected steps') that stopped at
+    /// the iteration cap above their tolerance, since the program was
+    /// built; each was redone with a factorisation of the tick's own A
+    /// (which then also preconditions the next solves). 0 for the other
+    /// force solvers.
+    pub fn matvec_unconverged(&self) -> u64 {
+        self.feedback.matvec_unconverged()
+    }
+
     /// Stored values of the Eq. 7 Cholesky factor (a size measure).
     pub fn force_factor_nnz(&self) -> usize {
         self.feedback.factor_nnz()

@@ -17,5 +17,6 @@ mod friction;
 mod pinch;
 mod recycle;
 mod rest;
+mod slots;
 mod witness_fd;
 mod witness_kinds;
