@@ -129,9 +129,7 @@ fn semantic_mode(s: &str) -> Result<haptloop_solver::scene::SemanticMode, String
     match s {
         "constrained" => Ok(SemanticMode::Constrained),
         "unconstrained" => Ok(SemanticMode::Unconstrained),
-        _ => Err(format!(
-            "`{s}`: expected `constrained` or `unconstrained`"
-        )),
+        _ => Err(format!("`{s}`: expected `constrained` or `unconstrained`")),
     }
 }
 

@@ -189,7 +189,12 @@ pub fn lines(out: &mut String, s: &Semantic) {
         let _ = writeln!(
             out,
             "objects: {} added, {} removed, {} not added; {} in the scene and {} constraints at the end; {} mode",
-            s.adds, s.removes, s.add_failures, s.objects_at_end, s.constraints_at_end, s.mode_at_end
+            s.adds,
+            s.removes,
+            s.add_failures,
+            s.objects_at_end,
+            s.constraints_at_end,
+            s.mode_at_end
         );
     }
     if s.graph.is_empty() {

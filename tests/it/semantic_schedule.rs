@@ -22,17 +22,33 @@ const CUP_ON_TABLE_Z: f64 = 0.075;
 const LIFT_M: f64 = 0.005;
 
 fn text() -> &'static str {
-    BUILTIN.iter().find(|b| b.name == "board-wall").unwrap().text
+    BUILTIN
+        .iter()
+        .find(|b| b.name == "board-wall")
+        .unwrap()
+        .text
 }
 
 /// Runs `scene` (a built-in name or a file) for 3.2 s on the mock clock.
 fn run(scene: &str, dir: &Path) -> Summary {
     let out = Command::new(env!("CARGO_BIN_EXE_haptloop"))
-        .args(["run", scene, "--deterministic", "--seconds", "3.2", "--quiet", "--out"])
+        .args([
+            "run",
+            scene,
+            "--deterministic",
+            "--seconds",
+            "3.2",
+            "--quiet",
+            "--out",
+        ])
         .arg(dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
@@ -98,15 +114,30 @@ fn board_wall_adds_switches_modes_and_removes_consistently() {
     assert_eq!(sem.loaded, 5);
     assert_eq!((sem.objects_at_end, sem.constraints_at_end), (5, 3));
     assert_eq!(sem.mode_at_end, "constrained");
-    let graph: Vec<[&str; 2]> = sem.graph.iter().map(|[a, b]| [a.as_str(), b.as_str()]).collect();
+    let graph: Vec<[&str; 2]> = sem
+        .graph
+        .iter()
+        .map(|[a, b]| [a.as_str(), b.as_str()])
+        .collect();
     assert_eq!(
         graph,
-        [["floor", "lamp"], ["floor", "partition"], ["partition", "board"]]
+        [
+            ["floor", "lamp"],
+            ["floor", "partition"],
+            ["partition", "board"]
+        ]
     );
     let events: Vec<(f64, &str, &str, &str)> = sem
         .events
         .iter()
-        .map(|e| (e.t_s, e.kind.as_str(), e.binding_body.as_str(), e.offer_body.as_str()))
+        .map(|e| {
+            (
+                e.t_s,
+                e.kind.as_str(),
+                e.binding_body.as_str(),
+                e.offer_body.as_str(),
+            )
+        })
         .collect();
     assert_eq!(
         events,
@@ -132,7 +163,10 @@ fn board_wall_adds_switches_modes_and_removes_consistently() {
     // stays on the partition.
     let board = track(&free_dir, "board");
     let (b0, b1) = (board[0].1, board.last().unwrap().1);
-    assert!((0..3).all(|k| (b0[k] - b1[k]).abs() < 1e-9), "{b0:?} → {b1:?}");
+    assert!(
+        (0..3).all(|k| (b0[k] - b1[k]).abs() < 1e-9),
+        "{b0:?} → {b1:?}"
+    );
 
     // Unconstrained (0.8–1.8 s): the cup follows the hand 5 mm up with no
     // binding force; constrained again it is back on the table.
@@ -221,17 +255,41 @@ fn bad_schedules_name_the_field() {
     let base = text();
     let lines = base.lines().count();
     let cases = [
-        ("[[schedule]]\nat = 1.0\nadd = \"vase\"\n", "unknown body `vase`", 3),
-        ("[[schedule]]\nat = nan\nremove = \"cup\"\n", "expected a session time", 2),
-        ("[[schedule]]\nat = 1.0\nremove = \"floor\"\n", "`floor` is fixed", 3),
+        (
+            "[[schedule]]\nat = 1.0\nadd = \"vase\"\n",
+            "unknown body `vase`",
+            3,
+        ),
+        (
+            "[[schedule]]\nat = nan\nremove = \"cup\"\n",
+            "expected a session time",
+            2,
+        ),
+        (
+            "[[schedule]]\nat = 1.0\nremove = \"floor\"\n",
+            "`floor` is fixed",
+            3,
+        ),
         (
             "[[schedule]]\nat = 1.0\nadd = \"cup\"\n\n[[schedule]]\nat = 2.0\nadd = \"cup\"\n",
             "`cup` is already in the scene at 2 s",
             7,
         ),
-        ("[[schedule]]\nat = 3.0\nremove = \"table\"\n", "`table` is not in the scene at 3 s", 3),
-        ("[[schedule]]\nat = 1.0\nadd = \"cup\"\nmode = \"constrained\"\n", "give exactly one of", 2),
-        ("[[schedule]]\nat = 1.0\nmode = \"loose\"\n", "unknown variant `loose`", 3),
+        (
+            "[[schedule]]\nat = 3.0\nremove = \"table\"\n",
+            "`table` is not in the scene at 3 s",
+            3,
+        ),
+        (
+            "[[schedule]]\nat = 1.0\nadd = \"cup\"\nmode = \"constrained\"\n",
+            "give exactly one of",
+            2,
+        ),
+        (
+            "[[schedule]]\nat = 1.0\nmode = \"loose\"\n",
+            "unknown variant `loose`",
+            3,
+        ),
     ];
     for (extra, expected, line) in cases {
         let text = format!("{base}\n{extra}");
@@ -255,12 +313,23 @@ fn bad_schedules_name_the_field() {
 fn the_cli_sets_the_starting_mode() {
     let tmp = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_haptloop"))
-        .args(["run", "board-wall", "--deterministic", "--seconds", "1.0", "--quiet"])
+        .args([
+            "run",
+            "board-wall",
+            "--deterministic",
+            "--seconds",
+            "1.0",
+            "--quiet",
+        ])
         .args(["--semantic-mode", "unconstrained", "--out"])
         .arg(tmp.path())
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let s: Summary =
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("summary.json")).unwrap())
             .unwrap();
@@ -273,8 +342,14 @@ fn the_cli_sets_the_starting_mode() {
     assert_eq!(first, [(0.3, "add", "lamp"), (0.5, "release", "cup")]);
     assert_eq!(sem.mode_at_end, "unconstrained");
     for (args, expected) in [
-        (["board-wall", "--semantic-mode", "loose"], "expected `constrained` or `unconstrained`"),
-        (["four-bar", "--semantic-mode", "constrained"], "has no semantic areas"),
+        (
+            ["board-wall", "--semantic-mode", "loose"],
+            "expected `constrained` or `unconstrained`",
+        ),
+        (
+            ["four-bar", "--semantic-mode", "constrained"],
+            "has no semantic areas",
+        ),
     ] {
         let r = Command::new(env!("CARGO_BIN_EXE_haptloop"))
             .arg("run")

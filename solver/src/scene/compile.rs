@@ -518,7 +518,10 @@ impl LoadedScene {
             .penetration_tolerance
             .as_ref()
             .map_or(contact.penetration_tolerance_m, |x| *x.get_ref());
-        let areas = s.bodies.iter().any(|b| !b.offer.is_empty() || !b.binding.is_empty());
+        let areas = s
+            .bodies
+            .iter()
+            .any(|b| !b.offer.is_empty() || !b.binding.is_empty());
         let (schedule, absent) = self.compile_schedule(&model, areas)?;
         let semantic = self.compile_semantic(&model, penetration, &absent)?;
         let holds = self.compile_holds(&model);

@@ -139,7 +139,11 @@ impl LoadedScene {
                     span.unwrap_or(e.at.span()),
                     format!(
                         "`{name}` is {} at {} s: a body's entries alternate `add` and `remove`",
-                        if adds { "already in the scene" } else { "not in the scene" },
+                        if adds {
+                            "already in the scene"
+                        } else {
+                            "not in the scene"
+                        },
                         d.at_s
                     ),
                 ));

@@ -368,9 +368,13 @@ impl SemanticScene {
             .into_iter(),
             self.settings.collision_tolerance_m,
         );
-        self.objects_near(&lo, &hi).into_iter().map(BodyId).find(|&y| {
-            self.tested(o, y) && self.overlap_m(o, pose, y, &self.objects[y.index()].pose) > PLACE_OVERLAP_M
-        })
+        self.objects_near(&lo, &hi)
+            .into_iter()
+            .map(BodyId)
+            .find(|&y| {
+                self.tested(o, y)
+                    && self.overlap_m(o, pose, y, &self.objects[y.index()].pose) > PLACE_OVERLAP_M
+            })
     }
 
     /// Takes object `o` and its offers out of the grids.

@@ -11,10 +11,10 @@ mod algorithms;
 mod common;
 // The solver tests' finite differences, shared.
 mod fast;
-mod presence;
 #[allow(dead_code)]
 #[path = "../solver/fd.rs"]
 mod fd;
+mod presence;
 mod random_ops;
 mod rows_fd;
 mod special;

@@ -89,7 +89,10 @@ fn removing_the_table_releases_the_board_and_adding_it_back_restores_the_graph()
     assert_eq!((s.present_count(), s.bonds().count()), (4, 4));
     let (t0, b0) = (s.pose(table), s.pose(board));
     let r = s.remove(table, false).unwrap();
-    assert_eq!((r.broken.len(), r.released.len(), r.rebound.len()), (1, 1, 0));
+    assert_eq!(
+        (r.broken.len(), r.released.len(), r.rebound.len()),
+        (1, 1, 0)
+    );
     assert_eq!((s.present_count(), s.bonds().count()), (3, 2));
     assert_eq!(
         graph(&s),
@@ -219,10 +222,16 @@ fn a_released_object_within_reach_of_an_offer_is_bound_again() {
     ];
     let mut s = scene(&objs, areas, &[]);
     let (coaster, cup) = (id(&s, "coaster"), id(&s, "cup"));
-    assert_eq!(graph(&s), edges(&[("table", "coaster"), ("coaster", "cup")]));
+    assert_eq!(
+        graph(&s),
+        edges(&[("table", "coaster"), ("coaster", "cup")])
+    );
     let z0 = s.pose(cup).r.z;
     let r = s.remove(coaster, false).unwrap();
-    assert_eq!((r.broken.len(), r.released.len(), r.rebound.len()), (1, 1, 1));
+    assert_eq!(
+        (r.broken.len(), r.released.len(), r.rebound.len()),
+        (1, 1, 1)
+    );
     assert!((z0 - s.pose(cup).r.z - 0.005).abs() < 1e-12);
     assert_eq!(graph(&s), edges(&[("table", "cup")]));
     assert_eq!((s.present_count(), s.bonds().count()), (2, 1));

@@ -181,9 +181,8 @@ impl SemanticLoop {
                 q[k + 5],
                 q[k + 6],
             ));
-            let mut e = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
-                pose.rot,
-            ));
+            let mut e =
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(pose.rot));
             if e.coords.dot(&e_old.coords) < 0.0 {
                 e = UnitQuaternion::new_unchecked(-e.into_inner());
             }
