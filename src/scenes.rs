@@ -73,6 +73,10 @@ pub const BUILTIN: &[Builtin] = &[
         text: include_str!("../scenes/room.toml"),
     },
     Builtin {
+        name: "board-wall",
+        text: include_str!("../scenes/board-wall.toml"),
+    },
+    Builtin {
         name: "grasp-3-contact",
         text: include_str!("../scenes/grasp-3-contact.toml"),
     },

@@ -115,6 +115,22 @@ pub struct RunArgs {
     /// PHANToM model).
     #[arg(long, value_name = "MODEL")]
     pub device: Option<String>,
+    /// The semantic interaction mode at the start (Gösele & Stuerzlinger
+    /// §6): `constrained` (the default: a held object's offer/binding
+    /// constraints act) or `unconstrained` (they are off for the held
+    /// object); `[[schedule]] mode` switches it during the run.
+    #[arg(long, value_name = "MODE", value_parser = semantic_mode)]
+    pub semantic_mode: Option<haptloop_solver::scene::SemanticMode>,
+}
+
+/// `--semantic-mode`'s values.
+fn semantic_mode(s: &str) -> Result<haptloop_solver::scene::SemanticMode, String> {
+    use haptloop_solver::scene::SemanticMode;
+    match s {
+        "constrained" => Ok(SemanticMode::Constrained),
+        "unconstrained" => Ok(SemanticMode::Unconstrained),
+        _ => Err(format!("`{s}`: expected `constrained` or `unconstrained`")),
+    }
 }
 
 impl Default for RunArgs {
@@ -143,6 +159,7 @@ impl Default for RunArgs {
             live: false,
             port: 8470,
             device: None,
+            semantic_mode: None,
         }
     }
 }
@@ -233,7 +250,14 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         thread: args.rt.thread(),
         reference_every: None,
         live,
+        semantic_mode: args.semantic_mode,
     };
+    if args.semantic_mode.is_some() && scene.compiled.semantic.is_none() {
+        return Ok(super::usage_error(&format!(
+            "--semantic-mode: scene `{}` has no semantic areas (offer and binding areas)",
+            scene.compiled.name
+        )));
+    }
     // Everything a flag can get wrong is said before the output directory
     // is claimed.
     let mut plan = Plan::new(&scene, &options)?;

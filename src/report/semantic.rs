@@ -56,6 +56,25 @@ pub struct Semantic {
     pub programs: u64,
     /// Changes whose program was not built or sent.
     pub program_failures: u64,
+    /// Objects added (`[[schedule]] add`), removed, and adds that found no
+    /// valid place.
+    #[serde(default)]
+    pub adds: u64,
+    /// See `adds`.
+    #[serde(default)]
+    pub removes: u64,
+    /// See `adds`.
+    #[serde(default)]
+    pub add_failures: u64,
+    /// Shaped objects in the scene at the end.
+    #[serde(default)]
+    pub objects_at_end: usize,
+    /// Satisfied constraints at the end.
+    #[serde(default)]
+    pub constraints_at_end: usize,
+    /// The interaction mode at the end (`constrained`, `unconstrained`).
+    #[serde(default)]
+    pub mode_at_end: String,
     /// One slow-loop semantic cycle, µs: mean and largest.
     #[serde(with = "super::figure")]
     pub cycle_us_mean: f64,
@@ -91,6 +110,12 @@ impl From<&SemanticReport> for Semantic {
             arrival_max_s: r.arrival_max_s,
             programs: r.programs,
             program_failures: r.program_failures,
+            adds: r.adds,
+            removes: r.removes,
+            add_failures: r.add_failures,
+            objects_at_end: r.present_at_end,
+            constraints_at_end: r.constraints_at_end,
+            mode_at_end: r.mode_at_end.to_owned(),
             cycle_us_mean: if r.cycles == 0 {
                 f64::NAN
             } else {
@@ -143,6 +168,11 @@ pub fn lines(out: &mut String, s: &Semantic) {
             "move" => format!("{} moves {}", e.offer_body, e.binding_body),
             "hold" => format!("{} takes hold of {}", e.offer_body, e.binding_body),
             "let_go" => format!("{} lets go of {}", e.offer_body, e.binding_body),
+            "add" if e.offer_body.is_empty() => format!("{} added", e.binding_body),
+            "add" => format!("{} added onto {}", e.binding_body, e.offer_body),
+            "add_failed" => format!("{} not added: no valid place", e.binding_body),
+            "remove" => format!("{} removed", e.binding_body),
+            "mode" => format!("{} mode", e.offer_body),
             other => format!("{other} {} {}", e.binding_body, e.offer_body),
         };
         let _ = writeln!(out, "  {:>7.3} s  {:<10} {what}", e.t_s, e.kind);
@@ -153,6 +183,18 @@ pub fn lines(out: &mut String, s: &Semantic) {
             "  {} snap{} still pulling at the end",
             s.pending_at_end,
             if s.pending_at_end == 1 { "" } else { "s" }
+        );
+    }
+    if s.adds + s.removes + s.add_failures > 0 || s.mode_at_end == "unconstrained" {
+        let _ = writeln!(
+            out,
+            "objects: {} added, {} removed, {} not added; {} in the scene and {} constraints at the end; {} mode",
+            s.adds,
+            s.removes,
+            s.add_failures,
+            s.objects_at_end,
+            s.constraints_at_end,
+            s.mode_at_end
         );
     }
     if s.graph.is_empty() {
@@ -168,28 +210,37 @@ pub fn check_lines(c: &CompiledScene) -> String {
     match (&c.semantic, c.holds.len()) {
         (None, 0) => "  semantic     no areas\n".to_string(),
         (None, n) => format!("  semantic     no areas; {n} scheduled holds\n"),
-        (Some(s), n) => {
-            let offers = s
-                .areas
-                .iter()
-                .filter(|a| a.kind == haptloop_solver::semantic::AreaKind::Offer)
-                .count();
-            let labels: std::collections::BTreeSet<&str> = s
-                .labels
-                .iter()
-                .map(String::as_str)
-                .chain(s.order.iter().flat_map(|(a, b)| [a.as_str(), b.as_str()]))
-                .chain(s.areas.iter().map(|a| a.label.as_str()))
-                .collect();
-            format!(
-                "  semantic     {offers} offer and {} binding areas, {} labels; consistent at load; \
-                 snap within {} m / {:.2} rad, break at {} N; {n} scheduled holds\n",
-                s.areas.len() - offers,
-                labels.len(),
-                s.settings.snap_distance_m,
-                s.settings.snap_angle_rad,
-                s.settings.break_force_n
-            )
-        }
+        (Some(s), n) if c.schedule.is_empty() => format!("{}\n", areas_line(s, n)),
+        (Some(s), n) => format!(
+            "{}; {} scheduled operations ({} absent at the start)\n",
+            areas_line(s, n),
+            c.schedule.len(),
+            c.absent.len()
+        ),
     }
+}
+
+/// The areas, labels and settings of `s`, with `n` scheduled holds.
+fn areas_line(s: &haptloop_solver::semantic::SemanticSpec, n: usize) -> String {
+    let offers = s
+        .areas
+        .iter()
+        .filter(|a| a.kind == haptloop_solver::semantic::AreaKind::Offer)
+        .count();
+    let labels: std::collections::BTreeSet<&str> = s
+        .labels
+        .iter()
+        .map(String::as_str)
+        .chain(s.order.iter().flat_map(|(a, b)| [a.as_str(), b.as_str()]))
+        .chain(s.areas.iter().map(|a| a.label.as_str()))
+        .collect();
+    format!(
+        "  semantic     {offers} offer and {} binding areas, {} labels; consistent at load; \
+         snap within {} m / {:.2} rad, break at {} N; {n} scheduled holds",
+        s.areas.len() - offers,
+        labels.len(),
+        s.settings.snap_distance_m,
+        s.settings.snap_angle_rad,
+        s.settings.break_force_n
+    )
 }

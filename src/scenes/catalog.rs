@@ -93,6 +93,11 @@ pub const CATALOG: &[Entry] = &[
     entry("box-slide", ChoiCremer, "§3.1–3.2 (witness changes)"),
     entry("sit-on-chair", ChoiCremer, "Fig. 1 (a figure onto a chair)"),
     entry("room", GoseleStuerzlinger, "Fig. 1, 3, 4 (§3–5)"),
+    entry(
+        "board-wall",
+        GoseleStuerzlinger,
+        "Fig. 5/6 (undirected cycle); §3.3 add/remove, §6 modes",
+    ),
     entry("sphere-toy-400", Own, "Fig. 1's toy at 400 bodies"),
     entry("bennett", Own, "overconstrained loop"),
     entry("lattice", Own, "64 loops"),

@@ -180,6 +180,12 @@ impl ContactLoop {
         self.manager.recycle(program);
     }
 
+    /// Takes the bodies `absent` out of every contact pair (objects not in
+    /// the scene); the next rebase or cycle builds the program without them.
+    pub fn set_absent(&mut self, absent: &[u32]) {
+        self.manager.set_absent(absent);
+    }
+
     /// Takes `base` as the mechanism from now on (a semantic change: new
     /// surface rows or holds) and returns the program for it at `q`, its
     /// build time counted with the structure changes.

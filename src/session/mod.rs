@@ -42,7 +42,7 @@ pub use reference::{
     ReferenceCheck, ReferenceSample, ReferenceStats,
 };
 pub use rig::{Rig, SessionDevice, VirtualOutcome, device_trajectory};
-pub use semantic::{Event, EventKind, SemanticLoop, SemanticReport};
+pub use semantic::{Event, EventKind, SemanticLoop, SemanticPlan, SemanticReport};
 pub use slow::{SlowLoop, SlowStats};
 pub use stats::{FailureKind, FingerStats, RunStats};
 pub use timing::{Stage, StageClock, StageTimes};
@@ -192,6 +192,11 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         model.clone(),
         scene.compiled.semantic.as_ref(),
         &scene.compiled.holds,
+        &SemanticPlan {
+            ops: scene.compiled.schedule.clone(),
+            absent: scene.compiled.absent.clone(),
+            mode: plan.semantic_mode,
+        },
         &q,
     )?;
     let mechanism = semantic
@@ -210,6 +215,8 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
     let mut contact = ContactLoop::new(mechanism.clone(), plan.solver, plan.contact, frames_tx);
     if let Some(c) = &mut contact {
+        let absent: Vec<u32> = scene.compiled.absent.iter().map(|b| b.0).collect();
+        c.set_absent(&absent);
         program = c.initial(&q).context("building the contact rows")?;
         program
             .set_q(&q)

@@ -6,6 +6,7 @@ use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
 use haptloop_rt::thread::ThreadConfig;
 use haptloop_solver::geometry::ContactSettings;
+use haptloop_solver::scene::SemanticMode;
 use haptloop_solver::{ForceSolver, SolverSettings, UpdateRule};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -62,6 +63,9 @@ pub struct SessionOptions {
     /// Stream the run to a live viewer (`--live`): called with the viewer's
     /// ends of the exchange when the loops start.
     pub live: Option<super::LiveHook>,
+    /// The interaction mode at the start (`--semantic-mode`; `None`:
+    /// constrained), for scenes with semantic areas (§6).
+    pub semantic_mode: Option<SemanticMode>,
 }
 
 /// How often a session compares the fast loop's force with the converged
@@ -88,6 +92,7 @@ impl Default for SessionOptions {
             thread: ThreadConfig::default(),
             reference_every: None,
             live: None,
+            semantic_mode: None,
         }
     }
 }
@@ -131,6 +136,8 @@ pub struct Plan {
     pub joint_rows: usize,
     /// The live viewer's hook (`--live`).
     pub live: Option<super::LiveHook>,
+    /// The semantic interaction mode at the start.
+    pub semantic_mode: SemanticMode,
 }
 
 impl Plan {
@@ -213,6 +220,12 @@ impl Plan {
                 contact.contact_distance_m
             );
         }
+        if options.semantic_mode.is_some() && scene.compiled.semantic.is_none() {
+            bail!(
+                "--semantic-mode: scene `{}` has no semantic areas (offer and binding areas)",
+                scene.compiled.name
+            );
+        }
         solver.velocity_filter = match options
             .velocity_filter
             .or(s.velocity_filter.map(Duration::from_secs_f64))
@@ -244,6 +257,7 @@ impl Plan {
             .max(1.0) as u64,
             joint_rows: super::joint_length_rows(&scene.compiled.model),
             live: options.live.clone(),
+            semantic_mode: options.semantic_mode.unwrap_or_default(),
         })
     }
 

@@ -283,8 +283,17 @@ impl SlowLoop {
         let Some(model) = sem.take_model() else {
             return false;
         };
+        // Added bodies go where the scene placed them: the contact cycle
+        // sees them there, and the fast loop's q is shifted there.
+        let placed = sem.placed_q(&q);
+        let at = placed.as_deref().unwrap_or(&q);
         let program = match &mut self.contact {
-            Some(c) => c.rebase(model.clone(), &q),
+            Some(c) => {
+                if sem.take_absent_changed() {
+                    c.set_absent(&sem.absent_bodies());
+                }
+                c.rebase(model.clone(), at)
+            }
             None => {
                 // Re-projections hand over programs of this model from now on.
                 self.model = model.clone();
@@ -292,11 +301,20 @@ impl SlowLoop {
             }
         };
         let ns = (haptloop_rt::clock::Clock::now(&clock) - start).0;
+        let correction = match &placed {
+            Some(p) => Correction::Shift(p.iter().zip(&q).map(|(a, b)| a - b).collect()),
+            None => Correction::None,
+        };
         let sent = program.is_some_and(|program| {
             self.programs
-                .try_send(Box::new(Handover::new(program)))
+                .try_send(Box::new(Handover {
+                    program,
+                    correction,
+                    snapshot_tick: None,
+                }))
                 .is_ok()
         });
+        sem.placements_sent(sent);
         sem.note_program(sent, ns);
         self.stats.programs_sent += u64::from(sent);
         sent

@@ -31,6 +31,7 @@ mod scene_format;
 mod scenes;
 mod seeds;
 mod semantic;
+mod semantic_schedule;
 mod session;
 mod solver_honesty;
 mod stability;

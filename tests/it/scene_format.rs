@@ -157,6 +157,14 @@ fn the_reference_lists_exactly_the_keys_and_values_the_loader_accepts() {
             format!("{base}\n[[design_flag]]\nzz_unknown = 1\n"),
         ),
         (
+            "[[schedule]]",
+            format!("{base}\n[[schedule]]\nzz_unknown = 1\n"),
+        ),
+        (
+            "mode values",
+            format!("{base}\n[[schedule]]\nat = 1.0\nmode = \"zz_unknown\"\n"),
+        ),
+        (
             "[[gear]] kind values",
             format!("{base}\n[[gear]]\nkind = \"zz_unknown\"\n"),
         ),

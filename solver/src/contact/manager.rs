@@ -74,6 +74,8 @@ pub struct ContactManager {
     builds: BuildCounts,
     /// Scratch: each body's expected motion over the next cycle, m.
     expected: Vec<f64>,
+    /// Bodies out of the scene (a semantic schedule's removals): in no pair.
+    absent: Vec<u32>,
 }
 
 /// How many contact programs were built new and how many taken from the
@@ -118,6 +120,7 @@ impl ContactManager {
             cache: Vec::new(),
             builds: BuildCounts::default(),
             expected: Vec::new(),
+            absent: Vec::new(),
         })
     }
 
@@ -149,11 +152,31 @@ impl ContactManager {
     /// returns the program for it and the pairs in reach. Programs kept for
     /// reuse belonged to the old mechanism and are dropped. Allocates.
     pub fn rebase(&mut self, base: Arc<Model>, q: &[f64]) -> Result<Program, ContactError> {
-        self.active.set_excluded(jointed_pairs(&base));
         self.base = base;
+        self.active.set_excluded(self.excluded());
         self.cache.clear();
         let _ = self.cycle(q);
         self.build_program()
+    }
+
+    /// Takes the bodies `absent` out of every pair from now on (and puts
+    /// back those no longer listed): objects removed from the scene, or not
+    /// added yet. The next cycle (or [`rebase`](Self::rebase)) builds the
+    /// program for the pairs that remain.
+    pub fn set_absent(&mut self, absent: &[u32]) {
+        self.absent = absent.to_vec();
+        self.active.set_excluded(self.excluded());
+    }
+
+    /// The pairs that never collide: jointed pairs and every pair with an
+    /// absent body.
+    fn excluded(&self) -> Vec<[u32; 2]> {
+        let n = self.base.bodies().len() as u32;
+        let mut out = jointed_pairs(&self.base);
+        for &a in &self.absent {
+            out.extend((0..n).filter(|&b| b != a).map(|b| [a, b]));
+        }
+        out
     }
 
     /// How the contact programs so far were obtained.

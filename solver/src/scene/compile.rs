@@ -169,6 +169,10 @@ pub struct CompiledScene {
     /// Design variables switched on and off during the run, by time
     /// (`[[design_flag]]`, plus any `--design-on` / `--design-off`).
     pub design_flags: Vec<super::DesignFlagDecl>,
+    /// Objects added and removed, modes switched, by time (`[[schedule]]`).
+    pub schedule: Vec<super::ScheduleDecl>,
+    /// Bodies absent at the start (their first schedule entry adds them).
+    pub absent: Vec<crate::BodyId>,
 }
 
 fn settings(s: &SolverSection) -> SceneSettings {
@@ -514,7 +518,12 @@ impl LoadedScene {
             .penetration_tolerance
             .as_ref()
             .map_or(contact.penetration_tolerance_m, |x| *x.get_ref());
-        let semantic = self.compile_semantic(&model, penetration)?;
+        let areas = s
+            .bodies
+            .iter()
+            .any(|b| !b.offer.is_empty() || !b.binding.is_empty());
+        let (schedule, absent) = self.compile_schedule(&model, areas)?;
+        let semantic = self.compile_semantic(&model, penetration, &absent)?;
         let holds = self.compile_holds(&model);
         let design_flags = self.compile_design_flags(&model)?;
 
@@ -565,6 +574,8 @@ impl LoadedScene {
             semantic,
             holds,
             design_flags,
+            schedule,
+            absent,
         })
     }
 

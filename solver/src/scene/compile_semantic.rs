@@ -55,6 +55,7 @@ impl LoadedScene {
         &self,
         model: &Model,
         penetration_tolerance_m: f64,
+        absent: &[BodyId],
     ) -> Result<Option<SemanticSpec>, SceneError> {
         let s = &self.spec;
         let mut areas = Vec::new();
@@ -92,6 +93,9 @@ impl LoadedScene {
         let mut scene = SemanticScene::from_model(model, model.q0(), &spec)
             .map_err(|e| at_scene(e.to_string()))?;
         self.check_inclusion_rows(&scene)?;
+        for &b in absent {
+            scene.start_absent(b);
+        }
         scene.satisfy_aligned();
         let joined: Vec<[BodyId; 2]> = jointed_pairs(model)
             .into_iter()

@@ -23,6 +23,7 @@ pub mod magnitudes;
 mod no_effect;
 mod placed;
 mod polygon;
+mod schedule;
 mod semantic;
 pub mod spec;
 mod validate;
@@ -34,6 +35,7 @@ pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_sw
 pub use error::SceneError;
 pub use flags::Flagged;
 pub use placed::BodyPose;
+pub use schedule::{ScheduleAction, ScheduleDecl, ScheduleSection, SemanticMode};
 pub use write::mechanism_tables;
 
 use std::ops::Range;

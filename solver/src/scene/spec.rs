@@ -100,6 +100,9 @@ pub struct SceneFile {
     /// `[semantic]`: snapping and breaking of semantic constraints.
     #[serde(default)]
     pub semantic: Option<SemanticSection>,
+    /// `[[schedule]]` tables: objects added and removed, modes switched.
+    #[serde(default, rename = "schedule")]
+    pub schedule: Vec<super::schedule::ScheduleSection>,
 }
 
 /// `[semantic]`: every key optional (defaults in

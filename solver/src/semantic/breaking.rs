@@ -26,6 +26,26 @@ impl SemanticScene {
         Some(bond.offer)
     }
 
+    /// Releases binding area `b`'s constraint without a pull (the
+    /// unconstrained mode turning a held object's constraints off): the
+    /// pair goes on the exception list only if the two overlap deeper than
+    /// the collision tolerance, so the binding may snap straight back when
+    /// the constraints are on again. Returns the offer area.
+    pub fn release(&mut self, b: AreaId) -> Option<AreaId> {
+        let bond = self.remove_bond(b)?;
+        let (x, y) = (
+            self.areas[b.index()].body,
+            self.areas[bond.offer.index()].body,
+        );
+        let (px, py) = (self.pose(x), self.pose(y));
+        if self.overlap_m(x, &px, y, &py) > self.settings.collision_tolerance_m
+            && !self.exceptions.contains(&[x, y])
+        {
+            self.exceptions.push([x, y]);
+        }
+        Some(bond.offer)
+    }
+
     /// Whether the objects of an exception pair have separated (see the
     /// module docs).
     pub fn separated(&self, [x, y]: [BodyId; 2]) -> bool {

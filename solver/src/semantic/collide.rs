@@ -69,7 +69,13 @@ impl SemanticScene {
             .exceptions
             .iter()
             .any(|&[a, b]| (a == x && b == y) || (a == y && b == x));
-        !(x == y || both_fixed || excepted || self.bound_pair(x, y) || self.is_ignored(x, y))
+        let absent = !self.is_present(x) || !self.is_present(y);
+        !(x == y
+            || absent
+            || both_fixed
+            || excepted
+            || self.bound_pair(x, y)
+            || self.is_ignored(x, y))
     }
 
     /// The first collision of the objects `moved` at the poses `poses`

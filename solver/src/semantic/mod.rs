@@ -21,6 +21,7 @@
 //! | `satisfy.rs` | searchCloseBindings and Algorithm 1; the loader's pass over aligned bindings |
 //! | `breaking.rs` | breaking a constraint, the exception list and separation |
 //! | `consistency.rs` | consistent(s) |
+//! | `presence.rs` | adding and removing objects (§3.3): a valid place, bonds broken and released |
 //! | `rows.rs` | a satisfied constraint as solver rows |
 //!
 //! ```text
@@ -43,6 +44,7 @@ mod graph;
 mod grid;
 mod labels;
 mod motion;
+mod presence;
 mod rows;
 mod satisfy;
 mod scene;
@@ -55,6 +57,7 @@ pub use consistency::Inconsistency;
 pub use grid::Grid;
 pub use labels::{Label, LabelCycle, LabelOrder};
 pub use motion::Move;
+pub use presence::{ADD_SPOTS, Addition, PresenceError, Removal};
 pub use satisfy::{Candidate, Snap};
 pub use scene::{Bond, Object, SemanticError, SemanticScene};
 pub use spec::{AreaKind, AreaSpec, SemanticSettings, SemanticSpec};

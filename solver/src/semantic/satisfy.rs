@@ -57,7 +57,7 @@ impl SemanticScene {
     pub fn search_close(&self, b: AreaId) -> Vec<Candidate> {
         let s = &self.settings;
         let area = &self.areas[b.index()];
-        if area.kind != AreaKind::Binding {
+        if area.kind != AreaKind::Binding || !self.is_present(area.body) {
             return Vec::new();
         }
         let o = area.body;
@@ -117,7 +117,7 @@ impl SemanticScene {
             return None;
         }
         let o = self.areas[b.index()].body;
-        if self.objects[o.index()].fixed {
+        if self.objects[o.index()].fixed || !self.is_present(o) {
             return None;
         }
         for x in self.search_close(b) {

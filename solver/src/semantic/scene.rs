@@ -86,6 +86,8 @@ pub struct SemanticScene {
     pub(super) ignored: Vec<[BodyId; 2]>,
     pub(super) object_grid: Grid,
     pub(super) offer_grid: Grid,
+    /// Per object: taken out of the scene (`presence.rs`).
+    pub(super) absent: Vec<bool>,
 }
 
 impl SemanticScene {
@@ -187,6 +189,7 @@ impl SemanticScene {
             areas,
             order,
             settings: spec.settings,
+            absent: vec![false; n],
         };
         for i in 0..n {
             scene.index(BodyId(i as u32));
@@ -296,7 +299,11 @@ impl SemanticScene {
     }
 
     /// Refreshes object `o`'s entries in the grids.
-    fn index(&mut self, o: BodyId) {
+    pub(super) fn index(&mut self, o: BodyId) {
+        if self.absent[o.index()] {
+            self.unindex(o);
+            return;
+        }
         let obj = &self.objects[o.index()];
         if let Some(c) = &obj.collider {
             let bb = c.full.compute_aabb(&obj.pose.to_parry());

@@ -14,6 +14,7 @@ mod fast;
 #[allow(dead_code)]
 #[path = "../solver/fd.rs"]
 mod fd;
+mod presence;
 mod random_ops;
 mod rows_fd;
 mod special;

@@ -54,7 +54,7 @@ impl SemanticLoop {
         changed
     }
 
-    fn holds_changed(&mut self) {
+    pub(super) fn holds_changed(&mut self) {
         let pairs: Vec<[BodyId; 2]> = self.holds.iter().map(|h| [h.tip, h.body]).collect();
         self.scene.set_ignored(&pairs);
         self.dirty = true;
@@ -67,7 +67,11 @@ impl SemanticLoop {
         let mut changed = self.let_go(t_s);
         for i in 0..self.schedule.len() {
             let d = self.schedule[i];
-            if self.done[i] || t_s < d.from_s || self.holds.iter().any(|h| h.decl == i) {
+            if self.done[i]
+                || t_s < d.from_s
+                || self.holds.iter().any(|h| h.decl == i)
+                || !self.scene.is_present(d.body)
+            {
                 continue;
             }
             if t_s >= d.until_s {
@@ -93,6 +97,9 @@ impl SemanticLoop {
                 });
                 let finger = self.finger_name(i);
                 self.event(t_s, EventKind::Hold, d.body, &finger);
+                if self.unconstrained(d.body) {
+                    self.release_held(d.body, t_s);
+                }
                 changed = true;
             }
         }

@@ -23,13 +23,14 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_solver::geometry::Pose3;
-use haptloop_solver::scene::HoldDecl;
+use haptloop_solver::scene::{HoldDecl, ScheduleDecl, SemanticMode};
 use haptloop_solver::semantic::{AreaId, SemanticScene};
 use haptloop_solver::{BodyId, HoldSpec, Model};
 use nalgebra::Vector3;
 
 mod holds;
 mod report;
+mod schedule;
 
 use holds::ActiveHold;
 pub use report::{Event, EventKind, SemanticReport};
@@ -63,6 +64,29 @@ pub struct SemanticLoop {
     pending: Vec<(AreaId, f64)>,
     dirty: bool,
     report: SemanticReport,
+    /// The scene's `[[schedule]]`, by time, and the next entry to run.
+    ops: Vec<ScheduleDecl>,
+    next_op: usize,
+    /// The interaction mode (§6).
+    mode: SemanticMode,
+    /// Added bodies' poses not yet sent to the fast loop, and those sent but
+    /// not yet seen in a snapshot (not mirrored until then).
+    placements: Vec<(BodyId, Pose3)>,
+    arriving: Vec<(BodyId, Pose3)>,
+    /// An add or remove changed which bodies are absent.
+    absent_changed: bool,
+}
+
+/// What a scene schedules for the semantic loop: the `[[schedule]]`
+/// entries, the bodies absent at the start, the starting mode.
+#[derive(Debug, Clone, Default)]
+pub struct SemanticPlan {
+    /// `[[schedule]]`, by time.
+    pub ops: Vec<ScheduleDecl>,
+    /// Bodies absent at the start.
+    pub absent: Vec<BodyId>,
+    /// The mode at the start.
+    pub mode: SemanticMode,
 }
 
 impl SemanticLoop {
@@ -74,6 +98,7 @@ impl SemanticLoop {
         base: Arc<Model>,
         spec: Option<&haptloop_solver::semantic::SemanticSpec>,
         schedule: &[HoldDecl],
+        plan: &SemanticPlan,
         q: &[f64],
     ) -> Result<Option<Self>> {
         if spec.is_none() && schedule.is_empty() {
@@ -83,6 +108,9 @@ impl SemanticLoop {
         let spec = spec.unwrap_or(&empty);
         let mut scene =
             SemanticScene::from_model(&base, q, spec).context("building the semantic scene")?;
+        for &b in &plan.absent {
+            scene.start_absent(b);
+        }
         let loaded = scene.satisfy_aligned();
         let tips = base
             .fingers()
@@ -109,6 +137,12 @@ impl SemanticLoop {
                 arrival_max_s: f64::NAN,
                 ..SemanticReport::default()
             },
+            ops: plan.ops.clone(),
+            next_op: 0,
+            mode: plan.mode,
+            placements: Vec::new(),
+            arriving: Vec::new(),
+            absent_changed: false,
         };
         s.check();
         s.current = Arc::new(s.model()?);
@@ -197,6 +231,19 @@ impl SemanticLoop {
             .collect();
         r.graph.sort();
         r.pending_at_end = self.pending.len();
+        r.present_at_end = self
+            .scene
+            .objects()
+            .iter()
+            .enumerate()
+            .filter(|(i, o)| {
+                self.scene.is_present(BodyId(*i as u32))
+                    && !self.tips.iter().any(|t| t.1.index() == *i)
+                    && o.collider.is_some()
+            })
+            .count();
+        r.constraints_at_end = self.scene.bonds().count();
+        r.mode_at_end = self.mode.as_str();
         r
     }
 
@@ -232,6 +279,7 @@ impl SemanticLoop {
         let clock = MonotonicClock::new();
         let start = clock.now();
         self.mirror(q);
+        self.run_schedule(t_s);
         self.update_holds(t_s);
         self.breaks(finger_force_n, t_s);
         for [b, o] in self.scene.update_exceptions() {
@@ -250,9 +298,13 @@ impl SemanticLoop {
 
     /// Mirrors the fast loop's poses; remembers the last ones.
     fn mirror(&mut self, q: &[f64]) {
-        for (i, last) in self.last.iter_mut().enumerate() {
+        for i in 0..self.last.len() {
             let id = BodyId(i as u32);
-            *last = self.scene.pose(id);
+            self.last[i] = self.scene.pose(id);
+            if !self.adopted(id, q) {
+                // Placed by an add, not yet in the fast loop's q.
+                continue;
+            }
             if let (Some(r), Some(rot)) = (
                 self.base.body_position(q, id),
                 self.base.body_rotation(q, id),
@@ -334,7 +386,12 @@ impl SemanticLoop {
         for i in 0..self.last.len() {
             let o = BodyId(i as u32);
             let obj = &self.scene.objects()[i];
-            if obj.fixed || obj.bindings.is_empty() || self.moved(o) <= 0.0 {
+            if obj.fixed
+                || obj.bindings.is_empty()
+                || self.moved(o) <= 0.0
+                || self.unconstrained(o)
+                || !self.scene.is_present(o)
+            {
                 continue;
             }
             for snap in self.scene.satisfy_object(o, true) {
@@ -352,7 +409,7 @@ impl SemanticLoop {
     fn group_moves(&mut self, t_s: f64) {
         for i in 0..self.last.len() {
             let o = BodyId(i as u32);
-            if self.scene.objects()[i].fixed {
+            if self.scene.objects()[i].fixed || !self.scene.is_present(o) {
                 continue;
             }
             let moving = self.moved(o) > MOVING_M;

@@ -21,6 +21,17 @@ pub enum EventKind {
     Hold,
     /// The hand let go (printed only).
     LetGo,
+    /// An object was added to the scene (`[[schedule]] add`), at the valid
+    /// place nearest its declared pose; `offer_body` names what it was put
+    /// on (empty: nothing).
+    Add,
+    /// An add found no valid place: the object stays out.
+    AddFailed,
+    /// An object was removed (`[[schedule]] remove`).
+    Remove,
+    /// The interaction mode switched (`offer_body`: the new mode; printed
+    /// only).
+    Mode,
 }
 
 impl EventKind {
@@ -34,12 +45,16 @@ impl EventKind {
             Self::Move => "move",
             Self::Hold => "hold",
             Self::LetGo => "let_go",
+            Self::Add => "add",
+            Self::AddFailed => "add_failed",
+            Self::Remove => "remove",
+            Self::Mode => "mode",
         }
     }
 
     /// True for the constraint events `summary.json` lists.
     pub fn is_constraint(self) -> bool {
-        !matches!(self, Self::Move | Self::Hold | Self::LetGo)
+        !matches!(self, Self::Move | Self::Hold | Self::LetGo | Self::Mode)
     }
 }
 
@@ -87,6 +102,19 @@ pub struct SemanticReport {
     pub cycle_ns_max: u64,
     /// Total, ns.
     pub cycle_ns_sum: u64,
+    /// Objects added, removed, and adds that found no valid place.
+    pub adds: u64,
+    /// See `adds`.
+    pub removes: u64,
+    /// See `adds`.
+    pub add_failures: u64,
+    /// Objects in the scene at the end (declared ones minus removed and
+    /// not-yet-added).
+    pub present_at_end: usize,
+    /// Satisfied constraints at the end.
+    pub constraints_at_end: usize,
+    /// The interaction mode at the end.
+    pub mode_at_end: &'static str,
     /// Largest and total time to build a program for a change, ns.
     pub build_ns_max: u64,
     /// Total, ns.
