@@ -76,7 +76,7 @@ impl From<Percentiles> for Quantiles {
     }
 }
 
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Serialize)]
 struct Violation {
     /// Largest length-row violation of any tick, m.
     max: f64,
@@ -84,6 +84,9 @@ struct Violation {
     rms: f64,
     /// Largest angle-row violation of any tick, rad.
     max_rad: f64,
+    /// The session report's verdict: what the figures are, or why there
+    /// are none ("no joint rows", "all ticks failed"), never NaN in text.
+    verdict: String,
 }
 
 /// What `--json` writes.
@@ -174,6 +177,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
             max: s.violation.max,
             rms: s.violation.rms,
             max_rad: s.violation.max_rad,
+            verdict: s.violation.verdict.clone(),
         },
         solver_failures: s.safety.solver_failures,
     };
@@ -239,10 +243,19 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
         b.slow_step_ns.p50 as f64 / 1e3,
         b.slow_step_ns.max as f64 / 1e3
     );
-    let _ = write!(
-        out,
-        "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m; solver failures: {}",
-        b.violation.max, b.violation.max_rad, b.violation.rms, b.solver_failures
-    );
+    let v = &b.violation;
+    if [v.max, v.max_rad, v.rms].iter().all(|x| x.is_finite()) {
+        let _ = write!(
+            out,
+            "constraint violation: max {:.2e} m, {:.2e} rad; RMS {:.2e} m; solver failures: {}",
+            v.max, v.max_rad, v.rms, b.solver_failures
+        );
+    } else {
+        let _ = write!(
+            out,
+            "constraint violation: {}; solver failures: {}",
+            v.verdict, b.solver_failures
+        );
+    }
     out
 }

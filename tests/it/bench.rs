@@ -204,3 +204,55 @@ fn bench_takes_the_solver_flags_and_scene_files() {
         );
     }
 }
+
+/// A contact scene has no joint rows: bench says so, as `run` does, and
+/// never prints NaN for the violation it has no rows to measure (it printed
+/// "max NaN m, NaN rad"); a joint scene keeps its three figures.
+#[test]
+fn bench_says_why_a_scene_has_no_violation_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("stack.json");
+    let out = haptloop()
+        .args(["bench", "stack", "--ticks", "50", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(
+        text.contains(
+            "constraint violation: none: the scene has no joint rows to violate; solver failures: 0"
+        ),
+        "{text}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["violation"]["max"].is_null(), "{}", v["violation"]);
+    assert!(
+        v["violation"]["verdict"]
+            .as_str()
+            .unwrap()
+            .starts_with("none")
+    );
+    let joints = haptloop()
+        .args(["bench", "four-bar", "--ticks", "50"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&joints.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("constraint violation: max "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let max: f64 = line["constraint violation: max ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(max.is_finite() && max < 1e-6, "{line}");
+}
