@@ -400,6 +400,13 @@ fn check_record(args: &RunArgs, plan: &Plan) -> Result<(), String> {
     let Some(record) = &args.record else {
         return Ok(());
     };
+    if record.exists() && !record.is_dir() {
+        return Err(format!(
+            "--record {}: that is a file; --record takes a directory (one trace per device is \
+             written into it)",
+            record.display()
+        ));
+    }
     if let Some(replay) = &args.replay
         && same_directory(record, replay)
     {

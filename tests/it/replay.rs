@@ -120,6 +120,28 @@ fn recording_into_the_replay_directory_is_refused() {
     assert_eq!(std::fs::read(traces.join("left.trace")).unwrap(), before);
 }
 
+/// `--record` naming a file: a usage error that names the flag, before
+/// anything runs (it was "creating …: File exists" once the run had
+/// started); the file is untouched.
+#[test]
+fn recording_into_a_file_is_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("notes.txt");
+    std::fs::write(&file, "mine").unwrap();
+    let o = haptloop()
+        .args(["run", "four-bar", "--deterministic", "--seconds", "0.1"])
+        .args(["--no-files", "--quiet", "--record"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!("--record {}: that is a file", file.display());
+    assert!(err.contains(&want), "{}", text(&o));
+    assert!(!err.contains("running"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+}
+
 /// Another scene's rows under an edited header load (every value is
 /// plausible), but the replay sends forces that differ from the recorded
 /// ones from the first tick that differs: the report says `DIVERGED`,
