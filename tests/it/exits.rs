@@ -34,11 +34,11 @@ fn names(dir: &Path) -> Vec<String> {
     v
 }
 
-/// A replay from a missing directory, a `--record` path that is a file, a
-/// `--spin-us` as long as the period: each fails, and the output directory
-/// is given back (a new one removed, an existing one left empty, with no
-/// lock and no `trace.csv.partial`), so the next run can use it. The spin
-/// window is a usage error naming its flag, found before anything is
+/// A replay from a missing directory fails after the output directory is
+/// claimed, and gives it back (a new one removed, an existing one left
+/// empty, with no lock and no `trace.csv.partial`), so the next run can use
+/// it. A `--record` path that is a file and a `--spin-us` as long as the
+/// period are usage errors naming their flag, found before anything is
 /// claimed.
 #[test]
 fn errors_after_the_claim_give_the_output_directory_back() {
@@ -57,7 +57,8 @@ fn errors_after_the_claim_give_the_output_directory_back() {
     let missing = dir.path().join("no-traces");
     let record_at_file = ["--record", a_file.to_str().unwrap()];
     let replay_missing = ["--replay", missing.to_str().unwrap()];
-    for extra in [&replay_missing[..], &record_at_file[..]] {
+    {
+        let extra = &replay_missing[..];
         let new = dir.path().join("new");
         let o = run(extra, &new);
         assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", text(&o));
@@ -79,6 +80,14 @@ fn errors_after_the_claim_give_the_output_directory_back() {
         String::from_utf8_lossy(&o.stderr).contains(
             "--spin-us 1000: the spin window must be shorter than the period, 1000 µs at 1000 Hz"
         ),
+        "{}",
+        text(&o)
+    );
+    assert!(!spin.exists());
+    let o = run(&record_at_file, &spin);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("that is a file; --record takes a directory"),
         "{}",
         text(&o)
     );
