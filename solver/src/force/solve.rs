@@ -244,17 +244,7 @@ impl MultiplierSolve {
             // unconverged force.
         }
         let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
-        self.factor(gram)?;
-        self.seeded = true;
-        // S from the tail block (lower triangle), mirrored.
-        let block = self.llt.tail_block();
-        for f in 0..m {
-            for g in 0..=f {
-                let v = block[f * m + g];
-                self.schur_keep[f * m + g] = v;
-                self.schur_keep[g * m + f] = v;
-            }
-        }
+        self.factor_keeping_schur(gram)?;
         self.gather(gram, r);
         let a_ff = &gram.values[nnz + m * n..];
         let reference = (0..m).map(|f| a_ff[f * m + f]).fold(0.0, f64::max);
@@ -475,15 +465,9 @@ impl MultiplierSolve {
         Ok(())
     }
 
-    /// The matvec-only tick's fallback for a projected step whose CG hit
-    /// the cap: factors `gram`'s A (seeding the preconditioner with it) and
-    /// solves the step directly, as the Cholesky tick does.
-    fn refactor_for_step(
-        &mut self,
-        gram: &Gram,
-        r: &[f64],
-        k_inv: &[f64],
-    ) -> Result<(), FactorError> {
+    /// Factors `gram` (seeding the preconditioner) and keeps S, the tail
+    /// block's lower triangle mirrored to a full m × m.
+    fn factor_keeping_schur(&mut self, gram: &Gram) -> Result<(), FactorError> {
         let m = gram.m_f;
         self.factor(gram)?;
         self.seeded = true;
@@ -495,6 +479,20 @@ impl MultiplierSolve {
                 self.schur_keep[g * m + f] = v;
             }
         }
+        Ok(())
+    }
+
+    /// The matvec-only tick's fallback for a projected step whose CG hit
+    /// the cap: factors `gram`'s A (seeding the preconditioner with it) and
+    /// solves the step directly, as the Cholesky tick does.
+    fn refactor_for_step(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        k_inv: &[f64],
+    ) -> Result<(), FactorError> {
+        let m = gram.m_f;
+        self.factor_keeping_schur(gram)?;
         self.gather(gram, r);
         let Self {
             llt,
