@@ -8,7 +8,8 @@
 //!          │                 (a penetration deeper than the tolerance: the same, from the
 //!          │                  last clean configuration, as a Reset: the backup)
 //!          └──no───────────► witness table ─► WitnessFrame mailbox
-//!  fast loop, every tick:   newest frame for its model ─► Program::apply_witnesses (copy + refactor)
+//!  fast loop, every tick:   newest frame for its model ─► Program::stage_witnesses (a copy; the tick
+//!                           takes it in before its force solve's evaluation)
 //!                           each step: an inactive contact it would violate is activated and
 //!                           the step retaken (at most MAX_ACTIVATIONS refactorisations)
 //! ```
@@ -309,7 +310,8 @@ impl WitnessInbox {
     ///
     /// # Real-time
     /// No allocation: a mailbox read and a copy of the table into the
-    /// program's (same length), then one refactorisation.
+    /// program's staging buffer (same length); the tick copies it in
+    /// before its force solve (`Program::stage_witnesses`).
     pub fn apply(&mut self, program: &mut Program) -> Option<u64> {
         if !self.frames.refresh() {
             return None;
@@ -318,7 +320,7 @@ impl WitnessInbox {
         if f.model_id != program.model().id() || f.generation <= self.applied {
             return None;
         }
-        if program.apply_witnesses(&f.table) {
+        if program.stage_witnesses(&f.table) {
             self.applied = f.generation;
             Some(f.snapshot_tick)
         } else {

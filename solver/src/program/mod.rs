@@ -59,6 +59,7 @@ mod auxiliary;
 mod contact;
 mod converged;
 mod design_flags;
+mod handover;
 mod inertial;
 mod objective;
 #[cfg(test)]
@@ -155,6 +156,14 @@ pub struct Program {
     report: TickReport,
     /// Refreshed force factors adopted (matvec-only tick).
     factor_adoptions: u64,
+    /// The factor was prepared for a hand-over (`handover`): the next
+    /// `adopt_state` keeps it.
+    prepared: bool,
+    /// A witness table waiting for the tick's evaluation (`handover`):
+    /// one entry per contact slot.
+    staged: Vec<crate::constraint::witness::Witness>,
+    /// `staged` holds a table not yet applied.
+    staged_ready: bool,
 }
 
 impl Program {
@@ -309,6 +318,9 @@ impl Program {
             outputs: vec![FingerOutput::default(); model.fingers().len()],
             report: TickReport::default(),
             factor_adoptions: 0,
+            prepared: false,
+            staged: vec![Default::default(); model.contact().slots],
+            staged_ready: false,
             feedback,
             ev,
             h,
