@@ -8,8 +8,7 @@
 //!          │                 (a penetration deeper than the tolerance: the same, from the
 //!          │                  last clean configuration, as a Reset: the backup)
 //!          └──no───────────► witness table ─► WitnessFrame mailbox
-//!  fast loop, every tick:   newest frame for its model ─► Program::stage_witnesses (a copy; the tick
-//!                           takes it in before its force solve's evaluation)
+//!  fast loop, every tick:   newest frame for its model ─► Program::apply_witnesses (copy + refactor)
 //!                           each step: an inactive contact it would violate is activated and
 //!                           the step retaken (at most MAX_ACTIVATIONS refactorisations)
 //! ```
@@ -310,8 +309,7 @@ impl WitnessInbox {
     ///
     /// # Real-time
     /// No allocation: a mailbox read and a copy of the table into the
-    /// program's staging buffer (same length); the tick copies it in
-    /// before its force solve (`Program::stage_witnesses`).
+    /// program's (same length), then one refactorisation.
     pub fn apply(&mut self, program: &mut Program) -> Option<u64> {
         if !self.frames.refresh() {
             return None;
@@ -320,7 +318,7 @@ impl WitnessInbox {
         if f.model_id != program.model().id() || f.generation <= self.applied {
             return None;
         }
-        if program.stage_witnesses(&f.table) {
+        if program.apply_witnesses(&f.table) {
             self.applied = f.generation;
             Some(f.snapshot_tick)
         } else {

@@ -161,7 +161,9 @@ impl Cholesky {
     /// and never factored: [`factor`](Self::factor) then leaves the Schur
     /// complement A_TT − L_TL L_TLᵀ in [`tail_block`](Self::tail_block), and
     /// [`solve_with_tail`](Self::solve_with_tail) solves the whole system
-    /// through a caller's solve of that block. Allocates.
+    /// through a caller's solve of that block. Allocates. (Tests; the force
+    /// solve analyses with [`analyze_grouped`](Self::analyze_grouped).)
+    #[cfg(test)]
     pub fn analyze_with_tail(
         n: usize,
         tail: usize,
@@ -172,7 +174,8 @@ impl Cholesky {
         Self::analyze_grouped(n, tail, entries, cliques, &[], max_rhs)
     }
 
-    /// [`analyze_with_tail`](Self::analyze_with_tail) keeping columns of
+    /// `analyze_with_tail` (the whole matrix given as its lower triangle's
+    /// entries, the last `tail` rows never factored) keeping columns of
     /// different `groups` keys (one per leading column, original order) in
     /// different supernodes: rows that are switched off together then form
     /// supernodes [`factor_decoupled`](Self::factor_decoupled) skips whole.
@@ -292,6 +295,7 @@ impl Cholesky {
     ///
     /// # Real-time
     /// No allocation; time fixed by the pattern.
+    #[cfg(test)]
     pub fn factor(&mut self, a: &[f64], reg: Regularization) -> Result<(), NotPositive> {
         self.diagonal.fill(false);
         self.numeric(a, reg)

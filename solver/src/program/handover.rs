@@ -1,36 +1,30 @@
-//! Handing the slow loop's contact changes to the fast loop without a
-//! factorisation on the fast thread.
+//! Handing a new contact program to the fast loop without a factorisation
+//! on the fast thread.
 //!
 //! ```text
 //!  slow thread, a new set of pairs:  Program::new / cached ─► prepare_handover(snapshot q)
 //!                                    (evaluation + Eq. 7 factor at that q, touching rows active)
 //!  fast thread, the swap:            adopt_state: q, motion, multipliers carried over;
 //!                                    the prepared factor is kept (no refactorisation)
-//!  slow thread, features changed:    witness table ─► mailbox
-//!  fast thread, the frame:           stage_witnesses (a copy); the tick's steps run on the
-//!                                    old table and its factor, then the table is copied in
-//!                                    before the evaluation the tick's force solve factors
 //! ```
 //!
-//! **A new program.** Until the first tick's force solve refactors at its
-//! end, its projected steps run on the factor of A = D C_q M̃⁻¹ C_qᵀ D made
-//! at the snapshot a few milliseconds old, with C_q of the same moment: a
-//! chord step, as every step after a tick's first already is; C (the
-//! residual) is evaluated at every step. A contact row the step would push
-//! through is activated and the step retaken with a fresh factor
-//! (`MAX_ACTIVATIONS` per tick), as for any row.
+//! Until the first tick's force solve refactors at its end, its projected
+//! steps run on the factor of A = D C_q M̃⁻¹ C_qᵀ D made at the snapshot a
+//! few milliseconds old, with C_q of the same moment: a chord step, as
+//! every step after a tick's first already is; C (the residual) is
+//! evaluated at every step. A contact row the step would push through is
+//! activated and the step retaken with a fresh factor (`MAX_ACTIVATIONS`
+//! per tick), as for any row.
 //!
-//! **A new witness table** changes rows inside the pattern. A step must not
-//! mix the new rows' C_q with a factor of the old ones (measured on
-//! `cluttered`: 700× the penetration), so the table waits for the point of
-//! the tick where C_q is evaluated anyway for the force solve: the steps of
-//! that tick use the old table consistently, the force and every later
-//! step the new one. The cost is one tick of latency (1 ms at 1 kHz, on a
-//! table computed from a snapshot 5 ms apart); the saving a refactorisation.
+//! A witness table (features changed inside the pairs) is still copied in
+//! and refactored on the fast thread (`Program::apply_witnesses`): copied in
+//! with C_q re-evaluated but the old factor kept, the penetration on
+//! `cluttered` grew 700×; copied in after the tick's steps, before the
+//! evaluation the force solve factors, `arm-push`'s joint violation grew
+//! from 6.6e-10 m to 2.4e-6 m (BENCHMARKS.md, issue 23).
 
 use super::{Program, ProgramError, TickOutcome};
 use crate::al::scaling::Role;
-use crate::constraint::witness::Witness;
 use crate::force::INEQUALITY_ACTIVE_BAND;
 
 impl Program {
@@ -72,44 +66,6 @@ impl Program {
     /// taken over.
     pub fn is_prepared(&self) -> bool {
         self.prepared
-    }
-
-    /// Stages a witness table from the slow loop for the running program
-    /// (the fast thread's [`apply_witnesses`](Self::apply_witnesses)): the
-    /// next tick's steps still run on the table and factor they were made
-    /// with; after them the table is copied in, before the evaluation that
-    /// the tick's force solve factors (see the module docs). `false`
-    /// (nothing staged) when its length is not this model's contact slots.
-    ///
-    /// # Real-time
-    /// No allocation; O(slots) copies, no evaluation or factorisation.
-    pub fn stage_witnesses(&mut self, table: &[Witness]) -> bool {
-        if table.len() != self.staged.len() {
-            return false;
-        }
-        self.staged.copy_from_slice(table);
-        self.staged_ready = true;
-        true
-    }
-
-    /// A table is staged and not yet applied (see
-    /// [`stage_witnesses`](Self::stage_witnesses)).
-    pub fn has_staged_witnesses(&self) -> bool {
-        self.staged_ready
-    }
-
-    /// Copies the staged table in (friction anchors of persisting contacts
-    /// kept, as [`apply_witnesses`](Self::apply_witnesses)).
-    ///
-    /// # Real-time
-    /// No allocation: the staged buffer is moved out and back.
-    pub(super) fn apply_staged_witnesses(&mut self) {
-        if !std::mem::take(&mut self.staged_ready) {
-            return;
-        }
-        let staged = std::mem::take(&mut self.staged);
-        self.copy_witnesses(&staged);
-        self.staged = staged;
     }
 
     /// [`adopt_state`](Self::adopt_state) without its refactorisation, for a

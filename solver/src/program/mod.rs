@@ -159,11 +159,6 @@ pub struct Program {
     /// The factor was prepared for a hand-over (`handover`): the next
     /// `adopt_state` keeps it.
     prepared: bool,
-    /// A witness table waiting for the tick's evaluation (`handover`):
-    /// one entry per contact slot.
-    staged: Vec<crate::constraint::witness::Witness>,
-    /// `staged` holds a table not yet applied.
-    staged_ready: bool,
 }
 
 impl Program {
@@ -319,8 +314,6 @@ impl Program {
             report: TickReport::default(),
             factor_adoptions: 0,
             prepared: false,
-            staged: vec![Default::default(); model.contact().slots],
-            staged_ready: false,
             feedback,
             ev,
             h,

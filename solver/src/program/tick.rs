@@ -317,9 +317,6 @@ impl Program {
             Err((status, k)) => return self.failed(status, k),
         };
         marks.end(SolverStage::Update);
-        // A witness table the slow loop sent since the last tick joins here,
-        // before the evaluation the force solve factors (`handover`).
-        self.apply_staged_witnesses();
         if self.ev.evaluate(&self.model, &self.q, targets).is_err() {
             return self.failed(TickOutcome::NonFinite, n);
         }
