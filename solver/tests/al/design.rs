@@ -166,56 +166,57 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         fresh.finger(f.clone());
     }
     b = fresh;
-    let mut specs = Vec::new();
-    specs.push(ObjectiveSpec::Dexterity {
-        name: None,
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: Vec::new(),
-        angular_directions: Vec::new(),
-        closure: Vec::new(),
-    });
-    specs.push(ObjectiveSpec::StraightLine {
-        name: None,
-        weight: 0.01,
-        body: "coupler".into(),
-        point_m: [0.0; 3],
-        line_point_m: [0.06, 0.03, 0.06],
-        direction: [1.0, 0.0, 0.0],
-    });
-    // Eq. 13's angular rows, a closed chain, Eq. 15 as written and App. D's
-    // workspace volume: the objectives of issue 22.
-    specs.push(ObjectiveSpec::Dexterity {
-        name: Some("angular".into()),
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: Vec::new(),
-        angular_directions: vec![[0.0, 0.0, 1.0]],
-        closure: Vec::new(),
-    });
-    specs.push(ObjectiveSpec::Dexterity {
-        name: Some("loop".into()),
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: vec![[0.0, 1.0, 0.0]],
-        angular_directions: Vec::new(),
-        closure: ["rocker", "ground"].map(String::from).to_vec(),
-    });
-    specs.push(ObjectiveSpec::InverseDistance {
-        name: None,
-        weight: 0.001,
-        points: vec![("coupler".into(), [0.0; 3])],
-        obstacle: haptloop_solver::ObstacleSpec::World([0.1, 0.1, 0.1]),
-    });
-    specs.push(ObjectiveSpec::WorkspaceVolume {
-        name: None,
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-    });
+    let specs = vec![
+        ObjectiveSpec::Dexterity {
+            name: None,
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: Vec::new(),
+            angular_directions: Vec::new(),
+            closure: Vec::new(),
+        },
+        ObjectiveSpec::StraightLine {
+            name: None,
+            weight: 0.01,
+            body: "coupler".into(),
+            point_m: [0.0; 3],
+            line_point_m: [0.06, 0.03, 0.06],
+            direction: [1.0, 0.0, 0.0],
+        },
+        // Eq. 13's angular rows, a closed chain, Eq. 15 as written and App. D's
+        // workspace volume: the objectives of issue 22.
+        ObjectiveSpec::Dexterity {
+            name: Some("angular".into()),
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: Vec::new(),
+            angular_directions: vec![[0.0, 0.0, 1.0]],
+            closure: Vec::new(),
+        },
+        ObjectiveSpec::Dexterity {
+            name: Some("loop".into()),
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: vec![[0.0, 1.0, 0.0]],
+            angular_directions: Vec::new(),
+            closure: ["rocker", "ground"].map(String::from).to_vec(),
+        },
+        ObjectiveSpec::InverseDistance {
+            name: None,
+            weight: 0.001,
+            points: vec![("coupler".into(), [0.0; 3])],
+            obstacle: haptloop_solver::ObstacleSpec::World([0.1, 0.1, 0.1]),
+        },
+        ObjectiveSpec::WorkspaceVolume {
+            name: None,
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+        },
+    ];
     let model = b.build().unwrap();
     assert_eq!(model.layout().design_coords(), 3);
     for update in [UpdateRule::Projected, UpdateRule::Gradient] {
