@@ -38,8 +38,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 HAPTLOOP = ROOT / "target" / "release" / "haptloop"
 # Every mechanism scene shipped (jointed, no contact, no design variables)
-# and the structure classes of issue 23. Not here: quarter-torus (its MJCF
-# is not assembled at q0: a rolling joint MuJoCo has no counterpart for)
+# and the structure classes of issue 23. Not here: quarter-torus (written
+# 5 mm apart and assembled at start-up, so its MJCF at q0 is not assembled)
 # and flexible-ik (MuJoCo's model of it cannot bend).
 SCENES = [
     "four-bar",
