@@ -175,10 +175,13 @@ impl<C: Clock> TickBody for FastLoop<C> {
         self.timer.start();
         let now = self.session_time(tick);
         let read_start = self.clock.now();
-        let swapped = self
-            .programs
-            .try_swap(&mut self.program, |old, new| new.take_over(old));
+        let mut prepared = 0;
+        let swapped = self.programs.try_swap(&mut self.program, |old, new| {
+            prepared += u64::from(new.program.is_prepared());
+            new.take_over(old);
+        });
         self.stats.programs_swapped += swapped as u64;
+        self.stats.contact.prepared_programs += prepared;
         if swapped > 0
             && let Some(at) = self.program.snapshot_tick
         {

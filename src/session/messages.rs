@@ -46,15 +46,24 @@ impl Handover {
     ///
     /// # Real-time
     /// No allocation (the correction vector was allocated by the slow loop).
+    /// A program prepared on the slow thread (`Program::prepare_handover`)
+    /// keeps its factor; a correction refactors once, after the state is
+    /// carried over (not before as well).
     pub fn take_over(&mut self, old: &Handover) {
-        self.program.adopt_state(&old.program);
+        let p = &mut self.program;
         match &self.correction {
-            Correction::None => {}
+            Correction::None => p.adopt_state(&old.program),
             Correction::Shift(dq) => {
-                let _ = self.program.shift_q(dq);
+                p.adopt_state_unfactored(&old.program);
+                if p.shift_q(dq).is_err() {
+                    p.refresh_factor();
+                }
             }
             Correction::Reset(q) => {
-                let _ = self.program.set_q(q);
+                p.adopt_state_unfactored(&old.program);
+                if p.set_q(q).is_err() {
+                    p.refresh_factor();
+                }
             }
         }
     }

@@ -169,6 +169,9 @@ pub struct ContactStats {
     pub latency_max_ticks: u64,
     /// Sum of the latencies, ticks (mean = this / updates).
     pub latency_sum_ticks: u64,
+    /// Contact programs taken over with the factor the slow loop prepared
+    /// (`Program::prepare_handover`): no refactorisation on the fast loop.
+    pub prepared_programs: u64,
     /// Most friction pairs sticking at once.
     pub max_sticking: u32,
     /// Ticks in which the contact speed limit held a shaped body back.

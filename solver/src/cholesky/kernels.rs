@@ -39,15 +39,16 @@ pub(super) fn numeric(
     a: &[f64],
     reg: Regularization,
     simd: bool,
+    decoupled: &[bool],
 ) -> Result<usize, NotPositive> {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` is true only where the CPU reported AVX2 and FMA
         // (`simd_available`), the features `numeric_avx2` is compiled for.
-        return unsafe { numeric_avx2(sym, values, inv, a, reg) };
+        return unsafe { numeric_avx2(sym, values, inv, a, reg, decoupled) };
     }
     let _ = simd;
-    numeric_in(sym, values, inv, a, reg)
+    numeric_in(sym, values, inv, a, reg, decoupled)
 }
 
 /// [`numeric_in`] compiled for AVX2 and FMA.
@@ -59,10 +60,15 @@ fn numeric_avx2(
     inv: &mut [f64],
     a: &[f64],
     reg: Regularization,
+    decoupled: &[bool],
 ) -> Result<usize, NotPositive> {
-    numeric_in(sym, values, inv, a, reg)
+    numeric_in(sym, values, inv, a, reg, decoupled)
 }
 
+/// `decoupled[s]`: every column of supernode s has A's entries zero off
+/// the diagonal (rows a force solve switched off), so its L is diagonal,
+/// √A_jj, and it neither gives nor takes an update (see
+/// `Cholesky::factor_decoupled`).
 #[inline(always)]
 fn numeric_in(
     sym: &Symbolic,
@@ -70,6 +76,7 @@ fn numeric_in(
     inv: &mut [f64],
     a: &[f64],
     reg: Regularization,
+    decoupled: &[bool],
 ) -> Result<usize, NotPositive> {
     v.fill(0.0);
     for &(src, dst) in &sym.load {
@@ -81,7 +88,15 @@ fn numeric_in(
         let (before, rest) = v.split_at_mut(sn.val as usize);
         let w = sn.w as usize;
         let block = &mut rest[..(w + sn.nrows as usize) * w];
+        if decoupled[s] {
+            regularized += diagonal_factor(block, w, sn.c0 as usize, reg)?;
+            continue;
+        }
         for u in &sym.updates[sn.updates.0 as usize..sn.updates.1 as usize] {
+            if decoupled[u.src as usize] {
+                // Its rows below the diagonal are zero: no update.
+                continue;
+            }
             let d = &sym.supernodes[u.src as usize];
             let wd = d.w as usize;
             let (a0, m) = (u.a as usize, u.m as usize);
@@ -283,6 +298,30 @@ fn update_any(
 /// number of regularised pivots. `c0`: the block's first column (for the
 /// error's index); `inv`: scratch of at least w.
 #[inline(always)]
+/// [`dense_factor`] of a block that is diagonal (its off-diagonal entries,
+/// below rows included, are zero and stay zero): √ of each pivot, with the
+/// same regularisation.
+fn diagonal_factor(
+    block: &mut [f64],
+    w: usize,
+    c0: usize,
+    reg: Regularization,
+) -> Result<usize, NotPositive> {
+    let mut replaced = 0;
+    for i in 0..w {
+        let mut d = block[i * w + i];
+        if d <= reg.epsilon {
+            d = reg.delta;
+            replaced += 1;
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(NotPositive { index: c0 + i });
+        }
+        block[i * w + i] = d.sqrt();
+    }
+    Ok(replaced)
+}
+
 fn dense_factor(
     block: &mut [f64],
     w: usize,

@@ -115,6 +115,24 @@ pub(crate) struct Cholesky {
     pub regularized: usize,
     /// Run the AVX2 + FMA kernels (`kernels::simd_available`).
     simd: bool,
+    /// Per column of the factor's order: its supernode.
+    col_supernode: Vec<u32>,
+    /// Per supernode: its factor in `values` is diagonal (all its columns
+    /// were decoupled in the last factorisation, see
+    /// [`factor_decoupled`](Self::factor_decoupled)).
+    diagonal: Vec<bool>,
+}
+
+/// Each column's supernode (the factor's order) and a cleared per-supernode
+/// flag vector. Allocates.
+fn supernode_maps(sym: &Symbolic) -> (Vec<u32>, Vec<bool>) {
+    let mut col = vec![0u32; sym.n];
+    for (s, sn) in sym.supernodes.iter().enumerate() {
+        for c in sn.c0..sn.c0 + sn.w {
+            col[c as usize] = s as u32;
+        }
+    }
+    (col, vec![false; sym.supernodes.len()])
 }
 
 impl Cholesky {
@@ -143,7 +161,9 @@ impl Cholesky {
     /// and never factored: [`factor`](Self::factor) then leaves the Schur
     /// complement A_TT − L_TL L_TLᵀ in [`tail_block`](Self::tail_block), and
     /// [`solve_with_tail`](Self::solve_with_tail) solves the whole system
-    /// through a caller's solve of that block. Allocates.
+    /// through a caller's solve of that block. Allocates. (Tests; the force
+    /// solve analyses with [`analyze_grouped`](Self::analyze_grouped).)
+    #[cfg(test)]
     pub fn analyze_with_tail(
         n: usize,
         tail: usize,
@@ -151,7 +171,24 @@ impl Cholesky {
         cliques: &[Vec<usize>],
         max_rhs: usize,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let sym = Symbolic::analyze(n, tail, entries, cliques)?;
+        Self::analyze_grouped(n, tail, entries, cliques, &[], max_rhs)
+    }
+
+    /// `analyze_with_tail` (the whole matrix given as its lower triangle's
+    /// entries, the last `tail` rows never factored) keeping columns of
+    /// different `groups` keys (one per leading column, original order) in
+    /// different supernodes: rows that are switched off together then form
+    /// supernodes [`factor_decoupled`](Self::factor_decoupled) skips whole.
+    /// Allocates.
+    pub fn analyze_grouped(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        groups: &[u32],
+        max_rhs: usize,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let sym = Symbolic::analyze(n, tail, entries, cliques, groups)?;
         // The solve kernels are specialised up to 8 right-hand sides.
         let max_rhs = max_rhs.clamp(1, 8);
         let widest = sym
@@ -160,6 +197,7 @@ impl Cholesky {
             .map(|s| s.w as usize)
             .max()
             .unwrap_or(0);
+        let (col_supernode, diagonal) = supernode_maps(&sym);
         Ok(Self {
             inv: vec![0.0; widest],
             values: vec![0.0; sym.len_values()],
@@ -167,6 +205,8 @@ impl Cholesky {
             max_rhs,
             regularized: 0,
             simd: kernels::simd_available(),
+            col_supernode,
+            diagonal,
             sym,
         })
     }
@@ -206,6 +246,7 @@ impl Cholesky {
             .map(|s| s.w as usize)
             .max()
             .unwrap_or(0);
+        let (col_supernode, diagonal) = supernode_maps(&sym);
         Self {
             inv: vec![0.0; widest],
             values: vec![0.0; sym.len_values()],
@@ -213,6 +254,8 @@ impl Cholesky {
             max_rhs: 1,
             regularized: 0,
             simd: kernels::simd_available(),
+            col_supernode,
+            diagonal,
             sym,
         }
     }
@@ -234,6 +277,8 @@ impl Cholesky {
             return false;
         }
         std::mem::swap(&mut self.values, values);
+        // Values factored elsewhere: nothing known of their shape.
+        self.diagonal.fill(false);
         true
     }
 
@@ -250,16 +295,66 @@ impl Cholesky {
     ///
     /// # Real-time
     /// No allocation; time fixed by the pattern.
+    #[cfg(test)]
     pub fn factor(&mut self, a: &[f64], reg: Regularization) -> Result<(), NotPositive> {
-        self.regularized = kernels::numeric(
+        self.diagonal.fill(false);
+        self.numeric(a, reg)
+    }
+
+    /// [`factor`](Self::factor) of a matrix whose leading-block columns with
+    /// `decoupled[i]` (original order, one per leading column; a slice of
+    /// another length is ignored) have every entry off the diagonal zero,
+    /// in their row and their column: rows switched off, as the force
+    /// solve's inactive contact rows are. Such a column's L is √A_ii alone,
+    /// so a supernode of them only takes its square roots, no supernode
+    /// updates from it or into it, and the solves only scale its entries.
+    /// The result is the same factor: the work skipped multiplies zeros.
+    ///
+    /// # Real-time
+    /// No allocation; O(n) to mark the supernodes, then the factorisation
+    /// without the skipped work.
+    pub fn factor_decoupled(
+        &mut self,
+        a: &[f64],
+        reg: Regularization,
+        decoupled: &[bool],
+    ) -> Result<(), NotPositive> {
+        let lead = self.sym.n - self.sym.tail;
+        self.diagonal.fill(false);
+        if decoupled.len() == lead {
+            self.diagonal[..self.sym.lead_supernodes].fill(true);
+            for (i, &d) in decoupled.iter().enumerate() {
+                if !d {
+                    let s = self.col_supernode[self.sym.iperm[i] as usize];
+                    self.diagonal[s as usize] = false;
+                }
+            }
+        }
+        self.numeric(a, reg)
+    }
+
+    fn numeric(&mut self, a: &[f64], reg: Regularization) -> Result<(), NotPositive> {
+        let done = kernels::numeric(
             &self.sym,
             &mut self.values,
             &mut self.inv,
             a,
             reg,
             self.simd,
-        )?;
+            &self.diagonal,
+        );
+        if done.is_err() {
+            self.diagonal.fill(false);
+        }
+        self.regularized = done?;
         Ok(())
+    }
+
+    /// Supernodes whose factor is diagonal after the last factorisation
+    /// (tests).
+    #[cfg(test)]
+    pub fn diagonal_supernodes(&self) -> usize {
+        self.diagonal.iter().filter(|&&d| d).count()
     }
 
     /// The tail's t × t block after [`factor`](Self::factor): the Schur
@@ -296,14 +391,14 @@ impl Cholesky {
         for (i, &xi) in x.iter().enumerate() {
             work[self.sym.iperm[i] as usize] = xi;
         }
-        triangular::forward(&self.sym, &self.values, work, 1, self.simd);
+        triangular::forward(&self.sym, &self.values, work, 1, self.simd, &self.diagonal);
         let t = self.sym.tail;
         let block = match self.sym.supernodes.get(self.sym.lead_supernodes) {
             Some(sn) => &self.values[sn.val as usize..sn.val as usize + t * t],
             None => &[][..],
         };
         let out = tail_solve(block, &mut work[lead..]);
-        triangular::backward(&self.sym, &self.values, work, 1, self.simd);
+        triangular::backward(&self.sym, &self.values, work, 1, self.simd, &self.diagonal);
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = work[self.sym.iperm[i] as usize];
         }
@@ -330,10 +425,10 @@ impl Cholesky {
                     work[self.sym.iperm[i] as usize * kk + t] = xi;
                 }
             }
-            triangular::forward(&self.sym, &self.values, work, kk, self.simd);
+            triangular::forward(&self.sym, &self.values, work, kk, self.simd, &self.diagonal);
             // A leading-block solve: the tail takes no part.
             work[n * kk..].fill(0.0);
-            triangular::backward(&self.sym, &self.values, work, kk, self.simd);
+            triangular::backward(&self.sym, &self.values, work, kk, self.simd, &self.diagonal);
             for (t, col) in cols.chunks_exact_mut(n).enumerate() {
                 for (i, xi) in col.iter_mut().enumerate() {
                     *xi = work[self.sym.iperm[i] as usize * kk + t];
@@ -346,3 +441,5 @@ impl Cholesky {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_decoupled;

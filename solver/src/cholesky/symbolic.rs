@@ -105,11 +105,17 @@ impl Symbolic {
     /// `tail` rows and columns are ordered last and left unfactored.
     /// `cliques`: groups of leading rows that couple with each other (the
     /// rows on one body), for the nested dissection; empty: AMD only.
+    ///
+    /// `groups`: one key per leading column (original order), or empty:
+    /// columns of different keys never share a supernode (the force
+    /// solve's contact rows, one key per witness constraint: a pair's rows
+    /// switched off together leave a supernode the factorisation skips).
     pub fn analyze(
         n: usize,
         tail: usize,
         entries: &[(usize, usize, usize)],
         cliques: &[Vec<usize>],
+        groups: &[u32],
     ) -> Result<Self, faer::sparse::FaerError> {
         let lead = n - tail;
         // 1. Fill-reducing order of the leading block (the tail keeps its
@@ -130,7 +136,7 @@ impl Symbolic {
             col_ptr.push(row_idx.len());
         }
         let amd = dissection::amd_order(lead, &col_ptr, &row_idx)?;
-        let by_amd = Self::with_order(n, tail, entries, &amd, Ordering::Amd)?;
+        let by_amd = Self::with_order(n, tail, entries, &amd, Ordering::Amd, groups)?;
         if lead < MIN_DISSECTION || cliques.is_empty() {
             return Ok(by_amd);
         }
@@ -144,7 +150,7 @@ impl Symbolic {
             }
         }
         let nd = dissection::dissection_order(&adj, cliques, dissection::LEAF_ROWS)?;
-        let by_nd = Self::with_order(n, tail, entries, &nd, Ordering::Dissection)?;
+        let by_nd = Self::with_order(n, tail, entries, &nd, Ordering::Dissection, groups)?;
         Ok(if by_nd.shape().cost() < by_amd.shape().cost() {
             by_nd
         } else {
@@ -177,7 +183,7 @@ impl Symbolic {
         }
         let amd = dissection::amd_order(lead, &cp, &ri).unwrap();
         (
-            Self::with_order(n, tail, entries, &amd, Ordering::Amd)
+            Self::with_order(n, tail, entries, &amd, Ordering::Amd, &[])
                 .unwrap()
                 .shape(),
             Self::dissected(n, tail, entries, cliques, dissection::LEAF_ROWS).shape(),
@@ -207,7 +213,7 @@ impl Symbolic {
             a.dedup();
         }
         let nd = dissection::dissection_order(&adj, cliques, leaf_rows).unwrap();
-        Self::with_order(n, tail, entries, &nd, Ordering::Dissection).unwrap()
+        Self::with_order(n, tail, entries, &nd, Ordering::Dissection, &[]).unwrap()
     }
 
     /// [`analyze`](Self::analyze) with the leading block's fill-reducing
@@ -218,6 +224,7 @@ impl Symbolic {
         entries: &[(usize, usize, usize)],
         perm_inv: &[usize],
         ordering: Ordering,
+        groups: &[u32],
     ) -> Result<Self, faer::sparse::FaerError> {
         let lead = n - tail;
         // 2. Elimination tree, then a postorder of the leading block's tree
@@ -293,7 +300,7 @@ impl Symbolic {
         }
         starts.push(lead);
         let mut starts = if lead > 0 {
-            amalgamate(&starts, &parent, &colpat)
+            split_groups(&amalgamate(&starts, &parent, &colpat), &iperm, groups)
         } else {
             vec![0]
         };
@@ -507,4 +514,31 @@ fn postorder(parent: &[usize]) -> Vec<usize> {
         }
     }
     post
+}
+
+/// Supernode starts (`starts`, ending with the leading block's end) split
+/// wherever two consecutive columns have different `groups` keys (original
+/// order; `iperm[old] = new`); unchanged when `groups` is empty. Any run of
+/// a supernode's columns is a valid (relaxed) supernode: splitting never
+/// adds fill.
+fn split_groups(starts: &[usize], iperm: &[usize], groups: &[u32]) -> Vec<usize> {
+    let lead = *starts.last().unwrap_or(&0);
+    if groups.len() != lead {
+        return starts.to_vec();
+    }
+    let mut perm = vec![0usize; lead];
+    for (old, &new) in iperm[..lead].iter().enumerate() {
+        perm[new] = old;
+    }
+    let mut out = Vec::with_capacity(starts.len());
+    for w in starts.windows(2) {
+        out.push(w[0]);
+        for j in w[0] + 1..w[1] {
+            if groups[perm[j]] != groups[perm[j - 1]] {
+                out.push(j);
+            }
+        }
+    }
+    out.push(lead);
+    out
 }

@@ -8,46 +8,62 @@ use super::symbolic::Symbolic;
 /// work ← L⁻¹ work over the leading block's columns (`k` interleaved
 /// right-hand sides): the tail entries end as r_T − L_TL w. `simd`:
 /// `kernels::simd_available` said so.
-pub(super) fn forward(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, simd: bool) {
+/// `diagonal[s]`: supernode s's factor is diagonal (see
+/// `kernels::numeric`); its columns are only scaled.
+pub(super) fn forward(
+    sym: &Symbolic,
+    values: &[f64],
+    work: &mut [f64],
+    k: usize,
+    simd: bool,
+    diagonal: &[bool],
+) {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` is true only where the CPU reported AVX2 and FMA.
-        return unsafe { forward_avx2(sym, values, work, k) };
+        return unsafe { forward_avx2(sym, values, work, k, diagonal) };
     }
     let _ = simd;
-    forward_in(sym, values, work, k);
+    forward_in(sym, values, work, k, diagonal);
 }
 
 /// work ← L⁻ᵀ work over the leading block's columns, with the tail
 /// entries as they are (subtracting L_TLᵀ x_T).
-pub(super) fn backward(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, simd: bool) {
+pub(super) fn backward(
+    sym: &Symbolic,
+    values: &[f64],
+    work: &mut [f64],
+    k: usize,
+    simd: bool,
+    diagonal: &[bool],
+) {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: as in `forward`.
-        return unsafe { backward_avx2(sym, values, work, k) };
+        return unsafe { backward_avx2(sym, values, work, k, diagonal) };
     }
     let _ = simd;
-    backward_in(sym, values, work, k);
+    backward_in(sym, values, work, k, diagonal);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn forward_avx2(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
-    forward_in(sym, values, work, k);
+fn forward_avx2(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, diagonal: &[bool]) {
+    forward_in(sym, values, work, k, diagonal);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn backward_avx2(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
-    backward_in(sym, values, work, k);
+fn backward_avx2(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, diagonal: &[bool]) {
+    backward_in(sym, values, work, k, diagonal);
 }
 
 /// work ← L⁻¹ work over the leading block's columns (`k` interleaved
 /// right-hand sides): the tail entries end as r_T − L_TL w.
 #[inline(always)]
-fn forward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
+fn forward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, diagonal: &[bool]) {
     match k {
-        1 => forward_one(sym, values, work),
+        1 => forward_one(sym, values, work, diagonal),
         2 => forward_k::<2>(sym, values, work),
         3 => forward_k::<3>(sym, values, work),
         4 => forward_k::<4>(sym, values, work),
@@ -61,9 +77,9 @@ fn forward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
 /// work ← L⁻ᵀ work over the leading block's columns, with the tail
 /// entries as they are (subtracting L_TLᵀ x_T).
 #[inline(always)]
-fn backward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
+fn backward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize, diagonal: &[bool]) {
     match k {
-        1 => backward_one(sym, values, work),
+        1 => backward_one(sym, values, work, diagonal),
         2 => backward_k::<2>(sym, values, work),
         3 => backward_k::<3>(sym, values, work),
         4 => backward_k::<4>(sym, values, work),
@@ -77,10 +93,14 @@ fn backward_in(sym: &Symbolic, values: &[f64], work: &mut [f64], k: usize) {
 /// [`forward`] for one right-hand side: per supernode a
 /// kernel of its width (1–16 unrolled at compile time).
 #[inline(always)]
-fn forward_one(sym: &Symbolic, values: &[f64], work: &mut [f64]) {
-    for sn in &sym.supernodes[..sym.lead_supernodes] {
+fn forward_one(sym: &Symbolic, values: &[f64], work: &mut [f64], diagonal: &[bool]) {
+    for (s, sn) in sym.supernodes[..sym.lead_supernodes].iter().enumerate() {
         let (c0, w) = (sn.c0 as usize, sn.w as usize);
         let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+        if diagonal[s] {
+            scale_diagonal(block, c0, w, work);
+            continue;
+        }
         let below = &sym.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
         macro_rules! fixed {
             ($($n:literal)*) => {
@@ -96,10 +116,15 @@ fn forward_one(sym: &Symbolic, values: &[f64], work: &mut [f64]) {
 
 /// [`backward`] for one right-hand side.
 #[inline(always)]
-fn backward_one(sym: &Symbolic, values: &[f64], work: &mut [f64]) {
-    for sn in sym.supernodes[..sym.lead_supernodes].iter().rev() {
+fn backward_one(sym: &Symbolic, values: &[f64], work: &mut [f64], diagonal: &[bool]) {
+    let lead = &sym.supernodes[..sym.lead_supernodes];
+    for (s, sn) in lead.iter().enumerate().rev() {
         let (c0, w) = (sn.c0 as usize, sn.w as usize);
         let block = &values[sn.val as usize..sn.val as usize + (w + sn.nrows as usize) * w];
+        if diagonal[s] {
+            scale_diagonal(block, c0, w, work);
+            continue;
+        }
         let below = &sym.rows[sn.rows as usize..(sn.rows + sn.nrows) as usize];
         macro_rules! fixed {
             ($($n:literal)*) => {
@@ -110,6 +135,15 @@ fn backward_one(sym: &Symbolic, values: &[f64], work: &mut [f64]) {
             };
         }
         fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+    }
+}
+
+/// A diagonal supernode's part of either substitution: x_c ← x_c / L_cc
+/// (nothing below it to update).
+#[inline(always)]
+fn scale_diagonal(block: &[f64], c0: usize, w: usize, work: &mut [f64]) {
+    for c in 0..w {
+        work[c0 + c] /= block[c * w + c];
     }
 }
 

@@ -247,13 +247,19 @@ impl ContactManager {
         }
         if self.active.pairs() != self.pairs {
             return match self.build_program() {
-                Ok(program) => (
-                    cycle,
-                    ContactUpdate::Program {
-                        program: Box::new(program),
-                        reset: None,
-                    },
-                ),
+                Ok(mut program) => {
+                    // Factored here at the snapshot, so the fast thread
+                    // takes it over without refactoring (a q of another
+                    // layout leaves it unprepared: the fast thread refactors).
+                    let _ = program.prepare_handover(q);
+                    (
+                        cycle,
+                        ContactUpdate::Program {
+                            program: Box::new(program),
+                            reset: None,
+                        },
+                    )
+                }
                 Err(_) => (cycle, ContactUpdate::None),
             };
         }

@@ -135,7 +135,7 @@ impl Feedback {
             ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
             ForceSolver::Matvec { max_iterations } => (None, Some(max_iterations)),
         };
-        let solve = MultiplierSolve::new(&gram, cg, matvec)?;
+        let solve = MultiplierSolve::new(&gram, cg, matvec, &contact_groups(model, &gram))?;
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -822,6 +822,29 @@ impl Feedback {
         }
         Ok(())
     }
+}
+
+/// Per joint row of `gram`: its witness constraint's index for a contact
+/// pair's rows (normal and friction: each switched on and off as a whole
+/// more often than not), `u32::MAX` for every other row; empty without
+/// contact pairs. The factor keeps a pair's rows in supernodes of their own
+/// (`Cholesky::analyze_grouped`), which it skips while they are off.
+fn contact_groups(model: &Model, gram: &super::gram::Gram) -> Vec<u32> {
+    let pairs = &model.contact().pairs;
+    if pairs.is_empty() {
+        return Vec::new();
+    }
+    let mut key = vec![u32::MAX; model.constraints().len()];
+    for p in pairs {
+        for c in std::iter::once(p.normal).chain(p.friction) {
+            key[c.index()] = c.index() as u32;
+        }
+    }
+    let rows = model.rows();
+    gram.j_rows
+        .iter()
+        .map(|&row| key[rows[row].constraint.index()])
+        .collect()
 }
 
 fn frame(q: &[f64], o: usize) -> Option<BodyFrame> {

@@ -87,6 +87,10 @@ pub(crate) struct Gram {
     cu: Vec<f64>,
     /// Per entry of the body being assembled: its row takes part (scale ≠ 0).
     live: Vec<bool>,
+    /// Per joint row (J order): switched off in the last assembly (scale
+    /// 0), so nothing couples it: the factor can skip it
+    /// (`Cholesky::factor_decoupled`).
+    pub decoupled: Vec<bool>,
     /// M̃_e⁻¹ of each body (layout order) at the last assembly.
     minv_e: Vec<Matrix4<f64>>,
     /// The model's auxiliary blocks (metric and columns).
@@ -242,6 +246,7 @@ impl Gram {
             values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
             cu: vec![0.0; 14 * max_entries],
             live: vec![false; max_entries],
+            decoupled: vec![false; n_j],
             minv_e: vec![Matrix4::zeros(); masses.len()],
             aux_blocks,
             aux,
@@ -340,6 +345,9 @@ impl Gram {
     ) {
         self.values.fill(0.0);
         y.fill(0.0);
+        for (d, &row) in self.decoupled.iter_mut().zip(&self.j_rows) {
+            *d = scale[row] == 0.0;
+        }
         let vals = jac.values();
         for body in &self.bodies {
             let m = &masses[body.mass];

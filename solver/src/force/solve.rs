@@ -96,11 +96,13 @@ impl MultiplierSolve {
     /// the tail); with `cg_iterations`, a capped conjugate-gradient solve
     /// replaces the numeric Cholesky in [`solve`](Self::solve); with
     /// `matvec_iterations`, the matvec-only tick's preconditioned one does
-    /// once the factor is seeded. Allocates.
+    /// once the factor is seeded; `groups` as `Cholesky::analyze_grouped`
+    /// (empty: none). Allocates.
     pub fn new(
         gram: &Gram,
         cg_iterations: Option<u32>,
         matvec_iterations: Option<u32>,
+        groups: &[u32],
     ) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
         // The matvec-only tick preconditions all 1 + m_f columns at once.
@@ -109,11 +111,12 @@ impl MultiplierSolve {
         } else {
             1
         };
-        let llt = Cholesky::analyze_with_tail(
+        let llt = Cholesky::analyze_grouped(
             n + m,
             m,
             &gram.factor_entries(),
             &gram.cliques(),
+            groups,
             max_rhs,
         )?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
@@ -375,7 +378,10 @@ impl MultiplierSolve {
             delta: 1e-10 * max_diag,
             epsilon: 1e-14 * max_diag,
         };
-        self.llt.factor(&gram.values, reg).map_err(|_| FactorError)
+        // Rows the assembly switched off are decoupled: the factor skips them.
+        self.llt
+            .factor_decoupled(&gram.values, reg, &gram.decoupled)
+            .map_err(|_| FactorError)
     }
 
     /// x ← A_JJ⁻¹ x (n_J entries, J order) with the last [`factor`](Self::factor).

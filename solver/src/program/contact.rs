@@ -30,6 +30,16 @@ impl Program {
     /// # Real-time
     /// No allocation; O(slots) copies, one evaluation and one force solve.
     pub fn apply_witnesses(&mut self, table: &[Witness]) -> bool {
+        if !self.copy_witnesses(table) {
+            return false;
+        }
+        let _ = self.refresh();
+        true
+    }
+
+    /// The copy of [`apply_witnesses`](Self::apply_witnesses), without the
+    /// refresh.
+    pub(super) fn copy_witnesses(&mut self, table: &[Witness]) -> bool {
         let keep = &self.friction_slot;
         // The contact slots: the table's head (semantic rows follow them).
         let n = self.model.contact().slots;
@@ -43,7 +53,6 @@ impl Program {
             }
             *o = *t;
         }
-        let _ = self.refresh();
         true
     }
 

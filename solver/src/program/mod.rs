@@ -59,6 +59,7 @@ mod auxiliary;
 mod contact;
 mod converged;
 mod design_flags;
+mod handover;
 mod inertial;
 mod objective;
 #[cfg(test)]
@@ -157,6 +158,9 @@ pub struct Program {
     report: TickReport,
     /// Refreshed force factors adopted (matvec-only tick).
     factor_adoptions: u64,
+    /// The factor was prepared for a hand-over (`handover`): the next
+    /// `adopt_state` keeps it.
+    prepared: bool,
 }
 
 impl Program {
@@ -325,6 +329,7 @@ impl Program {
             outputs: vec![FingerOutput::default(); model.fingers().len()],
             report: TickReport::default(),
             factor_adoptions: 0,
+            prepared: false,
             feedback,
             ev,
             h,

@@ -86,7 +86,9 @@ impl Program {
     /// No allocation. O(n) when the models share their structure (the usual
     /// case: `Model::with_inequalities` keeps every index); O(n²) string
     /// comparisons in the worst case of a re-ordered model; plus one
-    /// evaluation and force solve (the new program's factor at the adopted q).
+    /// evaluation and force solve (the new program's factor at the adopted q)
+    /// unless the program was prepared for the hand-over on the slow thread
+    /// ([`prepare_handover`](Self::prepare_handover)).
     pub fn adopt_state(&mut self, old: &Program) {
         // A reference count, not an allocation: keeps the model borrowable
         // while `self` is refreshed below.
@@ -176,7 +178,11 @@ impl Program {
         self.set_static_shift(old.static_shift());
         self.adopt_friction(old);
         self.adopt_semantic(old);
-        let _ = self.refresh();
+        // A factor prepared on the slow thread for a recent snapshot
+        // (`prepare_handover`) is kept: the fast thread does not refactor.
+        if !std::mem::take(&mut self.prepared) {
+            let _ = self.refresh();
+        }
         self.measure_objectives();
         self.report = old.report;
     }

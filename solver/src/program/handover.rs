@@ -1,0 +1,89 @@
+//! Handing a new contact program to the fast loop without a factorisation
+//! on the fast thread.
+//!
+//! ```text
+//!  slow thread, a new set of pairs:  Program::new / cached ─► prepare_handover(snapshot q)
+//!                                    (evaluation + Eq. 7 factor at that q, touching rows active)
+//!  fast thread, the swap:            adopt_state: q, motion, multipliers carried over;
+//!                                    the prepared factor is kept (no refactorisation)
+//! ```
+//!
+//! Until the first tick's force solve refactors at its end, its projected
+//! steps run on the factor of A = D C_q M̃⁻¹ C_qᵀ D made at the snapshot a
+//! few milliseconds old, with C_q of the same moment: a chord step, as
+//! every step after a tick's first already is; C (the residual) is
+//! evaluated at every step. A contact row the step would push through is
+//! activated and the step retaken with a fresh factor (`MAX_ACTIVATIONS`
+//! per tick), as for any row.
+//!
+//! A witness table (features changed inside the pairs) is still copied in
+//! and refactored on the fast thread (`Program::apply_witnesses`): copied in
+//! with C_q re-evaluated but the old factor kept, the penetration on
+//! `cluttered` grew 700×; copied in after the tick's steps, before the
+//! evaluation the force solve factors, `arm-push`'s joint violation grew
+//! from 6.6e-10 m to 2.4e-6 m (BENCHMARKS.md, issue 23).
+
+use super::{Program, ProgramError, TickOutcome};
+use crate::al::scaling::Role;
+use crate::force::INEQUALITY_ACTIVE_BAND;
+
+impl Program {
+    /// Prepares a program the slow thread is about to hand over for a
+    /// snapshot's configuration `q`: q set there (as [`set_q`](Self::set_q))
+    /// and the Eq. 7 matrix factored at it with every contact and
+    /// inequality row that touches (C within [`INEQUALITY_ACTIVE_BAND`])
+    /// active, as the running program's pushing rows are. The next
+    /// [`adopt_state`](Self::adopt_state) then keeps this factor instead of
+    /// refactoring on the fast thread.
+    ///
+    /// Slow thread: two evaluations and force solves.
+    pub fn prepare_handover(&mut self, q: &[f64]) -> Result<(), ProgramError> {
+        self.set_q(q)?;
+        let c = self.ev.values();
+        let mut any = false;
+        for (i, f) in self.feedback.forced.iter_mut().enumerate() {
+            let touching = matches!(self.scaling.role[i], Role::Contact | Role::Inequality)
+                && c[i] <= INEQUALITY_ACTIVE_BAND;
+            *f = touching;
+            any |= touching;
+        }
+        if any {
+            // Kept through the solve (not re-decided by zero multipliers);
+            // a touching row that would pull is released there as always.
+            self.feedback.carry_forced = true;
+            if !matches!(self.refresh(), TickOutcome::Ok) {
+                // The plain refresh of `set_q` stands in for it.
+                let _ = self.refresh();
+            }
+        }
+        self.feedback.carry_forced = false;
+        self.prepared = true;
+        Ok(())
+    }
+
+    /// Whether the program's factor was prepared on the slow thread for the
+    /// hand-over ([`prepare_handover`](Self::prepare_handover)) and not yet
+    /// taken over.
+    pub fn is_prepared(&self) -> bool {
+        self.prepared
+    }
+
+    /// [`adopt_state`](Self::adopt_state) without its refactorisation, for a
+    /// caller that moves q right after (`shift_q`, `set_q`: they refactor).
+    ///
+    /// # Real-time
+    /// As `adopt_state`, without the evaluation and force solve.
+    pub fn adopt_state_unfactored(&mut self, old: &Program) {
+        self.prepared = true;
+        self.adopt_state(old);
+    }
+
+    /// Refactors the Eq. 7 matrix at the current q (a hand-over whose
+    /// correction could not be applied, see `Handover::take_over`).
+    ///
+    /// # Real-time
+    /// No allocation; one evaluation and one force solve.
+    pub fn refresh_factor(&mut self) -> bool {
+        matches!(self.refresh(), TickOutcome::Ok)
+    }
+}
