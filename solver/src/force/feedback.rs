@@ -104,6 +104,9 @@ pub(crate) struct Feedback {
     /// known in advance, world frame, added to Eq. 7's Q_e: the kinetic
     /// friction of slipping contacts (inertial motion), which no row holds.
     pub applied: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per coordinate: the generalized force of the last step's contact and
+    /// friction rows (scratch of [`Feedback::take_contact_forces`]).
+    contact_raw: Vec<f64>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -116,6 +119,23 @@ pub(crate) struct Feedback {
 /// rows share the load (the minimum-norm split, as a stiff contact patch
 /// does) and every row holds to 1e-6 of its own scale.
 pub(crate) const CONTACT_COMPLIANCE: f64 = 1e-6;
+
+/// Whether Eq. 7 takes the contact and friction forces as known from the
+/// projected steps (inertial motion) instead of solving for them.
+///
+/// Under inertial motion the steps are the physics: a body's velocity
+/// changes by exactly the impulses of its rows. Eq. 7 balances the
+/// *filtered* M q̈, which spreads a contact's impulse over the next
+/// τ + τ_a; a contact row that takes part only while it is closed cannot
+/// carry that tail. A link pushing a sliding box follows the device's
+/// encoder counts (30 µm steps of a PHANToM), strikes the box for one tick
+/// and the box coasts ahead: the closed row saw a quarter of the ticks and
+/// the hand felt 0.13 N of the box's μ m g = 0.49 N (issue 19,
+/// `arm-push`). The step's contact forces, filtered like q̈, balance the
+/// box's filtered M q̈ exactly and pass its mean push, μ m g, to the links.
+pub(crate) fn contact_forces_known(settings: &SolverSettings) -> bool {
+    settings.dynamics && settings.update == UpdateRule::Projected
+}
 
 impl Feedback {
     /// Pattern, symbolic factor and buffers for `model` (whose Jacobian
@@ -215,6 +235,7 @@ impl Feedback {
             applied: vec![(Vector3::zeros(), Vector3::zeros()); n_bodies],
             fingers,
             b: vec![0.0; model.n_coords()],
+            contact_raw: vec![0.0; model.n_coords()],
             y: vec![0.0; model.n_coords()],
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
@@ -515,6 +536,9 @@ impl Feedback {
         }
         self.couplings(s, settings, q, targets, dt_s)?;
         self.activate(s, ev.values(), lambda);
+        // Inertial motion: the contact and friction forces are the step's
+        // own, known (`take_contact_forces`), not unknowns of Eq. 7.
+        let known_contacts = contact_forces_known(settings) && self.know_contacts(s);
         self.solve_multipliers(ev, settings)?;
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
@@ -580,14 +604,16 @@ impl Feedback {
                 released = true;
             }
         }
-        if !released {
+        if !released && !known_contacts {
             self.max_pull_n = self.contact_pull(s);
             self.pair_normal_forces(s);
             self.joint_torques(q, ev);
             return self.wrenches(s, settings, q, ev, targets, out);
         }
-        self.releases += 1;
-        self.solve_multipliers(ev, settings)?;
+        if released {
+            self.releases += 1;
+            self.solve_multipliers(ev, settings)?;
+        }
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
         self.joint_torques(q, ev);
@@ -661,6 +687,59 @@ impl Feedback {
             }
         }
         pull
+    }
+
+    /// Inertial motion ([`contact_forces_known`]): takes the active contact
+    /// and friction rows out of Eq. 7 and puts their filtered force from
+    /// the steps (`Motion::contact_a`) into b instead. Returns whether any
+    /// row was active (the projected step's factor then needs them back).
+    ///
+    /// # Real-time
+    /// No allocation; O(rows + coordinates).
+    fn know_contacts(&mut self, s: &Scaling) -> bool {
+        let mut any = false;
+        for (i, sc) in self.scale.iter_mut().enumerate() {
+            if matches!(s.role[i], Role::Contact | Role::Friction) && *sc != 0.0 {
+                *sc = 0.0;
+                any = true;
+            }
+        }
+        for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
+            *b += f;
+        }
+        any
+    }
+
+    /// Inertial motion: the generalized force −(ℓ C_q)ᵀ y / dt² of the
+    /// contact and friction rows in the step just taken (`y` its
+    /// multipliers, `jac` C_q; rows out of the step's factor have none),
+    /// into the filtered history Eq. 7 balances ([`Feedback::compute`]).
+    ///
+    /// # Real-time
+    /// No allocation; O(nonzeros of the contact rows + coordinates).
+    pub fn take_contact_forces(
+        &mut self,
+        s: &Scaling,
+        jac: &crate::Jacobian,
+        y: &[f64],
+        dt_s: f64,
+    ) {
+        self.contact_raw.fill(0.0);
+        let (ptr, cols, vals) = (jac.row_ptr(), jac.col_idx(), jac.values());
+        let inv_dt2 = 1.0 / (dt_s * dt_s);
+        for (i, &role) in s.role.iter().enumerate() {
+            if !matches!(role, Role::Contact | Role::Friction)
+                || self.scale[i] == 0.0
+                || y[i] == 0.0
+            {
+                continue;
+            }
+            let f = -s.ell[i] * y[i] * inv_dt2;
+            for p in ptr[i]..ptr[i + 1] {
+                self.contact_raw[cols[p]] += vals[p] * f;
+            }
+        }
+        self.motion.advance_contact(&self.contact_raw, dt_s);
     }
 
     /// Row scales: ℓ_i for equality and finger rows and for inequality rows
