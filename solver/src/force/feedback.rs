@@ -121,7 +121,10 @@ pub(crate) struct Feedback {
 pub(crate) const CONTACT_COMPLIANCE: f64 = 1e-6;
 
 /// Whether Eq. 7 takes the contact and friction forces as known from the
-/// projected steps (inertial motion) instead of solving for them.
+/// projected steps (inertial motion): their filtered generalized force
+/// (`Motion::contact_a`) goes into b, and their rows, still in A (one
+/// factorisation a tick, the step's), take only what the filtered balance
+/// leaves over, of either sign (not released when it "pulls").
 ///
 /// Under inertial motion the steps are the physics: a body's velocity
 /// changes by exactly the impulses of its rows. Eq. 7 balances the
@@ -131,8 +134,11 @@ pub(crate) const CONTACT_COMPLIANCE: f64 = 1e-6;
 /// encoder counts (30 µm steps of a PHANToM), strikes the box for one tick
 /// and the box coasts ahead: the closed row saw a quarter of the ticks and
 /// the hand felt 0.13 N of the box's μ m g = 0.49 N (issue 19,
-/// `arm-push`). The step's contact forces, filtered like q̈, balance the
-/// box's filtered M q̈ exactly and pass its mean push, μ m g, to the links.
+/// `arm-push`). The steps' contact forces, filtered like q̈, balance the
+/// box's filtered M q̈ (up to the filter's lag on its kinetic friction)
+/// and pass its mean push, μ m g, to the links: 0.52 N. (Taking the rows
+/// out of Eq. 7 instead gave 0.51 N, at a second factorisation on every
+/// tick with a contact.)
 pub(crate) fn contact_forces_known(settings: &SolverSettings) -> bool {
     settings.dynamics && settings.update == UpdateRule::Projected
 }
@@ -536,16 +542,27 @@ impl Feedback {
         }
         self.couplings(s, settings, q, targets, dt_s)?;
         self.activate(s, ev.values(), lambda);
-        // Inertial motion: the contact and friction forces are the step's
-        // own, known (`take_contact_forces`), not unknowns of Eq. 7.
-        let known_contacts = contact_forces_known(settings) && self.know_contacts(s);
+        // Inertial motion: the contact and friction forces are the steps'
+        // own, known (`take_contact_forces`); their rows stay in A and take
+        // only what the filtered balance leaves over, of either sign.
+        let known = contact_forces_known(settings);
+        if known {
+            for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
+                *b += f;
+            }
+        }
         self.solve_multipliers(ev, settings)?;
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
         // again: the bound keeps the tick's cost fixed.
         let mut released = false;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
-            if matches!(s.role[row], Role::Inequality | Role::Contact)
+            let releasable = match s.role[row] {
+                Role::Inequality => true,
+                Role::Contact => !known,
+                _ => false,
+            };
+            if releasable
                 && self.scale[row] != 0.0
                 && self.solve.joint_multiplier(j) > 0.0
             {
@@ -604,16 +621,14 @@ impl Feedback {
                 released = true;
             }
         }
-        if !released && !known_contacts {
+        if !released {
             self.max_pull_n = self.contact_pull(s);
             self.pair_normal_forces(s);
             self.joint_torques(q, ev);
             return self.wrenches(s, settings, q, ev, targets, out);
         }
-        if released {
-            self.releases += 1;
-            self.solve_multipliers(ev, settings)?;
-        }
+        self.releases += 1;
+        self.solve_multipliers(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
         self.joint_torques(q, ev);
@@ -687,27 +702,6 @@ impl Feedback {
             }
         }
         pull
-    }
-
-    /// Inertial motion ([`contact_forces_known`]): takes the active contact
-    /// and friction rows out of Eq. 7 and puts their filtered force from
-    /// the steps (`Motion::contact_a`) into b instead. Returns whether any
-    /// row was active (the projected step's factor then needs them back).
-    ///
-    /// # Real-time
-    /// No allocation; O(rows + coordinates).
-    fn know_contacts(&mut self, s: &Scaling) -> bool {
-        let mut any = false;
-        for (i, sc) in self.scale.iter_mut().enumerate() {
-            if matches!(s.role[i], Role::Contact | Role::Friction) && *sc != 0.0 {
-                *sc = 0.0;
-                any = true;
-            }
-        }
-        for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
-            *b += f;
-        }
-        any
     }
 
     /// Inertial motion: the generalized force −(ℓ C_q)ᵀ y / dt² of the
