@@ -164,8 +164,9 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         std::thread::sleep(Duration::from_millis(ms.min(60_000)));
     }
     let model = Arc::new(scene.compiled.model.clone());
-    let mut program =
-        Program::new(model.clone(), plan.solver).context("building the fast-loop program")?;
+    let objectives = scene.compiled.objectives.clone();
+    let mut program = Program::with_objectives(model.clone(), objectives.clone(), plan.solver)
+        .context("building the fast-loop program")?;
     // Initial assembly: Newton-KKT placement from q0 onto the constraints and
     // the fingers' initial positions, before the clock starts.
     let options = PlacementOptions::from_scene(
@@ -203,7 +204,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         .as_ref()
         .map_or(model.clone(), |s| s.current_model().clone());
     if semantic.is_some() {
-        program = Program::new(mechanism.clone(), plan.solver)
+        program = Program::with_objectives(mechanism.clone(), objectives.clone(), plan.solver)
             .context("building the fast-loop program with the semantic rows")?;
         program
             .set_q(&q)
@@ -213,7 +214,13 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     // model (the mechanism plus the contact rows of the pairs in reach) the
     // fast loop starts with.
     let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
-    let mut contact = ContactLoop::new(mechanism.clone(), plan.solver, plan.contact, frames_tx);
+    let mut contact = ContactLoop::new(
+        mechanism.clone(),
+        plan.solver,
+        plan.contact,
+        frames_tx,
+        objectives.clone(),
+    );
     if let Some(c) = &mut contact {
         let absent: Vec<u32> = scene.compiled.absent.iter().map(|b| b.0).collect();
         c.set_absent(&absent);
@@ -294,10 +301,11 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         }
         None => (Vec::new(), Vec::new()),
     };
-    let (design, design_columns) = match DesignTracker::new(&model, program.program.q()) {
-        Some((t, c)) => (Some(t), Some(c)),
-        None => (None, None),
-    };
+    let (design, design_columns) =
+        match DesignTracker::new(&model, &objectives, program.program.q()) {
+            Some((t, c)) => (Some(t), Some(c)),
+            None => (None, None),
+        };
     let counts = vec![[0; 3]; rig.devices.len()];
     let rig_devices = rig.devices.len();
     // A violation above the scene's tolerance (else 0.1 mm) triggers a
@@ -355,6 +363,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         refresh: refresh_tx,
         model: mechanism.clone(),
         settings: plan.solver,
+        objectives,
         placement: Placement::analyze(&scene.compiled.joints_only, &options)
             .context("analysing the scene's joints for re-projection")?,
         joints_only: scene.compiled.joints_only.clone(),
