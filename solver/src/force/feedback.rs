@@ -562,10 +562,7 @@ impl Feedback {
                 Role::Contact => !known,
                 _ => false,
             };
-            if releasable
-                && self.scale[row] != 0.0
-                && self.solve.joint_multiplier(j) > 0.0
-            {
+            if releasable && self.scale[row] != 0.0 && self.solve.joint_multiplier(j) > 0.0 {
                 self.scale[row] = 0.0;
                 self.forced[row] = false;
                 released = true;
