@@ -107,6 +107,12 @@ pub(crate) struct Feedback {
     /// Per coordinate: the generalized force of the last step's contact and
     /// friction rows (scratch of [`Feedback::take_contact_forces`]).
     contact_raw: Vec<f64>,
+    /// Per row: its force in the steps, physical sign (λ > 0 pulls, so a
+    /// push is < 0), N, through the two filter stages (`row_known`: after
+    /// the second). With known contact forces a row's force in Eq. 7 is
+    /// this plus its multiplier (`row_force`).
+    row_known_f: Vec<f64>,
+    row_known: Vec<f64>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -242,6 +248,8 @@ impl Feedback {
             fingers,
             b: vec![0.0; model.n_coords()],
             contact_raw: vec![0.0; model.n_coords()],
+            row_known_f: vec![0.0; model.n_rows()],
+            row_known: vec![0.0; model.n_rows()],
             y: vec![0.0; model.n_coords()],
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
@@ -682,7 +690,7 @@ impl Feedback {
             self.normal_force_n[k] = (p.normal_rows[0]..p.normal_rows[1])
                 .filter(|&row| self.scale[row] != 0.0)
                 .filter_map(|row| match self.gram.slot[row] {
-                    Slot::J(j) => Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0)),
+                    Slot::J(j) => Some((-self.row_force(s, row, j)).max(0.0)),
                     _ => None,
                 })
                 .sum();
@@ -690,15 +698,24 @@ impl Feedback {
     }
 
     /// The largest pull (physical λ > 0, N) of an active contact row in the
-    /// last solve.
+    /// last solve (with known contact forces, the row's known force and its
+    /// multiplier together: `row_force`).
     fn contact_pull(&self, s: &Scaling) -> f64 {
         let mut pull: f64 = 0.0;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if s.role[row] == Role::Contact && self.scale[row] != 0.0 {
-                pull = pull.max(s.ell[row] * self.solve.joint_multiplier(j));
+                pull = pull.max(self.row_force(s, row, j));
             }
         }
         pull
+    }
+
+    /// Row `row`'s force in the last solve, physical sign (λ > 0 pulls), N:
+    /// ℓ times its multiplier (slot `j`) plus its filtered force from the
+    /// steps (`row_known`; 0 unless contact forces are known,
+    /// `contact_forces_known`).
+    fn row_force(&self, s: &Scaling, row: usize, j: usize) -> f64 {
+        s.ell[row] * self.solve.joint_multiplier(j) + self.row_known[row]
     }
 
     /// Inertial motion: the generalized force −(ℓ C_q)ᵀ y / dt² of the
@@ -718,14 +735,21 @@ impl Feedback {
         self.contact_raw.fill(0.0);
         let (ptr, cols, vals) = (jac.row_ptr(), jac.col_idx(), jac.values());
         let inv_dt2 = 1.0 / (dt_s * dt_s);
+        let (alpha_f, alpha_a) = self.motion.alphas(dt_s);
         for (i, &role) in s.role.iter().enumerate() {
-            if !matches!(role, Role::Contact | Role::Friction)
-                || self.scale[i] == 0.0
-                || y[i] == 0.0
-            {
+            let stepped = matches!(role, Role::Contact | Role::Friction) && self.scale[i] != 0.0;
+            // Physical sign (Eq. 7's λ): the step's y is −ν for a push.
+            let lambda = if stepped {
+                s.ell[i] * y[i] * inv_dt2
+            } else {
+                0.0
+            };
+            self.row_known_f[i] += (lambda - self.row_known_f[i]) * alpha_f;
+            self.row_known[i] += (self.row_known_f[i] - self.row_known[i]) * alpha_a;
+            let f = -lambda;
+            if f == 0.0 {
                 continue;
             }
-            let f = -s.ell[i] * y[i] * inv_dt2;
             for p in ptr[i]..ptr[i + 1] {
                 self.contact_raw[cols[p]] += vals[p] * f;
             }

@@ -178,7 +178,7 @@ impl Motion {
     }
 
     /// The two stages' smoothing factors for a tick of `dt_s`.
-    fn alphas(&self, dt_s: f64) -> (f64, f64) {
+    pub fn alphas(&self, dt_s: f64) -> (f64, f64) {
         if self.tau_s > 0.0 {
             (
                 dt_s / (self.tau_s + dt_s),
