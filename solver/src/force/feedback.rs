@@ -104,6 +104,15 @@ pub(crate) struct Feedback {
     /// known in advance, world frame, added to Eq. 7's Q_e: the kinetic
     /// friction of slipping contacts (inertial motion), which no row holds.
     pub applied: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per coordinate: the generalized force of the last step's contact and
+    /// friction rows (scratch of [`Feedback::take_contact_forces`]).
+    contact_raw: Vec<f64>,
+    /// Per row: its force in the steps, physical sign (λ > 0 pulls, so a
+    /// push is < 0), N, through the two filter stages (`row_known`: after
+    /// the second). With known contact forces a row's force in Eq. 7 is
+    /// this plus its multiplier (`row_force`).
+    row_known_f: Vec<f64>,
+    row_known: Vec<f64>,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -116,6 +125,29 @@ pub(crate) struct Feedback {
 /// rows share the load (the minimum-norm split, as a stiff contact patch
 /// does) and every row holds to 1e-6 of its own scale.
 pub(crate) const CONTACT_COMPLIANCE: f64 = 1e-6;
+
+/// Whether Eq. 7 takes the contact and friction forces as known from the
+/// projected steps (inertial motion): their filtered generalized force
+/// (`Motion::contact_a`) goes into b, and their rows, still in A (one
+/// factorisation a tick, the step's), take only what the filtered balance
+/// leaves over, of either sign (not released when it "pulls").
+///
+/// Under inertial motion the steps are the physics: a body's velocity
+/// changes by exactly the impulses of its rows. Eq. 7 balances the
+/// *filtered* M q̈, which spreads a contact's impulse over the next
+/// τ + τ_a; a contact row that takes part only while it is closed cannot
+/// carry that tail. A link pushing a sliding box follows the device's
+/// encoder counts (30 µm steps of a PHANToM), strikes the box for one tick
+/// and the box coasts ahead: the closed row saw a quarter of the ticks and
+/// the hand felt 0.13 N of the box's μ m g = 0.49 N (issue 19,
+/// `arm-push`). The steps' contact forces, filtered like q̈, balance the
+/// box's filtered M q̈ (up to the filter's lag on its kinetic friction)
+/// and pass its mean push, μ m g, to the links: 0.52 N. (Taking the rows
+/// out of Eq. 7 instead gave 0.51 N, at a second factorisation on every
+/// tick with a contact.)
+pub(crate) fn contact_forces_known(settings: &SolverSettings) -> bool {
+    settings.dynamics && settings.update == UpdateRule::Projected
+}
 
 impl Feedback {
     /// Pattern, symbolic factor and buffers for `model` (whose Jacobian
@@ -215,6 +247,9 @@ impl Feedback {
             applied: vec![(Vector3::zeros(), Vector3::zeros()); n_bodies],
             fingers,
             b: vec![0.0; model.n_coords()],
+            contact_raw: vec![0.0; model.n_coords()],
+            row_known_f: vec![0.0; model.n_rows()],
+            row_known: vec![0.0; model.n_rows()],
             y: vec![0.0; model.n_coords()],
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
@@ -515,16 +550,27 @@ impl Feedback {
         }
         self.couplings(s, settings, q, targets, dt_s)?;
         self.activate(s, ev.values(), lambda);
+        // Inertial motion: the contact and friction forces are the steps'
+        // own, known (`take_contact_forces`); their rows stay in A and take
+        // only what the filtered balance leaves over, of either sign.
+        let known = contact_forces_known(settings);
+        if known {
+            for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
+                *b += f;
+            }
+        }
         self.solve_multipliers(ev, settings)?;
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
         // again: the bound keeps the tick's cost fixed.
         let mut released = false;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
-            if matches!(s.role[row], Role::Inequality | Role::Contact)
-                && self.scale[row] != 0.0
-                && self.solve.joint_multiplier(j) > 0.0
-            {
+            let releasable = match s.role[row] {
+                Role::Inequality => true,
+                Role::Contact => !known,
+                _ => false,
+            };
+            if releasable && self.scale[row] != 0.0 && self.solve.joint_multiplier(j) > 0.0 {
                 self.scale[row] = 0.0;
                 self.forced[row] = false;
                 released = true;
@@ -644,7 +690,7 @@ impl Feedback {
             self.normal_force_n[k] = (p.normal_rows[0]..p.normal_rows[1])
                 .filter(|&row| self.scale[row] != 0.0)
                 .filter_map(|row| match self.gram.slot[row] {
-                    Slot::J(j) => Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0)),
+                    Slot::J(j) => Some((-self.row_force(s, row, j)).max(0.0)),
                     _ => None,
                 })
                 .sum();
@@ -652,15 +698,63 @@ impl Feedback {
     }
 
     /// The largest pull (physical λ > 0, N) of an active contact row in the
-    /// last solve.
+    /// last solve (with known contact forces, the row's known force and its
+    /// multiplier together: `row_force`).
     fn contact_pull(&self, s: &Scaling) -> f64 {
         let mut pull: f64 = 0.0;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if s.role[row] == Role::Contact && self.scale[row] != 0.0 {
-                pull = pull.max(s.ell[row] * self.solve.joint_multiplier(j));
+                pull = pull.max(self.row_force(s, row, j));
             }
         }
         pull
+    }
+
+    /// Row `row`'s force in the last solve, physical sign (λ > 0 pulls), N:
+    /// ℓ times its multiplier (slot `j`) plus its filtered force from the
+    /// steps (`row_known`; 0 unless contact forces are known,
+    /// `contact_forces_known`).
+    fn row_force(&self, s: &Scaling, row: usize, j: usize) -> f64 {
+        s.ell[row] * self.solve.joint_multiplier(j) + self.row_known[row]
+    }
+
+    /// Inertial motion: the generalized force −(ℓ C_q)ᵀ y / dt² of the
+    /// contact and friction rows in the step just taken (`y` its
+    /// multipliers, `jac` C_q; rows out of the step's factor have none),
+    /// into the filtered history Eq. 7 balances ([`Feedback::compute`]).
+    ///
+    /// # Real-time
+    /// No allocation; O(nonzeros of the contact rows + coordinates).
+    pub fn take_contact_forces(
+        &mut self,
+        s: &Scaling,
+        jac: &crate::Jacobian,
+        y: &[f64],
+        dt_s: f64,
+    ) {
+        self.contact_raw.fill(0.0);
+        let (ptr, cols, vals) = (jac.row_ptr(), jac.col_idx(), jac.values());
+        let inv_dt2 = 1.0 / (dt_s * dt_s);
+        let (alpha_f, alpha_a) = self.motion.alphas(dt_s);
+        for (i, &role) in s.role.iter().enumerate() {
+            let stepped = matches!(role, Role::Contact | Role::Friction) && self.scale[i] != 0.0;
+            // Physical sign (Eq. 7's λ): the step's y is −ν for a push.
+            let lambda = if stepped {
+                s.ell[i] * y[i] * inv_dt2
+            } else {
+                0.0
+            };
+            self.row_known_f[i] += (lambda - self.row_known_f[i]) * alpha_f;
+            self.row_known[i] += (self.row_known_f[i] - self.row_known[i]) * alpha_a;
+            let f = -lambda;
+            if f == 0.0 {
+                continue;
+            }
+            for p in ptr[i]..ptr[i + 1] {
+                self.contact_raw[cols[p]] += vals[p] * f;
+            }
+        }
+        self.motion.advance_contact(&self.contact_raw, dt_s);
     }
 
     /// Row scales: ℓ_i for equality and finger rows and for inequality rows

@@ -62,6 +62,12 @@ pub(crate) struct Motion {
     /// Velocity and acceleration of each auxiliary column.
     pub aux_v: Vec<f64>,
     pub aux_a: Vec<f64>,
+    /// Per coordinate: the generalized force the step's contact and
+    /// friction rows applied (inertial motion), through the same two
+    /// low-pass stages as the accelerations: `contact` after the first,
+    /// `contact_a` after the second ([`Motion::advance_contact`]).
+    pub contact: Vec<f64>,
+    pub contact_a: Vec<f64>,
 }
 
 impl Motion {
@@ -80,6 +86,8 @@ impl Motion {
             aux_start,
             aux_v: vec![0.0; n_aux],
             aux_a: vec![0.0; n_aux],
+            contact: vec![0.0; q.len()],
+            contact_a: vec![0.0; q.len()],
         }
     }
 
@@ -94,6 +102,8 @@ impl Motion {
         }
         self.aux_v.fill(0.0);
         self.aux_a.fill(0.0);
+        self.contact.fill(0.0);
+        self.contact_a.fill(0.0);
         self.ticks = 0;
     }
 
@@ -102,16 +112,7 @@ impl Motion {
     /// # Real-time
     /// No allocation; O(bodies).
     pub fn advance(&mut self, masses: &[BodyMass], q: &[f64], dt_s: f64) {
-        let alpha_f = if self.tau_s > 0.0 {
-            dt_s / (self.tau_s + dt_s)
-        } else {
-            1.0
-        };
-        let alpha_a = if self.tau_s > 0.0 {
-            dt_s / (ACCELERATION_FILTER_FRACTION * self.tau_s + dt_s)
-        } else {
-            1.0
-        };
+        let (alpha_f, alpha_a) = self.alphas(dt_s);
         let first = self.ticks == 0;
         for (k, m) in masses.iter().enumerate() {
             let o = m.offset;
@@ -157,6 +158,42 @@ impl Motion {
         }
         self.q_prev.copy_from_slice(q);
         self.ticks = self.ticks.saturating_add(1);
+    }
+
+    /// Passes this tick's generalized contact force `raw` (per coordinate,
+    /// N or its Euler-parameter equivalent) through the two low-pass stages
+    /// the accelerations pass (τ, then τ_a), so that Eq. 7 balances the
+    /// filtered contact forces against the equally filtered M q̈: the
+    /// step's velocity change of a body is exactly its forces' impulse, and
+    /// a filter commutes with that sum (`Feedback::compute`).
+    ///
+    /// # Real-time
+    /// No allocation; O(coordinates).
+    pub fn advance_contact(&mut self, raw: &[f64], dt_s: f64) {
+        let (alpha_f, alpha_a) = self.alphas(dt_s);
+        for ((f, a), &x) in self.contact.iter_mut().zip(&mut self.contact_a).zip(raw) {
+            *f += (x - *f) * alpha_f;
+            *a += (*f - *a) * alpha_a;
+        }
+    }
+
+    /// The two stages' smoothing factors for a tick of `dt_s`.
+    pub fn alphas(&self, dt_s: f64) -> (f64, f64) {
+        if self.tau_s > 0.0 {
+            (
+                dt_s / (self.tau_s + dt_s),
+                dt_s / (ACCELERATION_FILTER_FRACTION * self.tau_s + dt_s),
+            )
+        } else {
+            (1.0, 1.0)
+        }
+    }
+
+    /// Copies the filtered contact force of the coordinates `from..from + n`
+    /// of `old` into `to..to + n` of `self` (a hand-over).
+    pub fn copy_contact(&mut self, to: usize, old: &Motion, from: usize, n: usize) {
+        self.contact[to..to + n].copy_from_slice(&old.contact[from..from + n]);
+        self.contact_a[to..to + n].copy_from_slice(&old.contact_a[from..from + n]);
     }
 
     /// Copies the history of body `from` of `old` into body `to` of `self`.

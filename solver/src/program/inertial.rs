@@ -493,6 +493,14 @@ impl Program {
     /// # Real-time
     /// No allocation; O(bodies + finger rows), O(nnz) on a bounce.
     pub(super) fn finish_motion(&mut self, dt_s: f64) {
+        if crate::force::feedback::contact_forces_known(&self.settings) {
+            self.feedback.take_contact_forces(
+                &self.scaling,
+                self.ev.jacobian(),
+                self.projected.multipliers(),
+                dt_s,
+            );
+        }
         let masses = &self.feedback.masses;
         let st = &mut self.inertial;
         st.vel.finish(masses, &self.q_ref, &self.q, dt_s);

@@ -109,6 +109,7 @@ impl Program {
             if let Some(ok) = old.feedback.masses.iter().position(|m| m.offset == oo) {
                 self.feedback.motion.copy_body(k, mo, ok);
                 self.feedback.motion.q_prev[no..no + 7].copy_from_slice(&mo.q_prev[oo..oo + 7]);
+                self.feedback.motion.copy_contact(no, mo, oo, 7);
                 self.inertial.vel.copy_body(k, &old.inertial.vel, ok);
             }
         }
