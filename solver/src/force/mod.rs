@@ -53,6 +53,7 @@ mod cg;
 pub(crate) mod feedback;
 pub mod friction;
 mod gram;
+mod gram_products;
 pub(crate) mod inertia;
 mod motion;
 mod output;
