@@ -26,12 +26,13 @@ pub(crate) fn padded(k: usize) -> usize {
 
 /// Adds the lower triangle of C Uᵀ (k × k) to `values`: entry (a, b), b ≤ a,
 /// goes to `values[dests[a (a + 1) / 2 + b]]`. `c`: k rows of 7, row a at
-/// `c[c_stride · a..]`;
-/// `ut`: 7 rows of `stride` ≥ [`padded`]`(k)` (entries past k are read but
-/// their products never stored). `simd`: the CPU runs AVX2 and FMA.
+/// `c[c_stride · a..]`; `ut`: 7 rows of `stride` ≥ [`padded`]`(k)` (entries
+/// past k are read but their products never stored). `simd`: the CPU runs
+/// AVX2 and FMA.
 ///
 /// # Real-time
 /// No allocation; k (k + 1) / 2 · 7 multiply-adds in vectors of four.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn add_products(
     k: usize,
     c: &[f64],
