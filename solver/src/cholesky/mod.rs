@@ -36,11 +36,6 @@ mod kernels;
 mod symbolic;
 mod triangular;
 
-/// Whether this CPU runs the AVX2 + FMA kernels (checked at run time).
-pub(crate) fn simd_available() -> bool {
-    kernels::simd_available()
-}
-
 use symbolic::Symbolic;
 
 /// Dynamic regularisation of the pivots (faer's LLᵀ rule).

@@ -85,12 +85,6 @@ pub(crate) struct Gram {
     pub values: Vec<f64>,
     /// c and u of one body's entries (14 per entry).
     cu: Vec<f64>,
-    /// u of one body's entries transposed: 7 rows of `ut_stride`
-    /// (`gram_products`).
-    ut: Vec<f64>,
-    ut_stride: usize,
-    /// The products run the AVX2 + FMA build.
-    simd: bool,
     /// Per entry of the body being assembled: its row takes part (scale ≠ 0).
     live: Vec<bool>,
     /// M̃_e⁻¹ of each body (layout order) at the last assembly.
@@ -247,9 +241,6 @@ impl Gram {
             products,
             values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
             cu: vec![0.0; 14 * max_entries],
-            ut: vec![0.0; 7 * super::gram_products::padded(max_entries)],
-            ut_stride: super::gram_products::padded(max_entries),
-            simd: crate::cholesky::simd_available(),
             live: vec![false; max_entries],
             minv_e: vec![Matrix4::zeros(); masses.len()],
             aux_blocks,
@@ -366,16 +357,11 @@ impl Gram {
             let be = Vector4::new(b[o + 3], b[o + 4], b[o + 5], b[o + 6]);
             y[o + 3..o + 7].copy_from_slice((minv * be).as_slice());
             let entries = &self.entries[body.entries.clone()];
-            // One division a body, not three an entry (a `divpd` an entry
-            // was a third of the assembly on the lattice).
-            let inv_mass = 1.0 / m.mass;
-            let mut all_live = true;
             for (k, ent) in entries.iter().enumerate() {
                 let s = scale[ent.row];
                 // A dropped row (scale 0) contributes nothing: no products.
                 self.live[k] = s != 0.0;
                 if s == 0.0 {
-                    all_live = false;
                     continue;
                 }
                 let cu = &mut self.cu[14 * k..14 * k + 14];
@@ -386,29 +372,13 @@ impl Gram {
                     *d = v * s;
                 }
                 for i in 0..3 {
-                    u[i] = c[i] * inv_mass;
+                    u[i] = c[i] / m.mass;
                 }
                 let ue = minv * Vector4::new(c[3], c[4], c[5], c[6]);
                 u[3..].copy_from_slice(ue.as_slice());
-                for (i, &v) in u.iter().enumerate() {
-                    self.ut[i * self.ut_stride + k] = v;
-                }
             }
             // Products in the order `new` listed them: (a, b) for b ≤ a.
             let products = &self.products[body.products.clone()];
-            if all_live {
-                super::gram_products::add_products(
-                    entries.len(),
-                    &self.cu,
-                    14,
-                    &self.ut,
-                    self.ut_stride,
-                    products,
-                    &mut self.values,
-                    self.simd,
-                );
-                continue;
-            }
             let mut first = 0;
             for a in 0..entries.len() {
                 if self.live[a] {

@@ -53,7 +53,6 @@ mod cg;
 pub(crate) mod feedback;
 pub mod friction;
 mod gram;
-mod gram_products;
 pub(crate) mod inertia;
 mod motion;
 mod output;
