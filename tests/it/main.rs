@@ -15,6 +15,7 @@ mod docs;
 mod exits;
 mod export;
 mod figures;
+mod lattice;
 mod limits;
 mod load_bounds;
 mod matvec;
