@@ -199,12 +199,17 @@ fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: 
     let (rows, _) = block.as_chunks::<W>();
     let (diag, under) = rows.split_at(W);
     let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    // Column by column (x_j final, then subtracted from every later
+    // entry), with the pivots' reciprocals formed off the chain: the
+    // dependency chain is one multiply and one multiply-add per column, not
+    // a row's dot product and a division (issue 23).
+    let inv: [f64; W] = std::array::from_fn(|j| 1.0 / diag[j][j]);
     for j in 0..W {
-        let mut s = xs[j];
-        for l in 0..j {
-            s -= diag[j][l] * xs[l];
+        xs[j] *= inv[j];
+        let xj = xs[j];
+        for i in j + 1..W {
+            xs[i] -= diag[i][j] * xj;
         }
-        xs[j] = s / diag[j][j];
     }
     work[c0..c0 + W].copy_from_slice(&xs);
     for (row, &r) in under.iter().zip(below) {
@@ -247,8 +252,9 @@ fn backward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work:
             xs[l] -= row[l] * xr;
         }
     }
+    let inv: [f64; W] = std::array::from_fn(|j| 1.0 / diag[j][j]);
     for j in (0..W).rev() {
-        xs[j] /= diag[j][j];
+        xs[j] *= inv[j];
         let xj = xs[j];
         for l in 0..j {
             xs[l] -= diag[j][l] * xj;
