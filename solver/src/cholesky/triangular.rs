@@ -199,13 +199,13 @@ fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: 
     let (rows, _) = block.as_chunks::<W>();
     let (diag, under) = rows.split_at(W);
     let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
-    // Column by column (x_j final, then subtracted from every later
-    // entry), with the pivots' reciprocals formed off the chain: the
-    // dependency chain is one multiply and one multiply-add per column, not
-    // a row's dot product and a division (issue 23).
-    let inv: [f64; W] = std::array::from_fn(|j| 1.0 / diag[j][j]);
+    // Column by column: x_j final, then subtracted from every later entry.
+    // Each entry sees the same subtractions in the same order as a row's
+    // dot product would give it (the result is the same to the last bit),
+    // but the chain between two pivots is one multiply-add, not a dot
+    // product (issue 23).
     for j in 0..W {
-        xs[j] *= inv[j];
+        xs[j] /= diag[j][j];
         let xj = xs[j];
         for i in j + 1..W {
             xs[i] -= diag[i][j] * xj;
@@ -252,9 +252,8 @@ fn backward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work:
             xs[l] -= row[l] * xr;
         }
     }
-    let inv: [f64; W] = std::array::from_fn(|j| 1.0 / diag[j][j]);
     for j in (0..W).rev() {
-        xs[j] *= inv[j];
+        xs[j] /= diag[j][j];
         let xj = xs[j];
         for l in 0..j {
             xs[l] -= diag[j][l] * xj;
