@@ -14,7 +14,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use haptloop_solver::{FingerTarget, Model, Program, SolverSettings, TickOutcome, scene};
+use haptloop_solver::{
+    FingerTarget, Model, Objectives, Program, SolverSettings, TickOutcome, scene,
+};
 use nalgebra::Vector3;
 
 const SCENES: [&str; 5] = [
@@ -42,11 +44,11 @@ fn without_design(text: &str) -> String {
     out
 }
 
-fn model(name: &str, text: &str) -> Model {
-    scene::parse(name, text, None)
+fn model(name: &str, text: &str) -> (Model, Arc<Objectives>) {
+    let c = scene::parse(name, text, None)
         .and_then(|l| l.compile())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .model
+        .unwrap_or_else(|e| panic!("{e}"));
+    (c.model, c.objectives)
 }
 
 /// 1000 ticks of targets on 2 mm circles at 0.5 Hz (1 kHz).
@@ -69,13 +71,15 @@ fn design_tick(c: &mut Criterion) {
     for name in SCENES {
         let text = std::fs::read_to_string(dir.join(format!("{name}.toml"))).unwrap();
         for (variant, text) in [("with", text.clone()), ("without", without_design(&text))] {
-            let model = model(name, &text);
+            let (model, objectives) = model(name, &text);
             if variant == "without" {
                 assert_eq!(model.layout().design_coords(), 0, "{name}");
-                assert!(model.objectives().is_empty(), "{name}");
+                assert!(objectives.is_empty(), "{name}");
             }
             let ts = targets(&model);
-            let mut p = Program::new(Arc::new(model), SolverSettings::default()).unwrap();
+            let mut p =
+                Program::with_objectives(Arc::new(model), objectives, SolverSettings::default())
+                    .unwrap();
             let mut k = 0;
             g.bench_function(BenchmarkId::new(name, variant), |b| {
                 b.iter(|| {

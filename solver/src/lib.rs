@@ -17,8 +17,9 @@
 //!                                                                   mul_vec / mul_t_vec, faer view)
 //! ```
 //!
-//! The fast loop wraps that evaluation: `Program::new(Arc<Model>, SolverSettings)`
-//! (slow thread) → `tick(targets, dt)` per device sample → `TickReport` and
+//! The fast loop wraps that evaluation: `Program::new(Arc<Model>, SolverSettings)`,
+//! or `Program::with_objectives` with the design objectives compiled against
+//! the model (`Objectives::compile`; the model knows nothing of them) (slow thread) → `tick(targets, dt)` per device sample → `TickReport` and
 //! `finger_outputs()` (forces for the device) → `adopt_state(&old)` when the
 //! slow thread hands over a replacement.
 //!

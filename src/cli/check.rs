@@ -181,7 +181,7 @@ pub fn summary(scene: &Scene) -> String {
         };
         out += &format!("  design       {} ({parts}, m; {bounds})\n", d.name);
     }
-    for o in &m.objectives().terms {
+    for o in &c.objectives.terms {
         out += &format!(
             "  objective    {} ({}, weight {})\n",
             o.name, o.kind, o.weight

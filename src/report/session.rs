@@ -24,6 +24,34 @@ fn row(out: &mut String, label: &str, p: &Percentiles) {
 /// device model) in model order.
 pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     let mut out = String::new();
+    header_lines(&mut out, s);
+    timing_table(&mut out, s);
+    accuracy_lines(&mut out, s, fingers);
+    design_lines(&mut out, s);
+    safety_lines(&mut out, s);
+    if let Some(c) = &s.contact {
+        contact_lines(&mut out, c);
+    }
+    if let Some(sem) = &s.semantic {
+        super::semantic::lines(&mut out, sem);
+    }
+    reference_line(&mut out, s);
+    let _ = write!(
+        out,
+        "slow loop: {} re-projections ({} recoveries, {} not converged); programs swapped in: {}; \
+         trace samples dropped: {}; wall clock {:.2} s",
+        s.slow_loop.reprojections,
+        s.slow_loop.recoveries,
+        s.slow_loop.placements_not_converged,
+        s.programs_swapped,
+        s.trace_dropped,
+        s.wall_clock_s
+    );
+    out
+}
+
+/// The run line, the device grant and the assembly.
+fn header_lines(out: &mut String, s: &Summary) {
     let mode = if s.deterministic {
         "deterministic (mock clock)"
     } else {
@@ -64,30 +92,31 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             );
         }
     }
+}
+
+/// The latency table: lateness, compute, read → write, the stages, and the
+/// ticks and misses under it.
+fn timing_table(out: &mut String, s: &Summary) {
     let _ = writeln!(
         out,
         "\n  {:<16} {:>9} {:>9} {:>9} {:>9} {:>10}   (µs)",
         "", "p50", "p99", "p99.9", "p99.99", "max"
     );
     if let Some(lateness) = &s.lateness_ns {
-        row(&mut out, "lateness", lateness);
+        row(out, "lateness", lateness);
     }
-    row(&mut out, "compute", &s.compute_ns);
+    row(out, "compute", &s.compute_ns);
     if let Some(r2w) = &s.read_to_write_ns {
-        row(&mut out, "read → write", r2w);
+        row(out, "read → write", r2w);
     }
     for stage in Stage::ALL {
         row(
-            &mut out,
+            out,
             &format!("  {}", stage.label()),
             &s.stages_ns.get(stage),
         );
     }
-    row(
-        &mut out,
-        "tick w/o device",
-        &s.stages_ns.tick_without_device,
-    );
+    row(out, "tick w/o device", &s.stages_ns.tick_without_device);
     let _ = writeln!(out);
     let _ = writeln!(
         out,
@@ -98,6 +127,10 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
         s.misses.overrun,
         s.misses.skipped
     );
+}
+
+/// Constraint violation, finger tracking and the force on each finger.
+fn accuracy_lines(out: &mut String, s: &Summary, fingers: &[(String, String)]) {
     let v = &s.violation;
     if v.ticks_measured == 0 || v.rows == 0 {
         let _ = writeln!(out, "constraint violation: {}", v.verdict);
@@ -141,7 +174,11 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
             f.mean, f.max, f.commanded_max
         );
     }
-    design_lines(&mut out, s);
+}
+
+/// Force cuts, failures, faults and device events; energy, warnings and the
+/// replay's verdict.
+fn safety_lines(out: &mut String, s: &Summary) {
     let kinds = if s.safety.failure_kinds.is_empty() {
         String::new()
     } else {
@@ -170,75 +207,61 @@ pub fn render(s: &Summary, fingers: &[(String, String)]) -> String {
     if let Some(r) = &s.replay {
         let _ = writeln!(out, "replay: {}", r.verdict);
     }
-    if let Some(c) = &s.contact {
-        let _ = writeln!(
-            out,
-            "contact: max penetration {} (exact, per slow-loop snapshot: {}; witness rows, per tick: {}; \
-             scene tolerance {}: {}); up to {} rows active, {} pairs tracked",
-            units::mm(c.max_penetration_m),
-            units::mm(c.max_penetration_exact_m),
-            units::mm(c.max_penetration_rows_m),
-            units::mm(c.tolerance_m),
-            c.verdict,
-            c.max_active,
-            c.max_tracked_pairs
-        );
-        // Mean and max only over programs that were built (or reused).
-        let timed = |n: u64, what: &str, mean: f64, max: f64| {
-            if n == 0 {
-                format!("none {what}")
-            } else {
-                format!("{n} {what}: mean {mean:.0} µs, max {max:.0} µs")
-            }
-        };
-        let built = c.structure_changes - c.reused;
-        let _ = writeln!(
-            out,
-            "  {} witness changes, {} tables, {} new programs ({}; {}), \
-             {} backups, {} expansions, {} in-tick activations ({} ticks at the limit)",
-            c.witness_changes,
-            c.witness_tables,
-            c.structure_changes,
-            timed(built, "built", c.build_us_mean, c.build_us_max),
-            timed(c.reused, "reused", c.reuse_us_mean, c.reuse_us_max),
-            c.backups,
-            c.expansions,
-            c.activations,
-            c.activation_limit_ticks
-        );
-        let latency = if c.updates == 0 {
-            "no latency to measure".to_string()
-        } else {
-            format!(
-                "latency mean {:.1} ticks, max {} ticks",
-                c.latency_ticks_mean, c.latency_ticks_max
-            )
-        };
-        let _ = writeln!(
-            out,
-            "  witness → fast loop: {} updates, {latency}; slow-loop contact cycle mean {}, max {}",
-            c.updates,
-            units::or_not_measured(c.cycle_us_mean, 0, "µs"),
-            units::or_not_measured(c.cycle_us_max, 0, "µs")
-        );
-        let _ = writeln!(out, "  {}", speed_limit_line(c));
-    }
-    if let Some(sem) = &s.semantic {
-        super::semantic::lines(&mut out, sem);
-    }
-    reference_line(&mut out, s);
-    let _ = write!(
+}
+
+/// The contact block: penetration, active rows, programs, witness latency.
+fn contact_lines(out: &mut String, c: &super::summary::Contact) {
+    let _ = writeln!(
         out,
-        "slow loop: {} re-projections ({} recoveries, {} not converged); programs swapped in: {}; \
-         trace samples dropped: {}; wall clock {:.2} s",
-        s.slow_loop.reprojections,
-        s.slow_loop.recoveries,
-        s.slow_loop.placements_not_converged,
-        s.programs_swapped,
-        s.trace_dropped,
-        s.wall_clock_s
+        "contact: max penetration {} (exact, per slow-loop snapshot: {}; witness rows, per tick: {}; \
+         scene tolerance {}: {}); up to {} rows active, {} pairs tracked",
+        units::mm(c.max_penetration_m),
+        units::mm(c.max_penetration_exact_m),
+        units::mm(c.max_penetration_rows_m),
+        units::mm(c.tolerance_m),
+        c.verdict,
+        c.max_active,
+        c.max_tracked_pairs
     );
-    out
+    // Mean and max only over programs that were built (or reused).
+    let timed = |n: u64, what: &str, mean: f64, max: f64| {
+        if n == 0 {
+            format!("none {what}")
+        } else {
+            format!("{n} {what}: mean {mean:.0} µs, max {max:.0} µs")
+        }
+    };
+    let built = c.structure_changes - c.reused;
+    let _ = writeln!(
+        out,
+        "  {} witness changes, {} tables, {} new programs ({}; {}), \
+         {} backups, {} expansions, {} in-tick activations ({} ticks at the limit)",
+        c.witness_changes,
+        c.witness_tables,
+        c.structure_changes,
+        timed(built, "built", c.build_us_mean, c.build_us_max),
+        timed(c.reused, "reused", c.reuse_us_mean, c.reuse_us_max),
+        c.backups,
+        c.expansions,
+        c.activations,
+        c.activation_limit_ticks
+    );
+    let latency = if c.updates == 0 {
+        "no latency to measure".to_string()
+    } else {
+        format!(
+            "latency mean {:.1} ticks, max {} ticks",
+            c.latency_ticks_mean, c.latency_ticks_max
+        )
+    };
+    let _ = writeln!(
+        out,
+        "  witness → fast loop: {} updates, {latency}; slow-loop contact cycle mean {}, max {}",
+        c.updates,
+        units::or_not_measured(c.cycle_us_mean, 0, "µs"),
+        units::or_not_measured(c.cycle_us_max, 0, "µs")
+    );
+    let _ = writeln!(out, "  {}", speed_limit_line(c));
 }
 
 /// The fast loop's force against the converged reference.

@@ -127,8 +127,9 @@ impl ContactLoop {
         settings: SolverSettings,
         contact: ContactSettings,
         frames: MailboxWriter<WitnessFrame>,
+        objectives: Arc<haptloop_solver::Objectives>,
     ) -> Option<Self> {
-        let manager = ContactManager::new(base, settings, contact)?;
+        let manager = ContactManager::new(base, settings, contact)?.with_objectives(objectives);
         Some(Self {
             manager,
             tolerance_m: contact.penetration_tolerance_m,

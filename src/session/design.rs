@@ -101,9 +101,13 @@ impl DesignTracker {
     /// (one per term); `None` when the model has neither design variables
     /// nor objectives. Also returns the reporter's end of the queue.
     /// Allocates.
-    pub fn new(model: &Model, q: &[f64]) -> Option<(Self, DesignColumns)> {
+    pub fn new(
+        model: &Model,
+        objectives: &Arc<haptloop_solver::Objectives>,
+        q: &[f64],
+    ) -> Option<(Self, DesignColumns)> {
         let layout = model.layout();
-        let terms = &model.objectives().terms;
+        let terms = &objectives.terms;
         let motors = model.torque_joints();
         if layout.design_coords() == 0 && terms.is_empty() && motors.is_empty() {
             return None;
@@ -116,7 +120,7 @@ impl DesignTracker {
             }
         }
         let mut reports = vec![f64::NAN; terms.len()];
-        let _ = model.objective_evaluation().reports(model, q, &mut reports);
+        let _ = objectives.evaluation(model).reports(model, q, &mut reports);
         let objectives: Vec<_> = terms
             .iter()
             .zip(&reports)

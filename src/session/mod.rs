@@ -11,6 +11,7 @@
 //! possible, with the slow loop stepped in lockstep every few ticks on the same
 //! thread, so two runs produce bit-identical results.
 
+mod build;
 mod contact;
 mod design;
 mod device_limits;
@@ -29,6 +30,7 @@ mod stats;
 pub mod timing;
 pub mod track;
 
+pub use build::build;
 pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;
@@ -51,16 +53,15 @@ pub use track::{BodyTrack, FingerTrack, TrackSample};
 use crate::scenes::Scene;
 use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
-use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
+use haptloop_devices::TraceStream;
 use haptloop_rt::clock::{Clock, MockClock, MonotonicClock, Nanos};
-use haptloop_rt::exchange::{MailboxWriter, mailbox, program_channel};
+use haptloop_rt::exchange::MailboxWriter;
 use haptloop_rt::schedule::{
     IntervalReceiver, LoopHistograms, LoopReport, Periodic, RunLimit, StopFlag, Tick, TickBody,
     TickStatus, spawn_loop,
 };
 use haptloop_rt::thread::Granted;
-use haptloop_solver::{Placement, PlacementOptions, Program, SolveInfo};
-use nalgebra::Vector3;
+use haptloop_solver::SolveInfo;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -149,262 +150,6 @@ pub struct Built<C: Clock> {
     pub design: Option<DesignColumns>,
     /// The live viewer's ends (`--live`) and the reporter's finger end.
     live: Option<(LiveSources, MailboxWriter<FingerFrame>)>,
-}
-
-/// Builds the program (and assembles the scene), the devices (registered on
-/// their fingers), the exchange between the loops and every buffer the fast
-/// loop will use. All allocation of a session happens here.
-pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
-    // A testing aid: stretch the build (off the real-time thread, before any
-    // device is driven) so a test can signal the process while it builds.
-    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-    {
-        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
-    }
-    let model = Arc::new(scene.compiled.model.clone());
-    let mut program =
-        Program::new(model.clone(), plan.solver).context("building the fast-loop program")?;
-    // Initial assembly: Newton-KKT placement from q0 onto the constraints and
-    // the fingers' initial positions, before the clock starts.
-    let options = PlacementOptions::from_scene(
-        Some(plan.assembly_tolerance_m),
-        scene.compiled.settings.damping,
-    );
-    let mut placement =
-        Placement::analyze(&model, &options).context("analysing the scene for placement")?;
-    let mut q = model.q0().to_vec();
-    let assembly = if plan.assemble {
-        let info = placement
-            .solve(&model, &mut q, model.q0(), &model.initial_targets())
-            .context("assembling the scene")?;
-        program
-            .set_q(&q)
-            .context("starting from the assembled configuration")?;
-        Some(info)
-    } else {
-        None
-    };
-    // Semantic constraints: those aligned at the assembled configuration are
-    // satisfied, and their rows are part of the mechanism from the start.
-    let semantic = SemanticLoop::new(
-        model.clone(),
-        scene.compiled.semantic.as_ref(),
-        &scene.compiled.holds,
-        &SemanticPlan {
-            ops: scene.compiled.schedule.clone(),
-            absent: scene.compiled.absent.clone(),
-            mode: plan.semantic_mode,
-        },
-        &q,
-    )?;
-    let mechanism = semantic
-        .as_ref()
-        .map_or(model.clone(), |s| s.current_model().clone());
-    if semantic.is_some() {
-        program = Program::new(mechanism.clone(), plan.solver)
-            .context("building the fast-loop program with the semantic rows")?;
-        program
-            .set_q(&q)
-            .context("starting from the assembled configuration")?;
-    }
-    // Contact: the active set at the assembled configuration decides the
-    // model (the mechanism plus the contact rows of the pairs in reach) the
-    // fast loop starts with.
-    let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
-    let mut contact = ContactLoop::new(mechanism.clone(), plan.solver, plan.contact, frames_tx);
-    if let Some(c) = &mut contact {
-        let absent: Vec<u32> = scene.compiled.absent.iter().map(|b| b.0).collect();
-        c.set_absent(&absent);
-        program = c.initial(&q).context("building the contact rows")?;
-        program
-            .set_q(&q)
-            .context("starting from the assembled configuration")?;
-    }
-    let inbox = contact.as_ref().map(|_| WitnessInbox::new(frames_rx));
-    // The converged reference of sampled ticks, where it applies.
-    let reference_unsupported = reference::unsupported(contact.is_some());
-    let (capture, check) = match reference_unsupported {
-        Some(_) => (None, None),
-        None if plan.reference_every_ticks == 0 => (None, None),
-        None => {
-            let (c, k) = reference::pair(&program, plan.reference_every_ticks)
-                .context("building the converged reference")?;
-            (Some(c), Some(k))
-        }
-    };
-    let program = Box::new(Handover::new(program));
-    let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
-    let n = model.n_coords();
-    let n_fingers = model.fingers().len();
-    let (snapshot, snapshots) = mailbox(|| Snapshot {
-        q: Vec::with_capacity(n),
-        solved: true,
-        finger_force_n: Vec::with_capacity(n_fingers),
-        speeds: Vec::with_capacity(model.bodies().len()),
-        ..Snapshot::default()
-    });
-    let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
-    let (refresh_tx, refresh_rx) = match refresh::channel(&program.program) {
-        Some((tx, rx)) => (Some(tx), Some(rx)),
-        None => (None, None),
-    };
-    let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
-    let fingers = model.fingers().len();
-    let targets = model.initial_targets();
-    let health = vec![haptloop_devices::Health::Ok; rig.devices.len()];
-    // Recording streams: the fast loop pushes rows into a bounded queue per
-    // device, the reporter writes them out as the run goes (no buffer for the
-    // whole run; a full queue drops and counts rows). The first row is the
-    // reading each device was registered with, so a replay registers
-    // identically.
-    let (recorders, device_traces) = match &plan.record {
-        Some(dir) => {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-            let mut recorders = Vec::new();
-            let mut streams = Vec::new();
-            for (k, d) in scene.compiled.devices.iter().enumerate() {
-                let header = TraceHeader {
-                    scene: scene.compiled.name.clone(),
-                    model: d.model.clone(),
-                    rate_hz: plan.rate_hz,
-                };
-                let (mut rec, stream) = TraceRecorder::streaming(header, RECORD_QUEUE);
-                if let Some(r) = rig.registered[k] {
-                    let q = r.orientation_device.quaternion();
-                    rec.record(TraceRow {
-                        time: Duration::ZERO,
-                        counts: r.joint_counts,
-                        command_n_device: Vector3::zeros(),
-                        output_n_device: Vector3::zeros(),
-                        hand_offset_m_device: Vector3::zeros(),
-                        orientation_wxyz: [q.w, q.i, q.j, q.k],
-                    });
-                }
-                let path = dir.join(format!("{}.trace", d.name));
-                streams.push(
-                    stream
-                        .create(&path)
-                        .with_context(|| format!("recording device `{}`", d.name))?,
-                );
-                recorders.push(rec);
-            }
-            (recorders, streams)
-        }
-        None => (Vec::new(), Vec::new()),
-    };
-    let (design, design_columns) = match DesignTracker::new(&model, program.program.q()) {
-        Some((t, c)) => (Some(t), Some(c)),
-        None => (None, None),
-    };
-    let counts = vec![[0; 3]; rig.devices.len()];
-    let rig_devices = rig.devices.len();
-    // A violation above the scene's tolerance (else 0.1 mm) triggers a
-    // re-projection; one above a tenth of the mechanism's size means it came
-    // apart.
-    let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
-    let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
-    let fast = FastLoop {
-        clock,
-        period: plan.period(),
-        program,
-        broken_m,
-        programs: programs_rx,
-        refresh: refresh_rx,
-        rig,
-        targets,
-        snapshot,
-        trace: trace.clone(),
-        stats: RunStats::new(fingers),
-        last_index: None,
-        cut_until: 0,
-        violation_peak_m: 0.0,
-        health,
-        counts,
-        orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
-        recorders,
-        inbox,
-        design,
-        switches: design::DesignSchedule::new(&scene.compiled.design_flags),
-        reference: capture,
-        sampled: false,
-        timer: StageClock::default(),
-        rendered: vec![Vector3::zeros(); fingers],
-        commanded: vec![Vector3::zeros(); fingers],
-    };
-    // The live viewer's exchange: the slow loop and the reporter write, the
-    // viewer reads; the fast loop takes no part.
-    let (live_frames, live) = match &plan.live {
-        None => (None, None),
-        Some(_) => {
-            let pointers = fast_pointers(&fast.rig, scene);
-            let (sinks, sources) = live::exchange(pointers);
-            (Some(sinks.frames), Some((sources, sinks.fingers)))
-        }
-    };
-    let slow = SlowLoop {
-        track: track::BodyTrack::of_model(&model),
-        track_model: model.clone(),
-        poses: Vec::new(),
-        contact_points: Vec::new(),
-        live: live_frames,
-        fresh: false,
-        snapshots,
-        programs: programs_tx,
-        refresh: refresh_tx,
-        model: mechanism.clone(),
-        settings: plan.solver,
-        placement: Placement::analyze(&scene.compiled.joints_only, &options)
-            .context("analysing the scene's joints for re-projection")?,
-        joints_only: scene.compiled.joints_only.clone(),
-        threshold_m,
-        broken_m,
-        last_good: q.clone(),
-        stats: SlowStats {
-            reference_unsupported,
-            ..SlowStats::default()
-        },
-        reference: check,
-        contact,
-        semantic,
-        step_times: haptloop_rt::hist::LatencyHistogram::new(),
-    };
-    // The track starts at the assembled configuration, at t = 0.
-    let mut slow = slow;
-    track::poses_at(&model, &q, &mut slow.poses);
-    if let Some(c) = &slow.contact {
-        c.contacts(&mut slow.contact_points);
-    }
-    let at_rest = vec![[0.0; 3]; n_fingers];
-    slow.track
-        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
-    Ok(Built {
-        fast,
-        slow,
-        device_traces,
-        trace,
-        assembly,
-        design: design_columns,
-        live,
-    })
-}
-
-/// The pointers of the virtual devices, with the mounts they were
-/// registered with.
-fn fast_pointers(rig: &Rig, scene: &Scene) -> Vec<LivePointer> {
-    rig.pointers
-        .iter()
-        .zip(&rig.devices)
-        .zip(&scene.compiled.devices)
-        .filter_map(|((p, d), decl)| {
-            p.as_ref().map(|p| LivePointer {
-                device: decl.name.clone(),
-                pointer: p.clone(),
-                mount: d.mount,
-            })
-        })
-        .collect()
 }
 
 /// Hands the viewer its ends of the exchange and the reporter its finger

@@ -235,7 +235,11 @@ pub fn pair(
         force_solver: haptloop_solver::ForceSolver::Cholesky,
         ..*fast
     };
-    let reference = Program::new(Arc::clone(program.model_arc()), settings)?;
+    let reference = Program::with_objectives(
+        Arc::clone(program.model_arc()),
+        Arc::clone(program.objectives()),
+        settings,
+    )?;
     let (out, samples) = mailbox(|| ReferenceSample::sized(program));
     Ok((
         ReferenceCapture {

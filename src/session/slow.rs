@@ -59,6 +59,8 @@ pub struct SlowLoop {
     /// make the problem infeasible).
     pub(super) joints_only: Model,
     pub(super) settings: SolverSettings,
+    /// The scene's design objectives (every program handed over carries them).
+    pub(super) objectives: Arc<haptloop_solver::Objectives>,
     /// Placement analysed for `joints_only`.
     pub(super) placement: Placement,
     /// Violation above which the fast loop's configuration is re-projected, m.
@@ -234,7 +236,10 @@ impl SlowLoop {
         };
         let program = match &self.contact {
             Some(c) => c.program_for_current(),
-            None => Program::new(self.model.clone(), self.settings).ok(),
+            None => {
+                Program::with_objectives(self.model.clone(), self.objectives.clone(), self.settings)
+                    .ok()
+            }
         };
         let Some(program) = program else {
             return;
@@ -297,7 +302,7 @@ impl SlowLoop {
             None => {
                 // Re-projections hand over programs of this model from now on.
                 self.model = model.clone();
-                Program::new(model, self.settings).ok()
+                Program::with_objectives(model, self.objectives.clone(), self.settings).ok()
             }
         };
         let ns = (haptloop_rt::clock::Clock::now(&clock) - start).0;

@@ -6,7 +6,7 @@
 
 use haptloop::scenes::resolve;
 use haptloop_solver::scene::{self, SceneError};
-use haptloop_solver::{BodySpec, ModelBuilder, ObjectiveSpec, ObstacleSpec};
+use haptloop_solver::{BodySpec, ModelBuilder, ObjectiveSpec, Objectives, ObstacleSpec};
 
 fn four_bar() -> scene::LoadedScene {
     let text = haptloop::scenes::BUILTIN
@@ -84,16 +84,17 @@ fn a_far_reaching_obstacle_still_pushes() {
     let grad = |d: f64| {
         let mut b = ModelBuilder::new();
         b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
-        b.objective(ObjectiveSpec::Obstacle {
+        let spec = ObjectiveSpec::Obstacle {
             name: None,
             weight: 1.0,
             points: vec![("a".into(), [0.0; 3])],
             obstacle: ObstacleSpec::World([0.0; 3]),
             distance_m: d,
-        });
+        };
         let m = b.build().unwrap();
+        let o = std::sync::Arc::new(Objectives::compile(&[spec], &m).unwrap());
         let q = m.q0().to_vec();
-        let mut ev = m.objective_evaluation();
+        let mut ev = o.evaluation(&m);
         let mut g = vec![0.0; m.n_coords()];
         let f = ev.gradient(&m, &q, &mut g).unwrap();
         // Central differences of F along x.
@@ -102,7 +103,7 @@ fn a_far_reaching_obstacle_still_pushes() {
             let mut qq = q.clone();
             qq[0] = x;
             let mut gg = vec![0.0; m.n_coords()];
-            m.objective_evaluation().gradient(&m, &qq, &mut gg).unwrap()
+            o.evaluation(&m).gradient(&m, &qq, &mut gg).unwrap()
         };
         let fd = (value(q[0] + h) - value(q[0] - h)) / (2.0 * h);
         (f, g, fd)

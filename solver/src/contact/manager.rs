@@ -14,7 +14,7 @@ use std::sync::Arc;
 use super::bodies::{contact_bodies, jointed_pairs};
 use crate::constraint::witness::Witness;
 use crate::geometry::{ActiveSet, ContactSettings, Cycle, PairSpec, Pose3};
-use crate::{BodyId, BuildError, Model, Program, ProgramError, SolverSettings};
+use crate::{BodyId, BuildError, Model, Objectives, Program, ProgramError, SolverSettings};
 
 /// What the fast loop should be given after a cycle.
 #[derive(Debug)]
@@ -59,6 +59,8 @@ pub struct ContactManager {
     /// The pairs of `current`.
     pairs: Vec<PairSpec>,
     settings: SolverSettings,
+    /// The design objectives every program it builds carries.
+    objectives: Arc<Objectives>,
     table: Vec<Witness>,
     /// The table the fast loop last received (with `current`'s program or
     /// as a table).
@@ -113,6 +115,7 @@ impl ContactManager {
             base,
             pairs: Vec::new(),
             settings,
+            objectives: Arc::new(Objectives::default()),
             table: Vec::new(),
             published: Vec::new(),
             last_clean: None,
@@ -122,6 +125,13 @@ impl ContactManager {
             expected: Vec::new(),
             absent: Vec::new(),
         })
+    }
+
+    /// The same manager building its programs with `objectives` (by
+    /// default none, every built-in weight 1).
+    pub fn with_objectives(mut self, objectives: Arc<Objectives>) -> Self {
+        self.objectives = objectives;
+        self
     }
 
     /// Takes back a program the fast loop handed back (it is replaced): kept
@@ -307,7 +317,8 @@ impl ContactManager {
     /// A program for the current model with the published table (for a
     /// re-projection sent by the caller). Allocates.
     pub fn program_for_current(&self) -> Result<Program, ProgramError> {
-        let mut program = Program::new(self.current.clone(), self.settings)?;
+        let mut program =
+            Program::with_objectives(self.current.clone(), self.objectives.clone(), self.settings)?;
         program.apply_witnesses(&self.published);
         Ok(program)
     }
@@ -347,7 +358,8 @@ impl ContactManager {
             }
             None => {
                 let model = Arc::new(self.base.with_contacts(&pairs)?);
-                let mut program = Program::new(model, self.settings)?;
+                let mut program =
+                    Program::with_objectives(model, self.objectives.clone(), self.settings)?;
                 program.reset_witnesses(&self.table);
                 self.builds.built += 1;
                 self.builds.last_reused = false;

@@ -30,7 +30,6 @@ pub struct ModelBuilder {
     joints: Vec<JointSpec>,
     gears: Vec<super::gears::GearSpec>,
     fingers: Vec<FingerSpec>,
-    objectives: Vec<crate::objective::ObjectiveSpec>,
     gravity: [f64; 3],
 }
 
@@ -76,17 +75,6 @@ impl ModelBuilder {
         FingerId(self.fingers.len() as u32 - 1)
     }
 
-    /// Adds an objective (`[[objective]]`); compiled against the built model.
-    pub fn objective(&mut self, spec: crate::objective::ObjectiveSpec) -> &mut Self {
-        self.objectives.push(spec);
-        self
-    }
-
-    /// The objectives added so far, in order.
-    pub fn objective_specs(&self) -> &[crate::objective::ObjectiveSpec] {
-        &self.objectives
-    }
-
     /// The bodies added so far, in order.
     pub fn body_specs(&self) -> &[BodySpec] {
         &self.bodies
@@ -113,7 +101,7 @@ impl ModelBuilder {
         self.build_with(true)
     }
 
-    /// The same model without the finger constraints and objectives: the
+    /// The same model without the finger constraints: the
     /// same bodies (contact fingers' fingertips included), the same layout of
     /// q, joint, quaternion-norm and design-bound rows only (for
     /// re-projection, which must not hold a finger where the mechanism cannot
@@ -283,7 +271,7 @@ impl ModelBuilder {
         q0.extend_from_slice(&fin.q0_tail);
         q0.resize(len, 0.0); // undeformed flexible bodies
         let body_coords = col;
-        let mut model = Model {
+        let model = Model {
             id: next_model_id(),
             bodies,
             fingers,
@@ -303,7 +291,6 @@ impl ModelBuilder {
             equality_rows,
             characteristic_length,
             contact: super::ContactLayout::default(),
-            objectives: crate::objective::Objectives::default(),
             semantic: super::SemanticLayout::default(),
             torque_joints,
             flexible: fin.flex_bodies,
@@ -315,9 +302,6 @@ impl ModelBuilder {
                 .map(|(k, _)| ConstraintId(k as u32))
                 .collect(),
         };
-        if with_fingers {
-            model.objectives = crate::objective::compile(&self.objectives, &model)?;
-        }
         Ok(model)
     }
 }

@@ -110,7 +110,6 @@ pub struct Model {
     pub(crate) equality_rows: usize,
     pub(crate) characteristic_length: f64,
     pub(crate) contact: ContactLayout,
-    pub(crate) objectives: crate::objective::Objectives,
     pub(crate) semantic: SemanticLayout,
     /// Joints whose motor torque is reported (`report_torque`), in joint order.
     pub(crate) torque_joints: Vec<ConstraintId>,

@@ -46,11 +46,15 @@ mod straight_line;
 mod sym6;
 mod workspace;
 
-pub(crate) use compile::{compile, display_name};
+use compile::compile;
+pub(crate) use compile::display_name;
 pub use dexterity::DET_FLOOR;
 pub use obstacle::MIN_DISTANCE_FRACTION;
 pub use spec::{ObjectiveKind, ObjectiveSpec, ObstacleSpec};
 
+use std::sync::Arc;
+
+use crate::model::BuildError;
 use crate::{EvalError, Model};
 use grad::BodyGrad;
 
@@ -114,31 +118,34 @@ impl Objectives {
     }
 }
 
-impl Model {
-    /// The model's objectives.
-    pub fn objectives(&self) -> &Objectives {
-        &self.objectives
+impl Objectives {
+    /// Compiles `specs` (`[[objective]]`, in scene order) against `model`
+    /// (bodies, joints and their geometry, q0). The error names the
+    /// objective and what is wrong. Allocates; build time only.
+    pub fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectives, BuildError> {
+        compile(specs, model)
     }
 
-    /// The scratch to evaluate this model's objectives. Allocates.
-    pub fn objective_evaluation(&self) -> ObjectiveEval {
-        ObjectiveEval::new(self)
+    /// The scratch to evaluate these objectives on `model` (the model they
+    /// were compiled against, or one with its layout). Allocates.
+    pub fn evaluation(self: &Arc<Self>, model: &Model) -> ObjectiveEval {
+        ObjectiveEval::new(Arc::clone(self), model)
     }
 }
 
 /// Scratch for evaluating a model's objectives, allocated once.
 #[derive(Debug, Clone)]
 pub struct ObjectiveEval {
+    objectives: Arc<Objectives>,
     model_id: u64,
     grad: BodyGrad,
     dex: dexterity::DexScratch,
 }
 
 impl ObjectiveEval {
-    /// Buffers for `model`. Allocates.
-    pub fn new(model: &Model) -> Self {
-        let columns = model
-            .objectives
+    /// Buffers for `objectives` on `model`. Allocates.
+    pub fn new(objectives: Arc<Objectives>, model: &Model) -> Self {
+        let columns = objectives
             .terms
             .iter()
             .map(|t| match &t.term {
@@ -148,6 +155,7 @@ impl ObjectiveEval {
             .max()
             .unwrap_or(0);
         Self {
+            objectives,
             model_id: model.id,
             grad: BodyGrad::new(model),
             dex: dexterity::DexScratch::new(columns),
@@ -167,7 +175,7 @@ impl ObjectiveEval {
     /// No allocation; O(bodies + terms' sizes).
     pub fn values(&mut self, model: &Model, q: &[f64], out: &mut [f64]) -> Result<(), EvalError> {
         self.prepare(model, q)?;
-        for (o, t) in out.iter_mut().zip(&model.objectives.terms) {
+        for (o, t) in out.iter_mut().zip(&self.objectives.terms) {
             *o = match &t.term {
                 Term::Dexterity(d) => d.value(&self.grad, q, &mut self.dex),
                 Term::Obstacle(a) => a.value(&self.grad),
@@ -186,7 +194,7 @@ impl ObjectiveEval {
     /// No allocation; O(bodies + terms' sizes).
     pub fn reports(&mut self, model: &Model, q: &[f64], out: &mut [f64]) -> Result<(), EvalError> {
         self.prepare(model, q)?;
-        for (o, t) in out.iter_mut().zip(&model.objectives.terms) {
+        for (o, t) in out.iter_mut().zip(&self.objectives.terms) {
             *o = match &t.term {
                 Term::Dexterity(d) => d.report(&self.grad, q, &mut self.dex),
                 Term::Obstacle(a) => a.report(&self.grad),
@@ -218,7 +226,7 @@ impl ObjectiveEval {
             });
         }
         let mut total = 0.0;
-        for t in &model.objectives.terms {
+        for t in &self.objectives.terms {
             let w = t.weight;
             total += w * match &t.term {
                 Term::Dexterity(d) => d.gradient(&mut self.grad, q, &mut self.dex, w, grad),

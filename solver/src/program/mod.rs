@@ -91,13 +91,15 @@ use crate::al::scaling::{Role, Scaling, check_stable};
 use crate::al::{RedundancyCheck, SolverSettings};
 use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
-use crate::{Evaluation, FingerTarget, Model, UpdateRule};
+use crate::{Evaluation, FingerTarget, Model, Objectives, UpdateRule};
 
 /// The fast loop's solver state for one model. `Send`: build it on the slow
 /// thread, move it to the fast one. See the [module docs](self).
 #[derive(Debug)]
 pub struct Program {
     model: Arc<Model>,
+    /// The design objectives and the built-in weights (`[[objective]]`).
+    objectives: Arc<Objectives>,
     settings: SolverSettings,
     scaling: Scaling,
     sigma_max: f64,
@@ -162,8 +164,21 @@ impl Program {
     /// multipliers zero). Finds and masks redundant rows at q0
     /// (`settings.redundancy`), measures σ_max at q0 to set h, rejects
     /// settings that would diverge and fixes the divergence limits.
-    /// Allocates; call it off the real-time thread.
+    /// Allocates; call it off the real-time thread. No design objective
+    /// and every built-in weight 1; see [`with_objectives`](Self::with_objectives).
     pub fn new(model: Arc<Model>, settings: SolverSettings) -> Result<Program, ProgramError> {
+        Self::with_objectives(model, Arc::new(Objectives::default()), settings)
+    }
+
+    /// [`new`](Self::new) with the design objectives `objectives`
+    /// ([`Objectives::compile`] against `model` or a model with its layout):
+    /// their gradient shifts each tick's least-astonishment anchor, and their
+    /// `finger` and `least_astonishment` weights scale the update.
+    pub fn with_objectives(
+        model: Arc<Model>,
+        objectives: Arc<Objectives>,
+        settings: SolverSettings,
+    ) -> Result<Program, ProgramError> {
         settings.validate()?;
         // The fused gradient pass holds at most six rows per constraint; a
         // contact pair's witness rows are one constraint of many rows.
@@ -195,7 +210,7 @@ impl Program {
         }
         // The scene's `finger` and `least_astonishment` weights.
         let mut settings = settings;
-        let weights = model.objectives();
+        let weights = &objectives;
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
         let mut ev = model.evaluation();
@@ -249,10 +264,10 @@ impl Program {
         )
         .with_design(
             &model,
-            objective::design_metric_kg(&model, feedback.mean_mass_kg()),
+            objective::design_metric_kg(&objectives, feedback.mean_mass_kg()),
             &masked_equalities(&model, &scaling, &redundancy.rows),
         );
-        let objective = objective::ObjectivePull::new(&model, feedback.mean_mass_kg());
+        let objective = objective::ObjectivePull::new(&model, &objectives, feedback.mean_mass_kg());
         let mut friction_slot = vec![false; model.contact().slots];
         let mut friction_pair = Vec::new();
         for (k, pair) in model.contact().pairs.iter().enumerate() {
@@ -283,6 +298,7 @@ impl Program {
             projected.reach(),
         );
         let mut p = Program {
+            objectives,
             inertial,
             friction_bodies,
             q: model.q0().to_vec(),
@@ -336,6 +352,12 @@ impl Program {
     /// The shared model (to build a replacement program from it).
     pub fn model_arc(&self) -> &Arc<Model> {
         &self.model
+    }
+
+    /// The design objectives and built-in weights this program optimises
+    /// (shared: a program rebuilt for a changed model passes them on).
+    pub fn objectives(&self) -> &Arc<Objectives> {
+        &self.objectives
     }
 
     /// The settings it was built with.

@@ -31,7 +31,9 @@
 
 use super::Program;
 use crate::UpdateRule;
-use crate::objective::ObjectiveEval;
+use std::sync::Arc;
+
+use crate::objective::{ObjectiveEval, Objectives};
 
 /// Largest objective-induced move of any coordinate per tick, scaled metres.
 pub const OBJECTIVE_STEP_LIMIT_M: f64 = 1e-4;
@@ -90,19 +92,23 @@ impl ObjectivePull {
 impl ObjectivePull {
     /// For a program of `model` with mean body mass `mean_mass_kg`; `None`
     /// when the model has no design objective. Allocates.
-    pub fn new(model: &crate::Model, mean_mass_kg: f64) -> Option<Self> {
-        let o = model.objectives();
+    pub fn new(
+        model: &crate::Model,
+        objectives: &Arc<Objectives>,
+        mean_mass_kg: f64,
+    ) -> Option<Self> {
+        let o = objectives;
         if o.is_empty() {
             return None;
         }
         let n = model.n_coords();
         Some(Self {
-            eval: model.objective_evaluation(),
+            eval: objectives.evaluation(model),
             grad: vec![0.0; n],
             shift: vec![0.0; n],
             reports: vec![f64::NAN; o.terms.len()],
             energy_kg: mean_mass_kg / o.least_astonishment,
-            design_kg: design_metric_kg(model, mean_mass_kg),
+            design_kg: design_metric_kg(objectives, mean_mass_kg),
             last_step_m: 0.0,
             static_shift: vec![0.0; static_columns(model)],
         })
@@ -134,8 +140,8 @@ fn static_columns(model: &crate::Model) -> usize {
 
 /// The least-astonishment metric of one design column, kg: the mean body
 /// mass times the scene's `design_weight`.
-pub(super) fn design_metric_kg(model: &crate::Model, mean_mass_kg: f64) -> f64 {
-    mean_mass_kg * model.objectives().design_weight
+pub(super) fn design_metric_kg(objectives: &Objectives, mean_mass_kg: f64) -> f64 {
+    mean_mass_kg * objectives.design_weight
 }
 
 impl Program {

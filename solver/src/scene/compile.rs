@@ -148,6 +148,9 @@ pub struct CompiledScene {
     pub description: String,
     /// The mechanism.
     pub model: Model,
+    /// Its design objectives and the built-in weights (`[[objective]]`),
+    /// for [`Program::with_objectives`](crate::Program::with_objectives).
+    pub objectives: std::sync::Arc<crate::Objectives>,
     /// The mechanism without its fingers: the same q layout, joint and
     /// quaternion-norm rows only.
     pub joints_only: Model,
@@ -449,7 +452,7 @@ impl LoadedScene {
         self.spec.joints.iter().map(joint_spec).collect()
     }
 
-    /// The scene's bodies, joints, fingers and objectives as a
+    /// The scene's bodies, joints and fingers as a
     /// [`ModelBuilder`], not built yet (`compile` builds it and maps its
     /// errors to spans; `haptloop place` builds a goal model from it).
     pub fn builder(&self) -> ModelBuilder {
@@ -488,10 +491,13 @@ impl LoadedScene {
             };
             builder.finger(spec);
         }
-        for o in &s.objectives {
-            builder.objective(objective_spec(o));
-        }
         builder
+    }
+
+    /// The `[[objective]]` tables as [`Objectives::compile`](crate::Objectives::compile)
+    /// takes them, in file order.
+    pub fn objective_specs(&self) -> Vec<ObjectiveSpec> {
+        self.spec.objectives.iter().map(objective_spec).collect()
     }
 
     /// Builds the model and wires devices to fingers. Every error names the
@@ -507,6 +513,8 @@ impl LoadedScene {
             .build_joints_only()
             .map_err(|e| self.build_error(&e))?;
         let model = builder.build().map_err(|e| self.build_error(&e))?;
+        let objectives = crate::Objectives::compile(&self.objective_specs(), &model)
+            .map_err(|e| self.build_error(&e))?;
         self.check_limits_at_q0(&model)?;
         let mut contact = crate::geometry::ContactSettings::default();
         if let Some(d) = &s.solver.contact_distance {
@@ -558,6 +566,7 @@ impl LoadedScene {
             })
             .collect();
         Ok(CompiledScene {
+            objectives: std::sync::Arc::new(objectives),
             name: s.scene.name.get_ref().clone(),
             description: s.scene.description.clone().unwrap_or_default(),
             model,

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use haptloop_rt::alloc::count;
 use haptloop_solver::{
     BodySpec, Bounds, DesignParam as P, FingerSpec, FingerTarget, JointKind as K, JointSpec, Model,
-    ModelBuilder, ObjectiveSpec, Program, SolverSettings, TickOutcome, UpdateRule,
+    ModelBuilder, ObjectiveSpec, Objectives, Program, SolverSettings, TickOutcome, UpdateRule,
     mechanisms::four_bar_builder,
 };
 use nalgebra::Vector3;
@@ -39,6 +39,16 @@ fn program(model: Model, update: UpdateRule) -> Program {
         ..SolverSettings::default()
     };
     Program::new(Arc::new(model), settings).unwrap()
+}
+
+/// [`program`] carrying `specs` compiled against `model`.
+fn designed(model: Model, specs: &[ObjectiveSpec], update: UpdateRule) -> Program {
+    let settings = SolverSettings {
+        update,
+        ..SolverSettings::default()
+    };
+    let objectives = Arc::new(Objectives::compile(specs, &model).unwrap());
+    Program::with_objectives(Arc::new(model), objectives, settings).unwrap()
 }
 
 /// The finger pulls the bob 3 cm outward: a fixed strut cannot follow, a
@@ -97,14 +107,14 @@ fn the_gradient_rule_moves_design_variables_too() {
 /// free motion, and the joints stay assembled every tick.
 #[test]
 fn an_objective_moves_the_mechanism_without_pulling_a_joint_apart() {
-    let mut b = four_bar_builder();
+    let b = four_bar_builder();
     let start = {
         let m = b.build().unwrap();
         m.finger_point(m.q0(), m.finger_id("index").unwrap())
             .unwrap()
     };
-    b.objective(ObjectiveSpec::Finger { weight: 1e-6 });
-    b.objective(ObjectiveSpec::StraightLine {
+    let mut specs = vec![ObjectiveSpec::Finger { weight: 1e-6 }];
+    specs.push(ObjectiveSpec::StraightLine {
         name: None,
         weight: 0.05,
         body: "coupler".into(),
@@ -113,7 +123,7 @@ fn an_objective_moves_the_mechanism_without_pulling_a_joint_apart() {
         direction: [1.0, 0.0, 0.0],
     });
     let model = b.build().unwrap();
-    let mut p = program(model, UpdateRule::Projected);
+    let mut p = designed(model, &specs, UpdateRule::Projected);
     let t = p.model().initial_targets();
     let first = {
         p.tick(&t, DT);
@@ -156,59 +166,61 @@ fn a_tick_with_objectives_and_design_variables_allocates_nothing() {
         fresh.finger(f.clone());
     }
     b = fresh;
-    b.objective(ObjectiveSpec::Dexterity {
-        name: None,
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: Vec::new(),
-        angular_directions: Vec::new(),
-        closure: Vec::new(),
-    });
-    b.objective(ObjectiveSpec::StraightLine {
-        name: None,
-        weight: 0.01,
-        body: "coupler".into(),
-        point_m: [0.0; 3],
-        line_point_m: [0.06, 0.03, 0.06],
-        direction: [1.0, 0.0, 0.0],
-    });
-    // Eq. 13's angular rows, a closed chain, Eq. 15 as written and App. D's
-    // workspace volume: the objectives of issue 22.
-    b.objective(ObjectiveSpec::Dexterity {
-        name: Some("angular".into()),
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: Vec::new(),
-        angular_directions: vec![[0.0, 0.0, 1.0]],
-        closure: Vec::new(),
-    });
-    b.objective(ObjectiveSpec::Dexterity {
-        name: Some("loop".into()),
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-        directions: vec![[0.0, 1.0, 0.0]],
-        angular_directions: Vec::new(),
-        closure: ["rocker", "ground"].map(String::from).to_vec(),
-    });
-    b.objective(ObjectiveSpec::InverseDistance {
-        name: None,
-        weight: 0.001,
-        points: vec![("coupler".into(), [0.0; 3])],
-        obstacle: haptloop_solver::ObstacleSpec::World([0.1, 0.1, 0.1]),
-    });
-    b.objective(ObjectiveSpec::WorkspaceVolume {
-        name: None,
-        weight: 0.01,
-        chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
-        point_m: [0.0; 3],
-    });
+    let specs = vec![
+        ObjectiveSpec::Dexterity {
+            name: None,
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: Vec::new(),
+            angular_directions: Vec::new(),
+            closure: Vec::new(),
+        },
+        ObjectiveSpec::StraightLine {
+            name: None,
+            weight: 0.01,
+            body: "coupler".into(),
+            point_m: [0.0; 3],
+            line_point_m: [0.06, 0.03, 0.06],
+            direction: [1.0, 0.0, 0.0],
+        },
+        // Eq. 13's angular rows, a closed chain, Eq. 15 as written and App. D's
+        // workspace volume: the objectives of issue 22.
+        ObjectiveSpec::Dexterity {
+            name: Some("angular".into()),
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: Vec::new(),
+            angular_directions: vec![[0.0, 0.0, 1.0]],
+            closure: Vec::new(),
+        },
+        ObjectiveSpec::Dexterity {
+            name: Some("loop".into()),
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+            directions: vec![[0.0, 1.0, 0.0]],
+            angular_directions: Vec::new(),
+            closure: ["rocker", "ground"].map(String::from).to_vec(),
+        },
+        ObjectiveSpec::InverseDistance {
+            name: None,
+            weight: 0.001,
+            points: vec![("coupler".into(), [0.0; 3])],
+            obstacle: haptloop_solver::ObstacleSpec::World([0.1, 0.1, 0.1]),
+        },
+        ObjectiveSpec::WorkspaceVolume {
+            name: None,
+            weight: 0.01,
+            chain: ["ground", "crank", "coupler"].map(String::from).to_vec(),
+            point_m: [0.0; 3],
+        },
+    ];
     let model = b.build().unwrap();
     assert_eq!(model.layout().design_coords(), 3);
     for update in [UpdateRule::Projected, UpdateRule::Gradient] {
-        let mut p = program(model.clone(), update);
+        let mut p = designed(model.clone(), &specs, update);
         let mut t: Vec<FingerTarget> = p.model().initial_targets();
         p.tick(&t, DT);
         let (statuses, stats) = count(|| {

@@ -1,11 +1,68 @@
 //! Small mechanisms carrying one objective each, random states, and F by
 //! finite differences.
 
+use std::ops::{Deref, DerefMut};
+use std::sync::Arc;
+
 use haptloop_solver::{
-    BodySpec, Bounds, DesignParam as P, JointKind as K, JointSpec, Model, ModelBuilder,
-    ObjectiveSpec, ObstacleSpec,
+    BodySpec, Bounds, BuildError, DesignParam as P, JointKind as K, JointSpec, Model, ModelBuilder,
+    ObjectiveSpec, Objectives, ObstacleSpec,
 };
 use nalgebra::{Quaternion, Vector3};
+
+/// A model builder plus objectives: the solver compiles objectives apart
+/// from the model ([`Objectives::compile`], against the built model), as a
+/// scene does.
+#[derive(Default)]
+pub struct Designer {
+    builder: ModelBuilder,
+    specs: Vec<ObjectiveSpec>,
+}
+
+impl Designer {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn objective(&mut self, spec: ObjectiveSpec) -> &mut Self {
+        self.specs.push(spec);
+        self
+    }
+
+    /// The model, then its objectives compiled against it.
+    pub fn build(&self) -> Result<Designed, BuildError> {
+        let model = self.builder.build()?;
+        let objectives = Arc::new(Objectives::compile(&self.specs, &model)?);
+        Ok(Designed { model, objectives })
+    }
+}
+
+impl Deref for Designer {
+    type Target = ModelBuilder;
+    fn deref(&self) -> &ModelBuilder {
+        &self.builder
+    }
+}
+
+impl DerefMut for Designer {
+    fn deref_mut(&mut self) -> &mut ModelBuilder {
+        &mut self.builder
+    }
+}
+
+/// A model and its compiled objectives.
+#[derive(Debug)]
+pub struct Designed {
+    pub model: Model,
+    pub objectives: Arc<Objectives>,
+}
+
+impl Deref for Designed {
+    type Target = Model;
+    fn deref(&self) -> &Model {
+        &self.model
+    }
+}
 
 const Z: [f64; 3] = [0.0, 0.0, 1.0];
 const Y: [f64; 3] = [0.0, 1.0, 0.0];
@@ -13,8 +70,8 @@ const Y: [f64; 3] = [0.0, 1.0, 0.0];
 /// A spatial 3R arm (yaw at the base, pitch, pitch) whose fixed base has a
 /// free position; links 0.3 m and 0.25 m; the hand point at the forearm's
 /// tip. Elbow bent by `elbow` radians.
-pub fn arm(elbow: f64) -> ModelBuilder {
-    let mut b = ModelBuilder::new();
+pub fn arm(elbow: f64) -> Designer {
+    let mut b = Designer::new();
     b.body(
         BodySpec::fixed("base")
             .free_position()
@@ -55,7 +112,7 @@ pub fn arm(elbow: f64) -> ModelBuilder {
 }
 
 /// The arm with a dexterity objective at the hand (all three directions).
-pub fn dexterity() -> Model {
+pub fn dexterity() -> Designed {
     let mut b = arm(1.0);
     b.objective(ObjectiveSpec::Dexterity {
         name: None,
@@ -73,7 +130,7 @@ pub fn dexterity() -> Model {
 
 /// The 3R arm with Eq. 13 as written: the three linear rows and the three
 /// angular rows (6 rows, 3 columns: G = J̃ᵀ J̃).
-pub fn dexterity_angular() -> Model {
+pub fn dexterity_angular() -> Designed {
     let mut b = arm(0.8);
     b.objective(ObjectiveSpec::Dexterity {
         name: None,
@@ -94,9 +151,9 @@ pub fn dexterity_angular() -> Model {
 /// direction (the loop has one degree of freedom). With `spin`, the
 /// coupler–rocker joint is spherical instead: the coupler may also spin
 /// about BC (two degrees of freedom), and an angular row joins.
-pub fn dexterity_closed(spin: bool) -> Model {
+pub fn dexterity_closed(spin: bool) -> Designed {
     let src = haptloop_solver::mechanisms::four_bar_builder();
-    let mut b = ModelBuilder::new();
+    let mut b = Designer::new();
     for s in src.body_specs() {
         b.body(s.clone());
     }
@@ -126,8 +183,8 @@ pub fn dexterity_closed(spin: bool) -> Model {
 
 /// A chain of every joint kind with a column form (spherical, universal,
 /// prismatic, revolute with free anchors), two task directions.
-pub fn dexterity_mixed() -> Model {
-    let mut b = ModelBuilder::new();
+pub fn dexterity_mixed() -> Designed {
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
     b.body(
@@ -167,8 +224,8 @@ pub fn dexterity_mixed() -> Model {
 }
 
 /// Three bodies' points near an obstacle point on a fourth, moving body.
-pub fn obstacle(on_body: bool) -> Model {
-    let mut b = ModelBuilder::new();
+pub fn obstacle(on_body: bool) -> Designed {
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground").free_position());
     b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
     b.body(BodySpec::new("b").at([0.0, 0.2, 0.0]));
@@ -197,8 +254,8 @@ pub fn obstacle(on_body: bool) -> Model {
 }
 
 /// Eq. 15 as written for the points of [`obstacle`] (world obstacle).
-pub fn inverse_distance() -> Model {
-    let mut b = ModelBuilder::new();
+pub fn inverse_distance() -> Designed {
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground").free_position());
     b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
     b.body(BodySpec::new("b").at([0.0, 0.2, 0.0]));
@@ -218,8 +275,8 @@ pub fn inverse_distance() -> Model {
 
 /// A three-link spherical chain with free anchors (every link's length a
 /// design variable somewhere), workspace volume at the last body's point.
-pub fn workspace() -> Model {
-    let mut b = ModelBuilder::new();
+pub fn workspace() -> Designed {
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("a").at([0.1, 0.0, 0.0]));
     b.body(BodySpec::new("b").at([0.25, 0.05, 0.0]));
@@ -251,8 +308,8 @@ pub fn workspace() -> Model {
 }
 
 /// A body point on a world line.
-pub fn straight_line() -> Model {
-    let mut b = ModelBuilder::new();
+pub fn straight_line() -> Designed {
+    let mut b = Designer::new();
     b.body(
         BodySpec::new("a")
             .at([0.1, 0.2, 0.0])
@@ -270,8 +327,8 @@ pub fn straight_line() -> Model {
 }
 
 /// Revolute, prismatic and distance limits (free anchors on two of them).
-pub fn joint_limits() -> Model {
-    let mut b = ModelBuilder::new();
+pub fn joint_limits() -> Designed {
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground").free_position());
     b.body(
         BodySpec::new("a")
@@ -345,26 +402,26 @@ pub fn state_len(model: &Model) -> usize {
 }
 
 /// Σ w_k F_k by a fresh evaluation.
-pub fn total(model: &Model, q: &[f64]) -> f64 {
-    let mut ev = model.objective_evaluation();
-    let mut f = vec![0.0; model.objectives().terms.len()];
+pub fn total(model: &Designed, q: &[f64]) -> f64 {
+    let mut ev = model.objectives.evaluation(model);
+    let mut f = vec![0.0; model.objectives.terms.len()];
     ev.values(model, q, &mut f).expect("values");
     f.iter()
-        .zip(&model.objectives().terms)
+        .zip(&model.objectives.terms)
         .map(|(f, t)| f * t.weight)
         .sum()
 }
 
 /// The analytic gradient of Σ w_k F_k, and the total it returns.
-pub fn gradient(model: &Model, q: &[f64]) -> (Vec<f64>, f64) {
-    let mut ev = model.objective_evaluation();
+pub fn gradient(model: &Designed, q: &[f64]) -> (Vec<f64>, f64) {
+    let mut ev = model.objectives.evaluation(model);
     let mut g = vec![0.0; model.n_coords()];
     let f = ev.gradient(model, q, &mut g).expect("gradient");
     (g, f)
 }
 
 /// Central differences of [`total`] with step `h`.
-pub fn fd(model: &Model, q: &[f64], h: f64) -> Vec<f64> {
+pub fn fd(model: &Designed, q: &[f64], h: f64) -> Vec<f64> {
     let mut x = q.to_vec();
     (0..q.len())
         .map(|c| {

@@ -1,12 +1,12 @@
 //! Bad objective entries: `build` fails naming the objective and what is
 //! wrong.
 
-use haptloop_solver::{BuildError as E, ModelBuilder, ObjectiveSpec, ObstacleSpec};
+use haptloop_solver::{BuildError as E, ObjectiveSpec, ObstacleSpec};
 
-use crate::common::arm;
+use crate::common::{Designer, arm};
 
 fn err(spec: ObjectiveSpec) -> E {
-    let mut b: ModelBuilder = arm(1.0);
+    let mut b = arm(1.0);
     b.objective(spec);
     b.build().expect_err("the objective is refused")
 }
@@ -189,7 +189,7 @@ fn a_name_is_used_once_and_builtin_weights_once() {
 fn a_closed_chain_closes_on_its_base_and_asks_no_more_rows_than_it_moves() {
     let four_bar = |closure: &[&str], directions: Vec<[f64; 3]>| {
         let src = haptloop_solver::mechanisms::four_bar_builder();
-        let mut b = ModelBuilder::new();
+        let mut b = Designer::new();
         for s in src.body_specs() {
             b.body(s.clone());
         }

@@ -8,7 +8,6 @@
 //! (an obstacle's barrier reaches F ≈ 200 m² next to gradients of 0.06); a
 //! wrong sign, factor or missing term errs by the order of |g| and fails.
 
-use haptloop_solver::Model;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestRunner};
 
@@ -16,7 +15,7 @@ use crate::common::{self, fd, gradient, state, state_len, total};
 
 const CASES: u32 = 48;
 
-fn check(model: &Model, q: &[f64]) -> Result<(), String> {
+fn check(model: &common::Designed, q: &[f64]) -> Result<(), String> {
     let (g, f) = gradient(model, q);
     let direct = total(model, q);
     if (f - direct).abs() > 1e-12 * (1.0 + direct.abs()) {
@@ -38,7 +37,7 @@ fn check(model: &Model, q: &[f64]) -> Result<(), String> {
     Ok(())
 }
 
-fn run(model: Model) {
+fn run(model: common::Designed) {
     let config = Config {
         cases: CASES,
         rng_seed: RngSeed::Fixed(0x0b1e_c71e),

@@ -2,14 +2,14 @@
 //! singular poses: finite values, finite (here zero) gradients.
 
 use haptloop_solver::{
-    BodySpec, JointKind as K, JointSpec, Model, ModelBuilder, ObjectiveSpec, objective::DET_FLOOR,
+    BodySpec, JointKind as K, JointSpec, ModelBuilder, ObjectiveSpec, objective::DET_FLOOR,
 };
 
-use crate::common::{self, gradient};
+use crate::common::{self, Designed, Designer, gradient};
 
-fn reports(model: &Model, q: &[f64]) -> Vec<f64> {
-    let mut ev = model.objective_evaluation();
-    let mut out = vec![0.0; model.objectives().terms.len()];
+fn reports(model: &Designed, q: &[f64]) -> Vec<f64> {
+    let mut ev = model.objectives.evaluation(model);
+    let mut out = vec![0.0; model.objectives.terms.len()];
     ev.reports(model, q, &mut out).unwrap();
     out
 }
@@ -17,14 +17,14 @@ fn reports(model: &Model, q: &[f64]) -> Vec<f64> {
 /// A planar 2R arm (links l1, l2, elbow θ) in the xy plane, dexterity in x
 /// and y: det J = l1 l2 sin θ, so Eq. 14 gives f = R² / (l1 l2 |sin θ|)
 /// with R = l1 + l2 (J̃ = J / R).
-fn planar(theta: f64) -> Model {
+fn planar(theta: f64) -> Designed {
     planar_with(theta, [0.1, 0.0, 0.0], Vec::new())
 }
 
 /// [`planar`] with its point x at `point` on the forearm and angular rows.
-fn planar_with(theta: f64, point_m: [f64; 3], angular_directions: Vec<[f64; 3]>) -> Model {
+fn planar_with(theta: f64, point_m: [f64; 3], angular_directions: Vec<[f64; 3]>) -> Designed {
     let (l1, l2) = (0.3, 0.2);
-    let mut b = ModelBuilder::new();
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("upper").at([l1 / 2.0, 0.0, 0.0]));
     let (s, c) = theta.sin_cos();
@@ -198,7 +198,7 @@ fn dexterity_of_a_closed_planar_four_bar_matches_a_planar_null_space() {
     );
     let x = (pb + pc) / 2.0 + Vector3::new(0.0, 0.01, 0.0);
     let d = Vector3::new(0.6, 0.8, 0.0);
-    let mut b = ModelBuilder::new();
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground"));
     let rod = |b: &mut ModelBuilder, name: &str, p: Vector3<f64>, q: Vector3<f64>| {
         b.body(BodySpec::new(name).at(((p + q) / 2.0).into()));
@@ -291,7 +291,7 @@ fn inverse_distance_is_the_nearest_points_inverse() {
 /// V = 4/3 π (0.4³ − 0.2³); F starts at 0 and falls as a link lengthens.
 #[test]
 fn workspace_volume_of_two_links_is_the_shell_between_their_sum_and_difference() {
-    let mut b = ModelBuilder::new();
+    let mut b = Designer::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("upper").at([0.15, 0.0, 0.0]));
     b.body(BodySpec::new("fore").at([0.35, 0.0, 0.0]));

@@ -1,0 +1,348 @@
+//! Building a session: the program (assembled, with its semantic and contact
+//! rows), the devices, the exchange between the loops and every buffer the
+//! fast loop will use, before the clock starts.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use crossbeam::queue::ArrayQueue;
+use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
+use haptloop_rt::clock::Clock;
+use haptloop_rt::exchange::{mailbox, program_channel};
+use haptloop_solver::{Model, Objectives, Placement, PlacementOptions, Program, SolveInfo};
+use nalgebra::Vector3;
+
+use super::{
+    Built, ContactLoop, DesignTracker, FastLoop, Handover, LivePointer, PROGRAM_QUEUE, Plan,
+    RECORD_QUEUE, Rig, RunStats, SLOW_BUILD_ENV, SemanticLoop, SemanticPlan, SlowLoop, SlowStats,
+    Snapshot, StageClock, TRACE_QUEUE, WitnessFrame, WitnessInbox, design, live, reference,
+    refresh, track,
+};
+use crate::scenes::Scene;
+
+/// The program the fast loop starts with, and what building it produced.
+struct Start {
+    /// The scene's model (its q layout is every snapshot's).
+    model: Arc<Model>,
+    /// The model with the semantic rows of the start (the scene's without).
+    mechanism: Arc<Model>,
+    objectives: Arc<Objectives>,
+    program: Program,
+    /// The assembled configuration.
+    q: Vec<f64>,
+    assembly: Option<SolveInfo>,
+    options: PlacementOptions,
+    semantic: Option<SemanticLoop>,
+    contact: Option<ContactLoop>,
+    inbox: Option<WitnessInbox>,
+}
+
+/// Builds the program (and assembles the scene), the devices (registered on
+/// their fingers), the exchange between the loops and every buffer the fast
+/// loop will use. All allocation of a session happens here.
+pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
+    // A testing aid: stretch the build (off the real-time thread, before any
+    // device is driven) so a test can signal the process while it builds.
+    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
+    }
+    let mut start = assemble(scene, plan)?;
+    with_semantic(&mut start, scene, plan)?;
+    with_contact(&mut start, scene, plan)?;
+    let Start {
+        model,
+        mechanism,
+        objectives,
+        program,
+        q,
+        assembly,
+        options,
+        semantic,
+        contact,
+        inbox,
+    } = start;
+    // The converged reference of sampled ticks, where it applies.
+    let reference_unsupported = reference::unsupported(contact.is_some());
+    let (capture, check) = match reference_unsupported {
+        Some(_) => (None, None),
+        None if plan.reference_every_ticks == 0 => (None, None),
+        None => {
+            let (c, k) = reference::pair(&program, plan.reference_every_ticks)
+                .context("building the converged reference")?;
+            (Some(c), Some(k))
+        }
+    };
+    let program = Box::new(Handover::new(program));
+    let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
+    let n = model.n_coords();
+    let n_fingers = model.fingers().len();
+    let (snapshot, snapshots) = mailbox(|| Snapshot {
+        q: Vec::with_capacity(n),
+        solved: true,
+        finger_force_n: Vec::with_capacity(n_fingers),
+        speeds: Vec::with_capacity(model.bodies().len()),
+        ..Snapshot::default()
+    });
+    let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
+    let (refresh_tx, refresh_rx) = match refresh::channel(&program.program) {
+        Some((tx, rx)) => (Some(tx), Some(rx)),
+        None => (None, None),
+    };
+    let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
+    let (recorders, device_traces) = recording(scene, plan, &rig)?;
+    let (design, design_columns) =
+        match DesignTracker::new(&model, &objectives, program.program.q()) {
+            Some((t, c)) => (Some(t), Some(c)),
+            None => (None, None),
+        };
+    let rig_devices = rig.devices.len();
+    // A violation above the scene's tolerance (else 0.1 mm) triggers a
+    // re-projection; one above a tenth of the mechanism's size means it came
+    // apart.
+    let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
+    let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
+    let fast = FastLoop {
+        clock,
+        period: plan.period(),
+        program,
+        broken_m,
+        programs: programs_rx,
+        refresh: refresh_rx,
+        targets: model.initial_targets(),
+        snapshot,
+        trace: trace.clone(),
+        stats: RunStats::new(n_fingers),
+        last_index: None,
+        cut_until: 0,
+        violation_peak_m: 0.0,
+        health: vec![haptloop_devices::Health::Ok; rig_devices],
+        counts: vec![[0; 3]; rig_devices],
+        orientations: vec![[1.0, 0.0, 0.0, 0.0]; rig_devices],
+        rig,
+        recorders,
+        inbox,
+        design,
+        switches: design::DesignSchedule::new(&scene.compiled.design_flags),
+        reference: capture,
+        sampled: false,
+        timer: StageClock::default(),
+        rendered: vec![Vector3::zeros(); n_fingers],
+        commanded: vec![Vector3::zeros(); n_fingers],
+    };
+    // The live viewer's exchange: the slow loop and the reporter write, the
+    // viewer reads; the fast loop takes no part.
+    let (live_frames, live) = match &plan.live {
+        None => (None, None),
+        Some(_) => {
+            let pointers = fast_pointers(&fast.rig, scene);
+            let (sinks, sources) = live::exchange(pointers);
+            (Some(sinks.frames), Some((sources, sinks.fingers)))
+        }
+    };
+    let mut slow = SlowLoop {
+        track: track::BodyTrack::of_model(&model),
+        track_model: model.clone(),
+        poses: Vec::new(),
+        contact_points: Vec::new(),
+        live: live_frames,
+        fresh: false,
+        snapshots,
+        programs: programs_tx,
+        refresh: refresh_tx,
+        model: mechanism,
+        settings: plan.solver,
+        objectives,
+        placement: Placement::analyze(&scene.compiled.joints_only, &options)
+            .context("analysing the scene's joints for re-projection")?,
+        joints_only: scene.compiled.joints_only.clone(),
+        threshold_m,
+        broken_m,
+        last_good: q.clone(),
+        stats: SlowStats {
+            reference_unsupported,
+            ..SlowStats::default()
+        },
+        reference: check,
+        contact,
+        semantic,
+        step_times: haptloop_rt::hist::LatencyHistogram::new(),
+    };
+    // The track starts at the assembled configuration, at t = 0.
+    track::poses_at(&model, &q, &mut slow.poses);
+    if let Some(c) = &slow.contact {
+        c.contacts(&mut slow.contact_points);
+    }
+    let at_rest = vec![[0.0; 3]; n_fingers];
+    slow.track
+        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
+    Ok(Built {
+        fast,
+        slow,
+        device_traces,
+        trace,
+        assembly,
+        design: design_columns,
+        live,
+    })
+}
+
+/// The fast-loop program of the scene's model, at the configuration the
+/// initial assembly (Newton-KKT placement from q0 onto the constraints and
+/// the fingers' initial positions) finds, or at q0 (`--no-assembly`).
+fn assemble(scene: &Scene, plan: &Plan) -> Result<Start> {
+    let model = Arc::new(scene.compiled.model.clone());
+    let objectives = scene.compiled.objectives.clone();
+    let mut program = Program::with_objectives(model.clone(), objectives.clone(), plan.solver)
+        .context("building the fast-loop program")?;
+    let options = PlacementOptions::from_scene(
+        Some(plan.assembly_tolerance_m),
+        scene.compiled.settings.damping,
+    );
+    let mut placement =
+        Placement::analyze(&model, &options).context("analysing the scene for placement")?;
+    let mut q = model.q0().to_vec();
+    let assembly = if plan.assemble {
+        let info = placement
+            .solve(&model, &mut q, model.q0(), &model.initial_targets())
+            .context("assembling the scene")?;
+        program
+            .set_q(&q)
+            .context("starting from the assembled configuration")?;
+        Some(info)
+    } else {
+        None
+    };
+    Ok(Start {
+        mechanism: model.clone(),
+        model,
+        objectives,
+        program,
+        q,
+        assembly,
+        options,
+        semantic: None,
+        contact: None,
+        inbox: None,
+    })
+}
+
+/// Semantic constraints: those aligned at the assembled configuration are
+/// satisfied, and their rows are part of the mechanism from the start.
+fn with_semantic(start: &mut Start, scene: &Scene, plan: &Plan) -> Result<()> {
+    start.semantic = SemanticLoop::new(
+        start.model.clone(),
+        scene.compiled.semantic.as_ref(),
+        &scene.compiled.holds,
+        &SemanticPlan {
+            ops: scene.compiled.schedule.clone(),
+            absent: scene.compiled.absent.clone(),
+            mode: plan.semantic_mode,
+        },
+        &start.q,
+    )?;
+    if let Some(s) = &start.semantic {
+        start.mechanism = s.current_model().clone();
+        start.program = Program::with_objectives(
+            start.mechanism.clone(),
+            start.objectives.clone(),
+            plan.solver,
+        )
+        .context("building the fast-loop program with the semantic rows")?;
+        start
+            .program
+            .set_q(&start.q)
+            .context("starting from the assembled configuration")?;
+    }
+    Ok(())
+}
+
+/// Contact: the active set at the assembled configuration decides the model
+/// (the mechanism plus the contact rows of the pairs in reach) the fast loop
+/// starts with.
+fn with_contact(start: &mut Start, scene: &Scene, plan: &Plan) -> Result<()> {
+    let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
+    start.contact = ContactLoop::new(
+        start.mechanism.clone(),
+        plan.solver,
+        plan.contact,
+        frames_tx,
+        start.objectives.clone(),
+    );
+    if let Some(c) = &mut start.contact {
+        let absent: Vec<u32> = scene.compiled.absent.iter().map(|b| b.0).collect();
+        c.set_absent(&absent);
+        start.program = c.initial(&start.q).context("building the contact rows")?;
+        start
+            .program
+            .set_q(&start.q)
+            .context("starting from the assembled configuration")?;
+        start.inbox = Some(WitnessInbox::new(frames_rx));
+    }
+    Ok(())
+}
+
+/// Recording streams (`--record`): the fast loop pushes rows into a bounded
+/// queue per device, the reporter writes them out as the run goes (no buffer
+/// for the whole run; a full queue drops and counts rows). The first row is
+/// the reading each device was registered with, so a replay registers
+/// identically.
+fn recording(
+    scene: &Scene,
+    plan: &Plan,
+    rig: &Rig,
+) -> Result<(Vec<TraceRecorder>, Vec<TraceStream>)> {
+    let Some(dir) = &plan.record else {
+        return Ok((Vec::new(), Vec::new()));
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut recorders = Vec::new();
+    let mut streams = Vec::new();
+    for (k, d) in scene.compiled.devices.iter().enumerate() {
+        let header = TraceHeader {
+            scene: scene.compiled.name.clone(),
+            model: d.model.clone(),
+            rate_hz: plan.rate_hz,
+        };
+        let (mut rec, stream) = TraceRecorder::streaming(header, RECORD_QUEUE);
+        if let Some(r) = rig.registered[k] {
+            let q = r.orientation_device.quaternion();
+            rec.record(TraceRow {
+                time: Duration::ZERO,
+                counts: r.joint_counts,
+                command_n_device: Vector3::zeros(),
+                output_n_device: Vector3::zeros(),
+                hand_offset_m_device: Vector3::zeros(),
+                orientation_wxyz: [q.w, q.i, q.j, q.k],
+            });
+        }
+        let path = dir.join(format!("{}.trace", d.name));
+        streams.push(
+            stream
+                .create(&path)
+                .with_context(|| format!("recording device `{}`", d.name))?,
+        );
+        recorders.push(rec);
+    }
+    Ok((recorders, streams))
+}
+
+/// The pointers of the virtual devices, with the mounts they were
+/// registered with.
+fn fast_pointers(rig: &Rig, scene: &Scene) -> Vec<LivePointer> {
+    rig.pointers
+        .iter()
+        .zip(&rig.devices)
+        .zip(&scene.compiled.devices)
+        .filter_map(|((p, d), decl)| {
+            p.as_ref().map(|p| LivePointer {
+                device: decl.name.clone(),
+                pointer: p.clone(),
+                mount: d.mount,
+            })
+        })
+        .collect()
+}
