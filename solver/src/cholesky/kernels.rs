@@ -277,14 +277,10 @@ fn update_any(
     }
 }
 
-/// Factors one supernode's block in place (its updates already applied),
-/// column by column over the whole block: column j's pivot from row j,
-/// then every later row's entry j (the diagonal block's and the rows below
-/// it alike). The rows' dot products within one column are independent, so
-/// they overlap in the pipeline; a row-by-row order (each entry waiting for
-/// the one before it in its row) made the small blocks of the linkages
-/// latency-bound (issue 23: 0.8 µs for the four-bar's 234 values). Returns
-/// the number of regularised pivots. `c0`: the block's first column (for the
+/// Factors one supernode's block in place (its updates already applied):
+/// the w × w diagonal part row by row, then the rows below it two at a time
+/// (independent rows, so their dependency chains interleave). Returns the
+/// number of regularised pivots. `c0`: the block's first column (for the
 /// error's index); `inv`: scratch of at least w.
 #[inline(always)]
 fn dense_factor(
@@ -294,85 +290,88 @@ fn dense_factor(
     reg: Regularization,
     inv: &mut [f64],
 ) -> Result<usize, NotPositive> {
+    let mut replaced = 0;
+    let inv = &mut inv[..w];
+    for i in 0..w {
+        let (done, row) = block.split_at_mut(i * w);
+        let row = &mut row[..w];
+        for j in 0..i {
+            let rj = &done[j * w..j * w + w];
+            row[j] = (row[j] - dot(&row[..j], &rj[..j])) * inv[j];
+        }
+        let mut d = row[i] - dot(&row[..i], &row[..i]);
+        if d <= reg.epsilon {
+            d = reg.delta;
+            replaced += 1;
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(NotPositive { index: c0 + i });
+        }
+        row[i] = d.sqrt();
+        inv[i] = 1.0 / row[i];
+    }
+    let (diag, below) = block.split_at_mut(w * w);
     macro_rules! fixed {
         ($($n:literal)*) => {
             match w {
-                $($n => columns_fixed::<$n>(block, c0, reg, inv),)*
-                _ => columns_any(block, w, c0, reg, inv),
+                $($n => below_fixed::<$n>(diag, below, inv),)*
+                _ => below_any(diag, below, w, inv),
             }
         };
     }
-    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+    Ok(replaced)
 }
 
-/// The pivot of column j from its row `rj` (entries before j final):
-/// √(a_jj − Σ l_jk²), regularised (faer's rule); its inverse into `inv_j`.
+/// The rows below a factored diagonal block: each row x ← x L⁻ᵀ, two rows
+/// at a time, width `W` known at compile time.
 #[inline(always)]
-fn pivot(
-    rj: &mut [f64],
-    j: usize,
-    c0: usize,
-    reg: Regularization,
-    replaced: &mut usize,
-) -> Result<f64, NotPositive> {
-    let mut d = rj[j] - dot(&rj[..j], &rj[..j]);
-    if d <= reg.epsilon {
-        d = reg.delta;
-        *replaced += 1;
-    }
-    if !(d > 0.0 && d.is_finite()) {
-        return Err(NotPositive { index: c0 + j });
-    }
-    rj[j] = d.sqrt();
-    Ok(1.0 / rj[j])
-}
-
-/// [`dense_factor`] for a block of width `W` known at compile time.
-#[inline(always)]
-fn columns_fixed<const W: usize>(
-    block: &mut [f64],
-    c0: usize,
-    reg: Regularization,
-    inv: &mut [f64],
-) -> Result<usize, NotPositive> {
-    let mut replaced = 0;
-    let (rows, _) = block.as_chunks_mut::<W>();
-    for j in 0..W {
-        let (head, rest) = rows.split_at_mut(j + 1);
-        let rj = &mut head[j];
-        let ij = pivot(rj, j, c0, reg, &mut replaced)?;
-        inv[j] = ij;
-        let rj: &[f64; W] = rj;
-        for r in rest.iter_mut() {
-            let mut s = 0.0;
+fn below_fixed<const W: usize>(diag: &[f64], below: &mut [f64], inv: &[f64]) {
+    let l: &[[f64; W]] = as_rows(diag);
+    let (rows, _) = below.as_chunks_mut::<W>();
+    let mut pairs = rows.chunks_exact_mut(2);
+    for pair in &mut pairs {
+        let (ra, rb) = pair.split_at_mut(1);
+        let (ra, rb) = (&mut ra[0], &mut rb[0]);
+        for j in 0..W {
+            let (mut sa, mut sb) = (ra[j], rb[j]);
             for k in 0..j {
-                s += r[k] * rj[k];
+                sa -= ra[k] * l[j][k];
+                sb -= rb[k] * l[j][k];
             }
-            r[j] = (r[j] - s) * ij;
+            ra[j] = sa * inv[j];
+            rb[j] = sb * inv[j];
         }
     }
-    Ok(replaced)
+    for r in pairs.into_remainder() {
+        for j in 0..W {
+            let mut s = r[j];
+            for k in 0..j {
+                s -= r[k] * l[j][k];
+            }
+            r[j] = s * inv[j];
+        }
+    }
 }
 
-/// [`dense_factor`] for any width.
+/// [`below_fixed`] for any width.
 #[inline(always)]
-fn columns_any(
-    block: &mut [f64],
-    w: usize,
-    c0: usize,
-    reg: Regularization,
-    inv: &mut [f64],
-) -> Result<usize, NotPositive> {
-    let mut replaced = 0;
-    for j in 0..w {
-        let (head, rest) = block.split_at_mut((j + 1) * w);
-        let rj = &mut head[j * w..j * w + w];
-        let ij = pivot(rj, j, c0, reg, &mut replaced)?;
-        inv[j] = ij;
-        let rj = &rj[..j];
-        for r in rest.chunks_exact_mut(w) {
-            r[j] = (r[j] - dot(&r[..j], rj)) * ij;
+fn below_any(diag: &[f64], below: &mut [f64], w: usize, inv: &[f64]) {
+    let mut pairs = below.chunks_exact_mut(2 * w);
+    for pair in &mut pairs {
+        let (ra, rb) = pair.split_at_mut(w);
+        for j in 0..w {
+            let rj = &diag[j * w..j * w + j];
+            let t = dot2x2(&ra[..j], &rb[..j], rj, rj);
+            ra[j] = (ra[j] - t[0]) * inv[j];
+            rb[j] = (rb[j] - t[2]) * inv[j];
         }
     }
-    Ok(replaced)
+    let rest = pairs.into_remainder();
+    if !rest.is_empty() {
+        for j in 0..w {
+            let rj = &diag[j * w..j * w + j];
+            rest[j] = (rest[j] - dot(&rest[..j], rj)) * inv[j];
+        }
+    }
 }

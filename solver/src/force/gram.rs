@@ -356,9 +356,6 @@ impl Gram {
             }
             let be = Vector4::new(b[o + 3], b[o + 4], b[o + 5], b[o + 6]);
             y[o + 3..o + 7].copy_from_slice((minv * be).as_slice());
-            // One division per body, not three per row (the divisions were
-            // a sixth of the assembly's time on the four-bar).
-            let inv_mass = 1.0 / m.mass;
             let entries = &self.entries[body.entries.clone()];
             for (k, ent) in entries.iter().enumerate() {
                 let s = scale[ent.row];
@@ -375,7 +372,7 @@ impl Gram {
                     *d = v * s;
                 }
                 for i in 0..3 {
-                    u[i] = c[i] * inv_mass;
+                    u[i] = c[i] / m.mass;
                 }
                 let ue = minv * Vector4::new(c[3], c[4], c[5], c[6]);
                 u[3..].copy_from_slice(ue.as_slice());
