@@ -233,12 +233,17 @@ fn forward_fixed<const W: usize>(block: &[f64], below: &[u32], c0: usize, work: 
     let (rows, _) = block.as_chunks::<W>();
     let (diag, under) = rows.split_at(W);
     let mut xs: [f64; W] = work[c0..c0 + W].try_into().expect("W entries");
+    // Column by column: x_j final, then subtracted from every later entry.
+    // Each entry sees the same subtractions in the same order as a row's
+    // dot product would give it (the result is the same to the last bit),
+    // but the chain between two pivots is one multiply-add, not a dot
+    // product (issue 23).
     for j in 0..W {
-        let mut s = xs[j];
-        for l in 0..j {
-            s -= diag[j][l] * xs[l];
+        xs[j] /= diag[j][j];
+        let xj = xs[j];
+        for i in j + 1..W {
+            xs[i] -= diag[i][j] * xj;
         }
-        xs[j] = s / diag[j][j];
     }
     work[c0..c0 + W].copy_from_slice(&xs);
     for (row, &r) in under.iter().zip(below) {

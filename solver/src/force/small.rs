@@ -44,6 +44,39 @@ pub(crate) fn min_norm_solve(
         v[i * n + i] = 1.0;
     }
     let scale: f64 = a.iter().map(|t| t * t).sum::<f64>().sqrt();
+    // The finger blocks are 3 × 3 (a point) or 6 × 6 (a rigid grasp, or two
+    // points): with the size known the sweeps unroll and lose their bounds
+    // checks (the 6 × 6 eigensolve was a sixth of the Stewart tick).
+    match n {
+        3 => sweeps::<3>(a, v, scale),
+        6 => sweeps::<6>(a, v, scale),
+        _ => sweeps_any(a, v, n, scale),
+    }
+    let top = (0..n)
+        .map(|i| a[i * n + i])
+        .fold(0.0, f64::max)
+        .max(reference);
+    x.fill(0.0);
+    let mut rank = 0;
+    for k in 0..n {
+        let d = a[k * n + k];
+        // NaN-safe: a NaN eigenvalue fails `d > …` and is skipped too.
+        if d.partial_cmp(&(RANK_TOLERANCE * top)) != Some(std::cmp::Ordering::Greater) {
+            continue;
+        }
+        rank += 1;
+        let proj: f64 = (0..n).map(|i| v[i * n + k] * b[i]).sum::<f64>() / d;
+        for i in 0..n {
+            x[i] += v[i * n + k] * proj;
+        }
+    }
+    rank
+}
+
+/// The Jacobi sweeps of [`min_norm_solve`] on the n × n `a` (row-major),
+/// accumulating the rotations into `v`, until the off-diagonal norm is
+/// 1e-15 × `scale` or [`MAX_SWEEPS`].
+fn sweeps_any(a: &mut [f64], v: &mut [f64], n: usize, scale: f64) {
     for _ in 0..MAX_SWEEPS {
         let off: f64 = (0..n)
             .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
@@ -72,25 +105,56 @@ pub(crate) fn min_norm_solve(
             }
         }
     }
-    let top = (0..n)
-        .map(|i| a[i * n + i])
-        .fold(0.0, f64::max)
-        .max(reference);
-    x.fill(0.0);
-    let mut rank = 0;
-    for k in 0..n {
-        let d = a[k * n + k];
-        // NaN-safe: a NaN eigenvalue fails `d > …` and is skipped too.
-        if d.partial_cmp(&(RANK_TOLERANCE * top)) != Some(std::cmp::Ordering::Greater) {
-            continue;
+}
+
+/// [`sweeps_any`] for n = `N` known at compile time: the same rotations in
+/// the same order, so the same result to the last bit.
+fn sweeps<const N: usize>(a: &mut [f64], v: &mut [f64], scale: f64) {
+    let a = &mut a.as_chunks_mut::<N>().0[..N];
+    let v = &mut v.as_chunks_mut::<N>().0[..N];
+    for _ in 0..MAX_SWEEPS {
+        let mut off = 0.0;
+        for (i, row) in a.iter().enumerate() {
+            for (j, &x) in row.iter().enumerate() {
+                if j != i {
+                    off += x * x;
+                }
+            }
         }
-        rank += 1;
-        let proj: f64 = (0..n).map(|i| v[i * n + k] * b[i]).sum::<f64>() / d;
-        for i in 0..n {
-            x[i] += v[i * n + k] * proj;
+        let off: f64 = f64::sqrt(off);
+        if off <= 1e-15 * scale || !off.is_finite() {
+            break;
+        }
+        for p in 0..N {
+            for q in p + 1..N {
+                let apq = a[p][q];
+                if apq.abs() <= 1e-300 {
+                    continue;
+                }
+                let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for row in a.iter_mut() {
+                    let (akp, akq) = (row[p], row[q]);
+                    row[p] = c * akp - s * akq;
+                    row[q] = s * akp + c * akq;
+                }
+                let (head, tail) = a.split_at_mut(q);
+                let (rp, rq) = (&mut head[p], &mut tail[0]);
+                for k in 0..N {
+                    let (apk, aqk) = (rp[k], rq[k]);
+                    rp[k] = c * apk - s * aqk;
+                    rq[k] = s * apk + c * aqk;
+                }
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p], row[q]);
+                    row[p] = c * vp - s * vq;
+                    row[q] = s * vp + c * vq;
+                }
+            }
         }
     }
-    rank
 }
 
 /// The common case of [`min_norm_solve`] without the eigensolve: when a
@@ -263,6 +327,40 @@ mod tests {
             }
         }
         a
+    }
+
+    /// The sweeps unrolled for 3 × 3 and 6 × 6 blocks rotate exactly as the
+    /// generic ones: eigenvalues and eigenvectors equal to the last bit, on
+    /// a rank-deficient 6 × 6 and on its leading 3 × 3.
+    #[test]
+    fn unrolled_sweeps_equal_the_generic_ones_bit_for_bit() {
+        let a6 = with_eigenvalues([2.0, 0.0, 0.5, 3.0, 1e-12, 1.5]);
+        let a3: Vec<f64> = (0..3)
+            .flat_map(|i| (0..3).map(move |j| a6[i * 6 + j]))
+            .collect();
+        for a0 in [a6.to_vec(), a3] {
+            let n = if a0.len() == 36 { 6 } else { 3 };
+            let scale = a0.iter().map(|t| t * t).sum::<f64>().sqrt();
+            let identity: Vec<f64> = (0..n * n)
+                .map(|k| if k % (n + 1) == 0 { 1.0 } else { 0.0 })
+                .collect();
+            let (mut a1, mut v1) = (a0.clone(), identity.clone());
+            let (mut a2, mut v2) = (a0.clone(), identity);
+            sweeps_any(&mut a1, &mut v1, n, scale);
+            match n {
+                3 => sweeps::<3>(&mut a2, &mut v2, scale),
+                _ => sweeps::<6>(&mut a2, &mut v2, scale),
+            }
+            let bits = |x: &[f64]| x.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a1), bits(&a2), "{n} × {n}: eigenvalues");
+            assert_eq!(bits(&v1), bits(&v2), "{n} × {n}: eigenvectors");
+            // And the sweeps did diagonalise: off-diagonal round-off only.
+            let off = (0..n * n)
+                .filter(|k| k % (n + 1) != 0)
+                .map(|k| a2[k].abs())
+                .fold(0.0, f64::max);
+            assert!(off < 1e-14 * scale, "{n} × {n}: off-diagonal {off:e}");
+        }
     }
 
     /// The Cholesky shortcut and the eigensolve agree where the shortcut is
