@@ -39,6 +39,15 @@ impl Program {
     /// Slow thread: two evaluations and force solves.
     pub fn prepare_handover(&mut self, q: &[f64]) -> Result<(), ProgramError> {
         self.set_q(q)?;
+        // Under inertial motion Eq. 7 takes the steps' filtered contact
+        // forces as known (`force::feedback::contact_forces_known`): that
+        // history is the running program's, so a factor solved here without
+        // it is not the one the fast loop needs (a pinch's contact reported
+        // a 1.6 N pull with it). Such programs refactor on adoption.
+        if crate::force::feedback::contact_forces_known(&self.settings) {
+            self.prepared = false;
+            return Ok(());
+        }
         let c = self.ev.values();
         let mut any = false;
         for (i, f) in self.feedback.forced.iter_mut().enumerate() {
