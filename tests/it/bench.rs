@@ -13,12 +13,12 @@ fn haptloop() -> Command {
     Command::new(env!("CARGO_BIN_EXE_haptloop"))
 }
 
-#[test]
-fn bench_writes_every_figure_and_they_add_up() {
-    let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("fb.json");
+/// `haptloop bench SCENE --ticks N --json FILE` (in `dir`), which must
+/// succeed: its printed report and its JSON.
+fn bench_json(scene: &str, ticks: u32, dir: &std::path::Path) -> (String, serde_json::Value) {
+    let json = dir.join(format!("{scene}.json"));
     let out = haptloop()
-        .args(["bench", "four-bar", "--ticks", "300", "--json"])
+        .args(["bench", scene, "--ticks", &ticks.to_string(), "--json"])
         .arg(&json)
         .output()
         .unwrap();
@@ -27,12 +27,17 @@ fn bench_writes_every_figure_and_they_add_up() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).expect("valid JSON");
+    (String::from_utf8_lossy(&out.stdout).into_owned(), v)
+}
+
+#[test]
+fn bench_writes_every_figure_and_they_add_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, v) = bench_json("four-bar", 300, dir.path());
     for label in ["tick w/o device", "force (Eq. 7)", "constraint violation"] {
         assert!(text.contains(label), "{text}");
     }
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).expect("valid JSON");
     assert_eq!(v["scene"], "four-bar");
     assert_eq!(v["ticks"], 300);
     let keys = ["p50", "p99", "p999", "max"];
@@ -211,18 +216,7 @@ fn bench_takes_the_solver_flags_and_scene_files() {
 #[test]
 fn bench_says_why_a_scene_has_no_violation_figure() {
     let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("stack.json");
-    let out = haptloop()
-        .args(["bench", "stack", "--ticks", "50", "--json"])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let (text, v) = bench_json("stack", 50, dir.path());
     assert!(!text.contains("NaN"), "{text}");
     assert!(
         text.contains(
@@ -230,8 +224,6 @@ fn bench_says_why_a_scene_has_no_violation_figure() {
         ),
         "{text}"
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["violation"]["max"].is_null(), "{}", v["violation"]);
     assert!(
         v["violation"]["verdict"]

@@ -6,9 +6,9 @@ use super::*;
 use nalgebra::{DMatrix, DVector};
 
 /// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
+pub(super) struct Lcg(pub(super) u64);
 impl Lcg {
-    fn next(&mut self) -> f64 {
+    pub(super) fn next(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6364136223846793005)
@@ -37,7 +37,7 @@ fn lower_csc(a: &DMatrix<f64>, keep: &DMatrix<bool>) -> (Vec<usize>, Vec<usize>,
 /// A = G Gᵀ + shift·I for a sparse G whose rows are the "rows of C" and
 /// whose columns are grouped in bodies: rows touching a common body couple,
 /// as in the Eq. 7 matrix.
-fn gram_like(
+pub(super) fn gram_like(
     edges: &[(usize, usize)],
     rows_per_edge: usize,
     bodies: usize,

@@ -4,37 +4,28 @@
 //! supernodes of their own by `analyze_grouped`, as the force solve's
 //! inactive contact pairs are.
 
+use super::tests::{Lcg, gram_like};
 use super::*;
 use nalgebra::{DMatrix, DVector};
 
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// A = G Gᵀ + 0.1 I for rows grouped in `rows_per_edge` per edge of
-/// bodies (7 columns each): the Eq. 7 matrix's shape, one edge a pair.
-fn pairs_matrix(edges: &[(usize, usize)], rows_per_edge: usize, bodies: usize) -> DMatrix<f64> {
-    let mut rng = Lcg(11);
-    let n = edges.len() * rows_per_edge;
-    let mut g = DMatrix::zeros(n, 7 * bodies);
-    for (e, &(b0, b1)) in edges.iter().enumerate() {
-        for r in 0..rows_per_edge {
-            for b in [b0, b1] {
-                for c in 0..7 {
-                    g[(e * rows_per_edge + r, 7 * b + c)] = rng.next() - 0.5;
-                }
+/// The lower triangle's entries (row, column, value slot) on `pattern`'s
+/// nonzeros and the diagonal, with the values of `a` there.
+fn lower_entries(
+    pattern: &DMatrix<f64>,
+    a: &DMatrix<f64>,
+) -> (Vec<(usize, usize, usize)>, Vec<f64>) {
+    let n = pattern.nrows();
+    let mut entries = Vec::new();
+    let mut values = Vec::new();
+    for c in 0..n {
+        for r in c..n {
+            if r == c || pattern[(r, c)] != 0.0 {
+                entries.push((r, c, values.len()));
+                values.push(a[(r, c)]);
             }
         }
     }
-    &g * g.transpose() + DMatrix::identity(n, n) * 0.1
+    (entries, values)
 }
 
 #[test]
@@ -44,7 +35,7 @@ fn skipping_decoupled_rows_gives_the_same_factor_and_solves() {
     let mut edges: Vec<(usize, usize)> = (1..bodies).map(|b| (0, b)).collect();
     edges.extend((1..bodies - 1).map(|b| (b, b + 1)));
     let per = 4;
-    let full = pairs_matrix(&edges, per, bodies);
+    let full = gram_like(&edges, per, bodies, 11);
     let n = full.nrows();
     // The pattern is the full matrix's (it is fixed per program); the
     // values have every third pair switched off, as the assembly leaves it.
@@ -61,16 +52,7 @@ fn skipping_decoupled_rows_gives_the_same_factor_and_solves() {
             a[(i, i)] = 1.0;
         }
     }
-    let mut entries = Vec::new();
-    let mut values = Vec::new();
-    for c in 0..n {
-        for r in c..n {
-            if r == c || full[(r, c)] != 0.0 {
-                entries.push((r, c, values.len()));
-                values.push(a[(r, c)]);
-            }
-        }
-    }
+    let (entries, values) = lower_entries(&full, &a);
     let groups: Vec<u32> = (0..n).map(|i| (i / per) as u32).collect();
     let reg = Regularization {
         epsilon: 0.0,
@@ -113,18 +95,9 @@ fn skipping_decoupled_rows_gives_the_same_factor_and_solves() {
 
 #[test]
 fn a_mask_of_another_length_skips_nothing() {
-    let full = pairs_matrix(&[(0, 1), (1, 2)], 3, 3);
+    let full = gram_like(&[(0, 1), (1, 2)], 3, 3, 11);
     let n = full.nrows();
-    let mut entries = Vec::new();
-    let mut values = Vec::new();
-    for c in 0..n {
-        for r in c..n {
-            if r == c || full[(r, c)] != 0.0 {
-                entries.push((r, c, values.len()));
-                values.push(full[(r, c)]);
-            }
-        }
-    }
+    let (entries, values) = lower_entries(&full, &full);
     let reg = Regularization {
         epsilon: 0.0,
         delta: 0.0,
