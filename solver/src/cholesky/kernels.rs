@@ -317,50 +317,46 @@ fn diagonal_factor(
 }
 
 /// Factors one supernode's block in place (its updates already applied):
-/// column by column for widths 1–16 ([`columns_fixed`]), row by row above
-/// that ([`rows_any`]). Returns the number of regularised pivots. `c0`: the
+/// the w × w diagonal part column by column ([`diagonal_by_columns`]), then
+/// the rows below it two at a time (independent rows, so their dependency
+/// chains interleave). Returns the number of regularised pivots. `c0`: the
 /// block's first column (for the error's index); `inv`: scratch of at
 /// least w.
 #[inline(always)]
-fn dense_factor(
+pub(super) fn dense_factor(
     block: &mut [f64],
     w: usize,
     c0: usize,
     reg: Regularization,
     inv: &mut [f64],
 ) -> Result<usize, NotPositive> {
-    macro_rules! fixed {
-        ($($n:literal)*) => {
-            match w {
-                $($n => columns_fixed::<$n>(block, c0, reg),)*
-                _ => rows_any(block, w, c0, reg, inv),
-            }
-        };
-    }
-    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    let inv = &mut inv[..w];
+    let (diag, below) = block.split_at_mut(w * w);
+    let replaced = diagonal_by_columns(diag, w, c0, reg, inv)?;
+    below_rows(diag, below, w, inv);
+    Ok(replaced)
 }
 
-/// [`dense_factor`] for a width `W` known at compile time, column by
-/// column over the whole block (diagonal part and the rows below): the
-/// pivot of column j, then every row's entry in column j, each an
-/// independent dot product of the row's first j entries with row j's (so
+/// The w × w diagonal part of a block factored column by column: the pivot
+/// of column j, then every later row's entry in column j, each an
+/// independent dot product of the row's first j entries with row j's, so
 /// their dependency chains overlap in the pipeline instead of each entry
-/// waiting for the one before it in its row).
+/// waiting for the one before it in its row. Each entry is the same
+/// expression as in the row order ([`rows_order`]), only computed in
+/// another order: bit-identical to it (a test checks). Fills `inv` with
+/// the reciprocal pivots.
 #[inline(always)]
-fn columns_fixed<const W: usize>(
-    block: &mut [f64],
+fn diagonal_by_columns(
+    diag: &mut [f64],
+    w: usize,
     c0: usize,
     reg: Regularization,
+    inv: &mut [f64],
 ) -> Result<usize, NotPositive> {
-    let (rows, _) = block.as_chunks_mut::<W>();
     let mut replaced = 0;
-    for j in 0..W {
-        let rest = &mut rows[j..];
-        let (pivot, below) = rest.split_first_mut().expect("W rows at least");
-        let mut d = pivot[j];
-        for k in 0..j {
-            d -= pivot[k] * pivot[k];
-        }
+    for j in 0..w {
+        let (pivot, later) = diag[j * w..].split_at_mut(w);
+        let mut d = pivot[j] - dot(&pivot[..j], &pivot[..j]);
         if d <= reg.epsilon {
             d = reg.delta;
             replaced += 1;
@@ -368,24 +364,67 @@ fn columns_fixed<const W: usize>(
         if !(d > 0.0 && d.is_finite()) {
             return Err(NotPositive { index: c0 + j });
         }
-        let ljj = d.sqrt();
-        let inv = 1.0 / ljj;
-        pivot[j] = ljj;
-        let p: &[f64; W] = pivot;
-        for r in below.iter_mut() {
-            let mut s = r[j];
-            for k in 0..j {
-                s -= r[k] * p[k];
-            }
-            r[j] = s * inv;
+        pivot[j] = d.sqrt();
+        inv[j] = 1.0 / pivot[j];
+        let p = &pivot[..j];
+        for r in later.chunks_exact_mut(w) {
+            r[j] = (r[j] - dot(&r[..j], p)) * inv[j];
         }
     }
     Ok(replaced)
 }
 
-/// [`dense_factor`] for any width: the w × w diagonal part row by row, then
-/// the rows below it two at a time.
-fn rows_any(
+/// The rows below a factored w × w diagonal part: unrolled for widths
+/// 1–16 ([`below_fixed`]), else [`below_any`].
+#[inline(always)]
+fn below_rows(diag: &[f64], below: &mut [f64], w: usize, inv: &[f64]) {
+    macro_rules! fixed {
+        ($($n:literal)*) => {
+            match w {
+                $($n => below_fixed::<$n>(diag, below, inv),)*
+                _ => below_any(diag, below, w, inv),
+            }
+        };
+    }
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// The rows below a factored diagonal block: each row x ← x L⁻ᵀ, two rows
+/// at a time, width `W` known at compile time.
+#[inline(always)]
+fn below_fixed<const W: usize>(diag: &[f64], below: &mut [f64], inv: &[f64]) {
+    let l: &[[f64; W]] = as_rows(diag);
+    let (rows, _) = below.as_chunks_mut::<W>();
+    let mut pairs = rows.chunks_exact_mut(2);
+    for pair in &mut pairs {
+        let (ra, rb) = pair.split_at_mut(1);
+        let (ra, rb) = (&mut ra[0], &mut rb[0]);
+        for j in 0..W {
+            let (mut sa, mut sb) = (ra[j], rb[j]);
+            for k in 0..j {
+                sa -= ra[k] * l[j][k];
+                sb -= rb[k] * l[j][k];
+            }
+            ra[j] = sa * inv[j];
+            rb[j] = sb * inv[j];
+        }
+    }
+    for r in pairs.into_remainder() {
+        for j in 0..W {
+            let mut s = r[j];
+            for k in 0..j {
+                s -= r[k] * l[j][k];
+            }
+            r[j] = s * inv[j];
+        }
+    }
+}
+
+/// The row order [`dense_factor`] replaced (each row of the diagonal part
+/// in turn, every entry waiting for the one before it in its row): kept as
+/// the reference its column order is tested against bit for bit.
+#[cfg(test)]
+pub(super) fn rows_order(
     block: &mut [f64],
     w: usize,
     c0: usize,
@@ -413,7 +452,7 @@ fn rows_any(
         inv[i] = 1.0 / row[i];
     }
     let (diag, below) = block.split_at_mut(w * w);
-    below_any(diag, below, w, inv);
+    below_rows(diag, below, w, inv);
     Ok(replaced)
 }
 
