@@ -99,11 +99,8 @@ mod tests {
                 let (mut a, mut y, mut v) = (a0.clone(), vec![0.0; n], vec![0.0; n * n]);
                 assert_eq!(min_norm_solve(&mut a, &b[..n], &mut y, &mut v, 1.0), 1);
                 let big = y.iter().map(|t| t.abs()).fold(0.0, f64::max);
-                for i in 0..n {
-                    assert!(
-                        (x[i] - y[i]).abs() <= 1e-11 * big,
-                        "{n}, {eps:e}: {x:?} {y:?}"
-                    );
+                for (xi, yi) in x.iter().zip(&y) {
+                    assert!((xi - yi).abs() <= 1e-11 * big, "{n}, {eps:e}: {x:?} {y:?}");
                 }
             }
             // A second eigenvalue at 1e-10 of σ: dropped by the eigensolve,
