@@ -1014,13 +1014,15 @@ fn the_stewart_legs_bottoming_out_10_nm_short() {
 /// at the start, changes it). It either snaps into its other branch there,
 /// or passes on its own and snaps where the hand brings Q back at about
 /// 3.42 s. Either way, for any round-off: each snap is a transient of a tick
-/// or two (0.14–0.83 mm at the first crossing, `haptloop sweep peaucellier`,
+/// or two (0.05–0.86 mm at the first crossing, `haptloop sweep peaucellier`,
 /// BENCHMARKS.md; 5–33 µm at the second), within the 1 mm the scene states;
 /// every excursion above 1 µm is over within 0.1 s, the run ends under 1 µm,
 /// and the quaternions' |e|² jump at a snap and are back within 1e-4 from
 /// 3.5 s on.
 /// Checked on the scene as shipped and on eight starts moved by
-/// k · 1e-12 m, which between them take both branches.
+/// k · 1e-12 m: changes of round-off size that can flip the branch (with
+/// another factor kernel's round-off, one of sixteen such starts passed
+/// the first crossing and snapped at the second; BENCHMARKS.md, issue 23).
 #[test]
 fn the_peaucellier_dead_point() {
     let (mut snapped_early, mut snapped_late) = (0, 0);

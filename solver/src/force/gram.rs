@@ -359,10 +359,8 @@ impl Gram {
             };
             let minv = m.inv_rotational_mass(&frame, &e);
             self.minv_e[body.mass] = minv;
-            // One division per body: every entry below multiplies by it.
-            let inv_m = 1.0 / m.mass;
             for c in 0..3 {
-                y[o + c] = b[o + c] * inv_m;
+                y[o + c] = b[o + c] / m.mass;
             }
             let be = Vector4::new(b[o + 3], b[o + 4], b[o + 5], b[o + 6]);
             y[o + 3..o + 7].copy_from_slice((minv * be).as_slice());
@@ -382,7 +380,7 @@ impl Gram {
                     *d = v * s;
                 }
                 for i in 0..3 {
-                    u[i] = c[i] * inv_m;
+                    u[i] = c[i] / m.mass;
                 }
                 let ue = minv * Vector4::new(c[3], c[4], c[5], c[6]);
                 u[3..].copy_from_slice(ue.as_slice());

@@ -95,7 +95,7 @@ impl BodyMass {
         let s = e.norm_squared();
         let j_inv = f.rot * Matrix3::from_diagonal(&self.inv_inertia) * f.rot.transpose();
         (f.omega.transpose() * j_inv * f.omega * (s / 4.0)
-            + e * e.transpose() * (1.0 / (s * self.norm_mass)))
+            + e * e.transpose() / (s * self.norm_mass))
             * (s / 4.0)
     }
 

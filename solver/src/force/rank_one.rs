@@ -11,6 +11,7 @@
 //! about 1e-12 relative. Anything else goes to the eigensolve.
 
 use super::small::RANK_TOLERANCE;
+use std::cmp::Ordering;
 
 /// ‖R‖_F over σ above which the shortcut is refused.
 const REST_TOLERANCE: f64 = 1e-12;
@@ -40,7 +41,8 @@ pub(crate) fn rank_one_solve(a: &[f64], b: &[f64], x: &mut [f64], reference: f64
     let s = |i: usize| a[i * n + k];
     let s2: f64 = (0..n).map(|i| s(i) * s(i)).sum();
     let sigma = s2 / skk;
-    if !(sigma > 1e3 * RANK_TOLERANCE * reference) {
+    // NaN-safe: an incomparable σ is refused too.
+    if sigma.partial_cmp(&(1e3 * RANK_TOLERANCE * reference)) != Some(Ordering::Greater) {
         return false;
     }
     let inv = 1.0 / skk;
@@ -52,13 +54,16 @@ pub(crate) fn rank_one_solve(a: &[f64], b: &[f64], x: &mut [f64], reference: f64
         }
     }
     let limit = REST_TOLERANCE * sigma;
-    if !(rest2 <= limit * limit) {
+    if !matches!(
+        rest2.partial_cmp(&(limit * limit)),
+        Some(Ordering::Less | Ordering::Equal)
+    ) {
         return false;
     }
     let sb: f64 = (0..n).map(|i| s(i) * b[i]).sum();
     let c = sb * skk / (s2 * s2);
-    for i in 0..n {
-        x[i] = s(i) * c;
+    for (i, xi) in x.iter_mut().enumerate() {
+        *xi = s(i) * c;
     }
     x.iter().all(|t| t.is_finite())
 }
