@@ -4,7 +4,9 @@
 //! **Witness updates.** The slow loop publishes a witness table for the
 //! program's model ([`Program::apply_witnesses`]); the fast loop copies it in
 //! at a tick boundary (no allocation: the table's length is the model's) and
-//! refactors once. A fingertip's friction anchors are the fast loop's own
+//! refactors once: for a quasi-static program only what the next steps use
+//! (evaluation, activation, one factorisation: `refresh_chord`), not a whole
+//! force solve. A fingertip's friction anchors are the fast loop's own
 //! while its contact persists: a stuck contact must not jump to where the
 //! slow loop saw it a few milliseconds ago.
 //!

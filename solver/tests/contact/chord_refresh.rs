@@ -3,6 +3,7 @@
 //! (`Program::refresh_factor`, the refresh it replaced) must change
 //! nothing: the same motion and forces, tick for tick.
 
+use haptloop_rt::alloc::count;
 use haptloop_solver::geometry::ContactSettings;
 use haptloop_solver::{
     BodySpec, FingerSpec, FingerTarget, ModelBuilder, SolverSettings, TickOutcome,
@@ -44,6 +45,16 @@ fn scene() -> haptloop_solver::Model {
     b.build().unwrap()
 }
 
+/// The hand's target at tick `k` of 700: down 0.3 mm into the table,
+/// across to the block and into it, turning.
+fn target(start: Vector3<f64>, k: usize) -> FingerTarget {
+    let s = (k as f64 / 600.0).min(1.0);
+    FingerTarget {
+        position_m: start + Vector3::new(0.11 * s, 0.004 * s, -0.0003),
+        orientation: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.4 * s),
+    }
+}
+
 #[test]
 fn a_witness_tables_chord_refresh_equals_a_whole_force_solve() {
     let run = |full_refresh: bool| {
@@ -56,13 +67,7 @@ fn a_witness_tables_chord_refresh_equals_a_whole_force_solve() {
         let start = l.program.model().initial_targets()[0].position_m;
         let mut out = Vec::new();
         for k in 0..700 {
-            let s = (k as f64 / 600.0).min(1.0);
-            // Down 0.3 mm into the table, across to the block and into it.
-            let target = FingerTarget {
-                position_m: start + Vector3::new(0.11 * s, 0.004 * s, -0.0003),
-                orientation: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.4 * s),
-            };
-            let r = l.tick(&[target]);
+            let r = l.tick(&[target(start, k)]);
             assert_eq!(r.status, TickOutcome::Ok, "tick {k}");
             let f = l.program.finger_outputs()[0];
             out.push((l.program.q().to_vec(), f.force_n, r.max_penetration_m));
@@ -93,4 +98,34 @@ fn a_witness_tables_chord_refresh_equals_a_whole_force_solve() {
         );
         assert!((a.2 - b.2).abs() <= 1e-12, "tick {k}: penetration");
     }
+}
+
+/// The chord refresh is on the fast path: taking a witness table allocates
+/// nothing (each table the drag publishes, taken again under the counter).
+#[test]
+fn a_witness_tables_chord_refresh_allocates_nothing() {
+    let mut l = Lockstep::new(
+        scene(),
+        SolverSettings::default(),
+        ContactSettings::default(),
+    );
+    let start = l.program.model().initial_targets()[0].position_m;
+    let mut table = Vec::new();
+    let (mut taken, mut allocations) = (0, 0);
+    for k in 0..700 {
+        let seen = l.tables;
+        let r = l.tick(&[target(start, k)]);
+        assert_eq!(r.status, TickOutcome::Ok, "tick {k}");
+        if l.tables > seen {
+            table.clear();
+            table.extend_from_slice(l.manager.published());
+            let before = l.program.chord_refreshes();
+            let (ok, stats) = count(|| l.program.apply_witnesses(&table));
+            assert!(ok);
+            taken += l.program.chord_refreshes() - before;
+            allocations += stats.total();
+        }
+    }
+    assert!(taken > 0, "no table took the chord refresh");
+    assert_eq!(allocations, 0, "taking {taken} tables allocated");
 }
