@@ -48,18 +48,21 @@ impl Program {
     }
 
     /// The refresh after a new witness table: evaluation, activation and
-    /// one factorisation, without the force solve's outputs, its release of
+    /// one factorisation, without the force solve's multipliers and
+    /// outputs, its release of
     /// pulling rows or its Coulomb judgement. The factor and row scales are
     /// those of [`refresh`](Self::refresh) at the same state: a force solve
     /// that releases a pulling row activates the rows again from C and the
     /// multipliers before it ends (the projected update keeps the kinematic
     /// active set), and with no friction row sticking there is no slip to
-    /// judge. Under inertial motion, with the gradient update or with a
-    /// sticking friction row: a whole refresh.
+    /// judge. Under inertial motion, with the gradient update, another
+    /// force solver than the Cholesky or a sticking friction row: a whole
+    /// refresh.
     pub(super) fn refresh_chord(&mut self) -> super::TickOutcome {
         use super::TickOutcome;
         let chord = !self.settings.dynamics
             && self.settings.update == crate::UpdateRule::Projected
+            && self.settings.force_solver == crate::ForceSolver::Cholesky
             && !self.feedback.stick.iter().any(|&s| s);
         if !chord {
             return self.refresh();
@@ -73,7 +76,12 @@ impl Program {
             self.feedback.forced.fill(false);
         }
         self.chord_refreshes += 1;
-        match (self.feedback).force_active(&self.scaling, &self.settings, &self.ev, &self.lambda) {
+        match (self.feedback).refactor_for_steps(
+            &self.scaling,
+            &self.settings,
+            &self.ev,
+            &self.lambda,
+        ) {
             Ok(()) => TickOutcome::Ok,
             Err(_) => TickOutcome::ForceSolve,
         }
