@@ -30,7 +30,7 @@ fn scene() -> haptloop_solver::Model {
     );
     for (k, y) in [-0.03, 0.03].into_iter().enumerate() {
         b.body(
-            BodySpec::new(&format!("box{k}"))
+            BodySpec::new(format!("box{k}"))
                 .at([0.0, y, 0.0101])
                 .shape(cuboid([0.01; 3]))
                 .mass(0.05),
