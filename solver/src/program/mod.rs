@@ -164,6 +164,8 @@ pub struct Program {
     /// The factor was prepared for a hand-over (`handover`): the next
     /// `adopt_state` keeps it.
     prepared: bool,
+    /// Witness tables taken with the chord refresh (`contact`).
+    chord_refreshes: u64,
 }
 
 impl Program {
@@ -334,6 +336,7 @@ impl Program {
             report: TickReport::default(),
             factor_adoptions: 0,
             prepared: false,
+            chord_refreshes: 0,
             feedback,
             ev,
             h,
