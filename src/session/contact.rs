@@ -8,7 +8,8 @@
 //!          │                 (a penetration deeper than the tolerance: the same, from the
 //!          │                  last clean configuration, as a Reset: the backup)
 //!          └──no───────────► witness table ─► WitnessFrame mailbox
-//!  fast loop, every tick:   newest frame for its model ─► Program::apply_witnesses (copy + refactor)
+//!  fast loop, every tick:   newest frame for its model ─► Program::apply_witnesses (copy + refactor;
+//!                           quasi-static: evaluation + one factorisation, no whole force solve)
 //!                           each step: an inactive contact it would violate is activated and
 //!                           the step retaken (at most MAX_ACTIVATIONS refactorisations)
 //! ```

@@ -371,6 +371,28 @@ impl Feedback {
         self.solve_multipliers(ev, settings)
     }
 
+    /// Refactors at `ev` with the rows active by C and `lambda` (as
+    /// [`compute`](Self::compute)'s activation) for the projected steps,
+    /// without solving for multipliers: the factor and row scales a
+    /// `compute` at the same state leaves when nothing slips (a pulling
+    /// row's release is undone by its last activation). The last solve's
+    /// multipliers and outputs stay as they were. Cholesky solver only.
+    ///
+    /// # Real-time
+    /// No allocation; one assembly and numeric factorisation.
+    pub fn refactor_for_steps(
+        &mut self,
+        s: &Scaling,
+        settings: &SolverSettings,
+        ev: &Evaluation,
+        lambda: &[f64],
+    ) -> Result<(), FactorError> {
+        self.activate(s, ev.values(), lambda);
+        self.generation = self.generation.wrapping_add(1);
+        self.assemble_regularized(ev, settings);
+        self.solve.factor_for_steps(&self.gram)
+    }
+
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).
     pub fn cg_iterations(&self) -> u32 {
         self.solve.cg_iterations()

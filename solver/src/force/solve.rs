@@ -472,6 +472,20 @@ impl MultiplierSolve {
         Ok(())
     }
 
+    /// Factors `gram` and keeps its Schur complement for
+    /// [`project`](Self::project), without solving for multipliers: the
+    /// factor a [`solve`](Self::solve) of the same A leaves for the steps
+    /// (Cholesky solver; the conjugate-gradient solver has no factor).
+    ///
+    /// # Real-time
+    /// No allocation; one numeric factorisation.
+    pub fn factor_for_steps(&mut self, gram: &Gram) -> Result<(), FactorError> {
+        if self.cg.is_some() || self.pcg.is_some() {
+            return Err(FactorError);
+        }
+        self.factor_keeping_schur(gram)
+    }
+
     /// Factors `gram` (seeding the preconditioner) and keeps S, the tail
     /// block's lower triangle mirrored to a full m × m.
     fn factor_keeping_schur(&mut self, gram: &Gram) -> Result<(), FactorError> {

@@ -4,7 +4,9 @@
 //! **Witness updates.** The slow loop publishes a witness table for the
 //! program's model ([`Program::apply_witnesses`]); the fast loop copies it in
 //! at a tick boundary (no allocation: the table's length is the model's) and
-//! refactors once. A fingertip's friction anchors are the fast loop's own
+//! refactors once: for a quasi-static program only what the next steps use
+//! (evaluation, activation, one factorisation: `refresh_chord`), not a whole
+//! force solve. A fingertip's friction anchors are the fast loop's own
 //! while its contact persists: a stuck contact must not jump to where the
 //! slow loop saw it a few milliseconds ago.
 //!
@@ -27,14 +29,69 @@ impl Program {
     /// model's [`ContactLayout::slots`](crate::ContactLayout::slots). Friction
     /// anchors of contacts that persist are kept (see the module docs).
     ///
+    /// A quasi-static program with the projected update and no friction
+    /// row sticking refactors only what its next steps use: C and C_q at q
+    /// with the new table, the rows active there (as a force solve's
+    /// activation decides them from C and the multipliers) and A's factor
+    /// ([`refresh_chord`](Self::refresh_chord)); other programs run a whole
+    /// force solve as a refresh.
+    ///
     /// # Real-time
-    /// No allocation; O(slots) copies, one evaluation and one force solve.
+    /// No allocation; O(slots) copies, one evaluation and one Eq. 7
+    /// assembly and factorisation (or a whole force solve, see above).
     pub fn apply_witnesses(&mut self, table: &[Witness]) -> bool {
         if !self.copy_witnesses(table) {
             return false;
         }
-        let _ = self.refresh();
+        let _ = self.refresh_chord();
         true
+    }
+
+    /// The refresh after a new witness table: evaluation, activation and
+    /// one factorisation, without the force solve's multipliers and
+    /// outputs, its release of
+    /// pulling rows or its Coulomb judgement. The factor and row scales are
+    /// those of [`refresh`](Self::refresh) at the same state: a force solve
+    /// that releases a pulling row activates the rows again from C and the
+    /// multipliers before it ends (the projected update keeps the kinematic
+    /// active set), and with no friction row sticking there is no slip to
+    /// judge. Under inertial motion, with the gradient update, another
+    /// force solver than the Cholesky or a sticking friction row: a whole
+    /// refresh.
+    pub(super) fn refresh_chord(&mut self) -> super::TickOutcome {
+        use super::TickOutcome;
+        let chord = !self.settings.dynamics
+            && self.settings.update == crate::UpdateRule::Projected
+            && self.settings.force_solver == crate::ForceSolver::Cholesky
+            && !self.feedback.stick.iter().any(|&s| s);
+        if !chord {
+            return self.refresh();
+        }
+        if let Err(e) = self.ev.evaluate(&self.model, &self.q, &self.last_targets) {
+            return TickOutcome::Eval(e);
+        }
+        // As a refresh's force solve: rows forced active by earlier steps
+        // are decided afresh (unless carried, see `Feedback::compute`).
+        if !std::mem::take(&mut self.feedback.carry_forced) {
+            self.feedback.forced.fill(false);
+        }
+        self.chord_refreshes += 1;
+        match (self.feedback).refactor_for_steps(
+            &self.scaling,
+            &self.settings,
+            &self.ev,
+            &self.lambda,
+        ) {
+            Ok(()) => TickOutcome::Ok,
+            Err(_) => TickOutcome::ForceSolve,
+        }
+    }
+
+    /// Witness tables taken with the chord refresh (see
+    /// [`apply_witnesses`](Self::apply_witnesses)) since the program was
+    /// built.
+    pub fn chord_refreshes(&self) -> u64 {
+        self.chord_refreshes
     }
 
     /// The copy of [`apply_witnesses`](Self::apply_witnesses), without the

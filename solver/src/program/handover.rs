@@ -17,11 +17,14 @@
 //! per tick), as for any row.
 //!
 //! A witness table (features changed inside the pairs) is still copied in
-//! and refactored on the fast thread (`Program::apply_witnesses`): copied in
-//! with C_q re-evaluated but the old factor kept, the penetration on
-//! `cluttered` grew 700×; copied in after the tick's steps, before the
-//! evaluation the force solve factors, `arm-push`'s joint violation grew
-//! from 6.6e-10 m to 2.4e-6 m (BENCHMARKS.md, issue 23).
+//! and refactored on the fast thread (`Program::apply_witnesses`; in
+//! quasi-static programs one evaluation and one factorisation, no whole
+//! force solve): copied in with C_q re-evaluated but the old factor kept,
+//! the penetration on `cluttered` grew 700×; copied in after the tick's
+//! steps, before the evaluation the force solve factors, `arm-push`'s joint
+//! violation grew from 6.6e-10 m to 2.4e-6 m, and `cluttered` in real time
+//! went beyond its penetration tolerance in 4 of 6 runs (main: 0 of 6)
+//! (BENCHMARKS.md, issue 23).
 
 use super::{Program, ProgramError, TickOutcome};
 use crate::al::scaling::Role;

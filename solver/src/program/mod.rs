@@ -66,6 +66,7 @@ mod objective;
 #[cfg(test)]
 mod probe;
 mod refresh;
+mod release;
 mod report;
 mod semantic;
 mod stages;
@@ -145,6 +146,8 @@ pub struct Program {
     design_off: Vec<bool>,
     /// Body velocities, friction states, restitution, energy (`dynamics`).
     inertial: inertial::Inertial,
+    /// Rows released this tick (`release.rs`).
+    released: release::Released,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -162,6 +165,8 @@ pub struct Program {
     /// The factor was prepared for a hand-over (`handover`): the next
     /// `adopt_state` keeps it.
     prepared: bool,
+    /// Witness tables taken with the chord refresh (`contact`).
+    chord_refreshes: u64,
 }
 
 impl Program {
@@ -305,6 +310,7 @@ impl Program {
         let mut p = Program {
             objectives,
             inertial,
+            released: release::Released::new(m),
             friction_bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
@@ -331,6 +337,7 @@ impl Program {
             report: TickReport::default(),
             factor_adoptions: 0,
             prepared: false,
+            chord_refreshes: 0,
             feedback,
             ev,
             h,

@@ -86,6 +86,10 @@ pub struct Lockstep {
     /// Hand replaced programs back to the manager for reuse, as the
     /// session's slow loop does (on unless a test turns it off).
     pub recycle: bool,
+    /// After each witness table, refactor again with a whole force solve
+    /// (`Program::refresh_factor`): the refresh `apply_witnesses` made
+    /// before it refactored only what the steps use.
+    pub full_refresh: bool,
 }
 
 impl Lockstep {
@@ -118,6 +122,7 @@ impl Lockstep {
             last_cycle: Default::default(),
             last_snapshot_q: Vec::new(),
             recycle: true,
+            full_refresh: false,
         }
     }
 
@@ -143,6 +148,9 @@ impl Lockstep {
                 ContactUpdate::None => {}
                 ContactUpdate::Table => {
                     assert!(self.program.apply_witnesses(self.manager.published()));
+                    if self.full_refresh {
+                        assert!(self.program.refresh_factor());
+                    }
                     self.tables += 1;
                 }
                 ContactUpdate::Program { mut program, reset } => {

@@ -8,6 +8,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 mod common;
 // The solver tests' finite differences, shared.
 mod backup_paths;
+mod chord_refresh;
 mod drags;
 mod expansion;
 #[allow(dead_code)]
