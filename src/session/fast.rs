@@ -38,7 +38,8 @@ pub struct TraceSample {
     pub t_s: f64,
     /// Model finger index.
     pub finger: u16,
-    /// Device tip (finger target), m, scene frame.
+    /// The finger target the program was given, m, scene frame: the device
+    /// tip, or after a stall its catch-up (`catch_up`).
     pub target_m: [f64; 3],
     /// Finger attachment point on the mechanism, m, scene frame.
     pub position_m: [f64; 3],
