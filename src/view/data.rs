@@ -69,8 +69,11 @@ pub struct Series {
 pub struct EventData {
     /// Session time, s.
     pub t_s: f64,
-    /// `snap`, `break`, `hold`, …
+    /// `snap`, `break`, `hold`, `add`, `remove`, …
     pub kind: String,
+    /// The bound body (for `add` and `remove`: the body brought in or
+    /// taken out).
+    pub body: String,
     /// In words.
     pub text: String,
 }
@@ -270,6 +273,7 @@ fn events(dir: &Path) -> Result<Vec<EventData>> {
                     format!("{kind} {a} / {b}")
                 },
                 kind,
+                body: a,
             });
         }
     }

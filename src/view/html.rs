@@ -61,6 +61,7 @@ mod tests {
             t_s: 1.0,
             kind: "snap".into(),
             text: "</script><b>".into(),
+            body: "</script>".into(),
         });
         let p = page(&d).unwrap();
         // (three.js itself names a global `__THREE__`: not a placeholder.)

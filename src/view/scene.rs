@@ -48,6 +48,10 @@ pub struct BodyInfo {
     pub position_m: [f64; 3],
     /// Initial orientation `[w, x, y, z]`.
     pub orientation: [f64; 4],
+    /// Declared but not in the scene at the start (a semantic scene's
+    /// `[[schedule]] add` brings it in): not drawn until its `add` event.
+    #[serde(default)]
+    pub absent: bool,
 }
 
 /// A collision shape, as the scene file writes it.
@@ -138,11 +142,16 @@ impl SceneInfo {
         for f in model.fingers() {
             add(&model.bodies()[f.body.index()].name, f.point_m.into());
         }
+        let mut absent = vec![false; model.bodies().len()];
+        for b in &c.absent {
+            absent[b.index()] = true;
+        }
         let bodies = model
             .bodies()
             .iter()
             .zip(links)
-            .map(|(b, mut l)| {
+            .zip(absent)
+            .map(|((b, mut l), absent)| {
                 if b.shape.is_none() && l.len() < 2 && !l.iter().any(|p| p == &[0.0; 3]) {
                     l.push([0.0; 3]);
                 }
@@ -155,6 +164,7 @@ impl SceneInfo {
                     fingertip: b.fingertip,
                     position_m: b.position_m.into(),
                     orientation: [o.w, o.i, o.j, o.k],
+                    absent,
                 }
             })
             .collect();

@@ -572,3 +572,46 @@ fn every_bin_of_the_page_force_plot_is_a_rendered_force_near_its_time() {
     }
     assert!(zeros < 10, "{zeros} bins hold 0 N");
 }
+
+/// `board-wall` declares the lamp absent until its `[[schedule]] add` at
+/// 0.3 s and removes the table at 2.8 s: the page's data says which bodies
+/// start absent and carries the add and remove events with their bodies,
+/// at the scene file's times (within one slow-loop step), so the viewer
+/// can draw a body only while it is in the scene.
+#[test]
+fn the_page_knows_when_each_body_is_in_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_haptloop"))
+        .args(["run", "board-wall", "--deterministic", "--seconds", "3.2"])
+        .args(["--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = haptloop::view::PageData::read(&out).unwrap();
+    let scene = page.scene.as_ref().unwrap();
+    let absent: Vec<&str> = scene
+        .bodies
+        .iter()
+        .filter(|b| b.absent)
+        .map(|b| b.name.as_str())
+        .collect();
+    assert_eq!(absent, ["lamp"]);
+    let when = |kind: &str, body: &str| -> Vec<f64> {
+        page.events
+            .iter()
+            .filter(|e| e.kind == kind && e.body == body)
+            .map(|e| e.t_s)
+            .collect()
+    };
+    let (added, removed) = (when("add", "lamp"), when("remove", "table"));
+    assert!(
+        added.len() == 1 && (added[0] - 0.3).abs() <= 0.0051,
+        "lamp added at {added:?} s, scheduled at 0.3 s"
+    );
+    assert!(
+        removed.len() == 1 && (removed[0] - 2.8).abs() <= 0.0051,
+        "table removed at {removed:?} s, scheduled at 2.8 s"
+    );
+}

@@ -226,6 +226,24 @@
     b.quaternion.set(p[4], p[5], p[6], p[3]);
   }
 
+  // Which bodies are in the scene at time t: those not absent at the start,
+  // then each `add` and `remove` event up to t, in time order. A body
+  // declared but not yet added (or already removed) is not drawn.
+  const bodyIndex = new Map(S.bodies.map((b, k) => [b.name, k]));
+  function showPresent(events, t) {
+    const present = S.bodies.map((b) => !b.absent);
+    for (const e of events) {
+      if (e.t_s > t) break;
+      const k = bodyIndex.get(e.body);
+      if (k === undefined) continue;
+      if (e.kind === 'add') present[k] = true;
+      else if (e.kind === 'remove') present[k] = false;
+    }
+    bodies.forEach((o, k) => (o.visible = present[k]));
+  }
+  showPresent([], 0);
+  api.visible = (name) => (bodyIndex.has(name) ? bodies[bodyIndex.get(name)].visible : null);
+
   // ---- plots (none that would stay empty) ----
   $('box-violation').hidden = !S.joints;
   $('box-penetration').hidden = !S.bodies.some((b) => b.shape && !b.fixed);
@@ -399,6 +417,7 @@
           setFinger(k, s(D.fingers.device), s(D.fingers.tip), s(D.fingers.force));
         });
       }
+      showPresent(D.events, t);
       const ci = lower(cTimes, t);
       drawContacts(cTimes.length && Math.abs(cTimes[ci] - t) < 0.02 ? cRows[ci] : []);
       slider.value = t;
@@ -467,6 +486,7 @@
     let selected = fingers.findIndex((f) => f.isVirtual);
     const targets = fingers.map(() => null);
     let lastSent = 0;
+    let liveEvents = [];
     function send(k, p) {
       targets[k] = p.clone();
       fingers[k].target.position.copy(p);
@@ -498,6 +518,8 @@
       hist.violation.push(m.violation);
       hist.pen.push(1e3 * Math.max(0, ...(m.contacts || []).map((c) => -c[6])));
       while (hist.t.length && hist.t[0] < m.t - WINDOW_S) { hist.t.shift(); hist.force.forEach((a) => a.shift()); hist.violation.shift(); hist.pen.shift(); }
+      if (m.events) liveEvents = m.events;
+      showPresent(liveEvents, m.t);
       if (m.events) {
         const ol = $('events');
         ol.textContent = '';

@@ -44,7 +44,7 @@ pub fn encode(bodies: &LiveFrame, fingers: &FingerFrame, with_events: bool) -> S
                 } else {
                     format!("{} {} / {}", e.kind.as_str(), e.binding_body, e.offer_body)
                 };
-                json!({"t_s": e.t_s, "kind": e.kind.as_str(), "text": text})
+                json!({"t_s": e.t_s, "kind": e.kind.as_str(), "body": e.binding_body, "text": text})
             })
             .collect();
     }

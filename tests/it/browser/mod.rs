@@ -412,3 +412,47 @@ fn a_drag_in_the_live_page_moves_the_virtual_device_by_the_dragged_amount() {
     let fmax = d["force_max_n"].as_f64().unwrap();
     assert!(fmax > 0.1, "force rendered: max {fmax} N");
 }
+
+/// `board-wall`: the lamp, declared but absent until its add at 0.3 s, is
+/// not drawn before it and is after; the table is drawn until its removal
+/// at 2.8 s and not after. Checked on the drawn scene graph and on the
+/// picture: hiding the lamp changes the pixels where it stands.
+#[test]
+fn the_view_draws_a_body_only_while_it_is_in_the_scene() {
+    let Some(bin) = browser_or_skip("the_view_draws_a_body_only_while…") else {
+        return;
+    };
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let mut b = Browser::start(&bin, WIDTH, HEIGHT);
+    let (_dir, out) = run("board-wall", "3.2");
+    open(&mut b, &out);
+    let visible = |b: &mut Browser, t: f64, name: &str| {
+        b.eval(&format!("window.haptloop.setTime({t})"));
+        b.eval(&format!("window.haptloop.visible('{name}')"))
+    };
+    for (t, lamp, table) in [(0.1, false, true), (1.0, true, true), (3.1, true, false)] {
+        assert_eq!(
+            visible(&mut b, t, "lamp"),
+            Value::Bool(lamp),
+            "lamp at {t} s"
+        );
+        assert_eq!(
+            visible(&mut b, t, "table"),
+            Value::Bool(table),
+            "table at {t} s"
+        );
+    }
+    b.eval("window.haptloop.setTime(0.1)");
+    let before = b.screenshot();
+    b.eval("window.haptloop.setTime(1.0)");
+    let after = b.screenshot();
+    let cam = Camera::of(&mut b);
+    let changed = count_in(&before, cam.rect, |x, y| {
+        let (p, q) = (before.rgb(x, y), after.rgb(x, y));
+        p.iter().zip(q).any(|(a, b)| a.abs_diff(b) > 40)
+    });
+    assert!(
+        changed > 100,
+        "adding the lamp changed only {changed} pixels"
+    );
+}
