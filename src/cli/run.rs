@@ -127,6 +127,18 @@ pub struct RunArgs {
     /// skips the slots between).
     #[arg(long, value_name = "SECONDS:PERIODS", requires = "deterministic", value_parser = stall)]
     pub stall: Vec<session::Stall>,
+    /// Stalls the slow loop in a deterministic run (repeatable):
+    /// `SECONDS:PERIODS`, no slow-loop step (contact witnesses and
+    /// programs, re-projection) for PERIODS periods after SECONDS, as when
+    /// the slow thread is descheduled or a contact program takes long to
+    /// build.
+    #[arg(long, value_name = "SECONDS:PERIODS", requires = "deterministic", value_parser = slow_stall)]
+    pub slow_stall: Vec<session::Stall>,
+}
+
+/// `--slow-stall`'s values.
+fn slow_stall(s: &str) -> Result<session::Stall, String> {
+    session::Stall::parse_flag("--slow-stall", s).map_err(|e| e.to_string())
 }
 
 /// `--stall`'s values.
@@ -172,6 +184,7 @@ impl Default for RunArgs {
             device: None,
             semantic_mode: None,
             stall: Vec::new(),
+            slow_stall: Vec::new(),
         }
     }
 }
@@ -274,6 +287,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
     // is claimed.
     let mut plan = Plan::new(&scene, &options)?;
     plan.stalls = args.stall.clone();
+    plan.slow_stalls = args.slow_stall.clone();
     if let Err(msg) = args.rt.check_spin(plan.rate_hz) {
         return Ok(super::usage_error(&msg));
     }

@@ -232,8 +232,10 @@ pub fn run(
         .iter()
         .map(|f| f.name.clone())
         .collect();
-    if !plan.deterministic && !plan.stalls.is_empty() {
-        anyhow::bail!("injected stalls (--stall) need a deterministic run (--deterministic)");
+    if !plan.deterministic && !(plan.stalls.is_empty() && plan.slow_stalls.is_empty()) {
+        anyhow::bail!(
+            "injected stalls (--stall, --slow-stall) need a deterministic run (--deterministic)"
+        );
     }
     let wall_start = MonotonicClock::new().now();
     let ticks = plan.ticks();
@@ -375,7 +377,7 @@ impl TickBody for Lockstep<'_> {
         // tick (a tick after skipped slots may close one whose last slot it
         // skipped).
         let cycle = (tick.index + 1) / self.every;
-        if cycle > self.slow_cycle {
+        if cycle > self.slow_cycle && !self.stalls.slow_stalled(tick.index) {
             self.slow_cycle = cycle;
             self.slow.step();
             if let Err(e) = self.recorder.drain(self.trace, self.names) {
@@ -404,7 +406,13 @@ fn run_deterministic(
     recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
     recorder.attach_design(built.design.take())?;
     start_live(plan, built.live.take(), recorder);
-    let stalls = stall::StallPlayer::new(&plan.stalls, plan.rate_hz, plan.period(), clock.clone());
+    let stalls = stall::StallPlayer::new(
+        &plan.stalls,
+        &plan.slow_stalls,
+        plan.rate_hz,
+        plan.period(),
+        clock.clone(),
+    );
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
     let _running = LoopsRunning::start();
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);

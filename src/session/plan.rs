@@ -141,6 +141,9 @@ pub struct Plan {
     /// Host stalls injected on the mock clock (deterministic runs only;
     /// `run --stall`).
     pub stalls: Vec<super::stall::Stall>,
+    /// Slow-loop stalls injected in the lockstep (deterministic runs only;
+    /// `run --slow-stall`): no slow step for that many periods.
+    pub slow_stalls: Vec<super::stall::Stall>,
 }
 
 impl Plan {
@@ -262,6 +265,7 @@ impl Plan {
             live: options.live.clone(),
             semantic_mode: options.semantic_mode.unwrap_or_default(),
             stalls: Vec::new(),
+            slow_stalls: Vec::new(),
         })
     }
 

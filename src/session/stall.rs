@@ -22,16 +22,21 @@ pub struct Stall {
 impl Stall {
     /// Parses `SECONDS:PERIODS`, e.g. `1.5:20`.
     pub fn parse(s: &str) -> Result<Stall> {
+        Self::parse_flag("--stall", s)
+    }
+
+    /// Parses `SECONDS:PERIODS` given to `flag` (named in the errors).
+    pub fn parse_flag(flag: &str, s: &str) -> Result<Stall> {
         let Some((at, n)) = s.split_once(':') else {
-            bail!("--stall `{s}`: expected SECONDS:PERIODS, e.g. 1.5:20");
+            bail!("{flag} `{s}`: expected SECONDS:PERIODS, e.g. 1.5:20");
         };
         let at_s: f64 = match at.trim().parse() {
             Ok(v) if f64::is_finite(v) && v >= 0.0 => v,
-            _ => bail!("--stall `{s}`: SECONDS must be a finite number ≥ 0, got `{at}`"),
+            _ => bail!("{flag} `{s}`: SECONDS must be a finite number ≥ 0, got `{at}`"),
         };
         let periods: u64 = match n.trim().parse() {
             Ok(v) if (2..=100_000).contains(&v) => v,
-            _ => bail!("--stall `{s}`: PERIODS must be an integer in 2–100000, got `{n}`"),
+            _ => bail!("{flag} `{s}`: PERIODS must be an integer in 2–100000, got `{n}`"),
         };
         Ok(Stall { at_s, periods })
     }
@@ -51,21 +56,51 @@ pub(super) struct StallPlayer {
     /// (slot, periods), sorted by slot.
     due: Vec<(u64, u64)>,
     next: usize,
+    /// The slow loop's stalls, (slot, periods), sorted by slot.
+    slow_due: Vec<(u64, u64)>,
+    slow_next: usize,
+    /// No slow step before this slot.
+    slow_until: u64,
 }
 
 impl StallPlayer {
-    pub(super) fn new(stalls: &[Stall], rate_hz: u32, period: Duration, clock: MockClock) -> Self {
-        let mut due: Vec<(u64, u64)> = stalls
-            .iter()
-            .map(|s| (s.slot(rate_hz), s.periods))
-            .collect();
-        due.sort_unstable();
+    pub(super) fn new(
+        stalls: &[Stall],
+        slow: &[Stall],
+        rate_hz: u32,
+        period: Duration,
+        clock: MockClock,
+    ) -> Self {
+        let slots = |v: &[Stall]| {
+            let mut d: Vec<(u64, u64)> = v.iter().map(|s| (s.slot(rate_hz), s.periods)).collect();
+            d.sort_unstable();
+            d
+        };
         StallPlayer {
             clock,
             period,
-            due,
+            due: slots(stalls),
             next: 0,
+            slow_due: slots(slow),
+            slow_next: 0,
+            slow_until: 0,
         }
+    }
+
+    /// True while the slow loop is stalled at grid slot `index` (`--slow-stall`):
+    /// it takes no step, so the fast loop runs on witness tables and programs
+    /// that grow old, as when the slow thread is descheduled or a contact
+    /// program takes long to build.
+    pub(super) fn slow_stalled(&mut self, index: u64) -> bool {
+        // From the tick after the stall's slot on, `periods` ticks.
+        while let Some(&(slot, periods)) = self.slow_due.get(self.slow_next) {
+            if slot >= index {
+                break;
+            }
+            self.slow_next += 1;
+            self.slow_until = self.slow_until.max(slot + 1 + periods);
+        }
+        index < self.slow_until
     }
 
     /// After the tick of grid slot `index`: if a stall is due, the clock

@@ -157,3 +157,36 @@ fn the_tick_after_a_stall_allocates_nothing() {
     assert!(st.catch_up_ticks > 0, "the catch-up path never ran: {st:?}");
     while built.trace.pop().is_some() {}
 }
+
+/// `--slow-stall` holds the lockstep slow loop back: after a 40-period
+/// stall at 1 kHz the 8 slow-loop cycles that ended inside it become one
+/// step at its end, 7 fewer steps per stall than the same run without.
+/// (The tool that reproduces `cluttered`'s real-time blow-up, BENCHMARKS.md,
+/// "Contact: missed ticks"; not fixed.)
+#[test]
+fn a_slow_stall_holds_the_slow_loop_back() {
+    let scene = resolve("pyramid-tilt").unwrap();
+    let steps = |stalls: Vec<Stall>| {
+        let options = SessionOptions {
+            seconds: 2.0,
+            deterministic: true,
+            ..SessionOptions::default()
+        };
+        let mut plan = Plan::new(&scene, &options).unwrap();
+        plan.slow_stalls = stalls;
+        let o = session::run(&scene, plan, &StopFlag::new(), &mut |_| {}).unwrap();
+        o.slow.steps
+    };
+    let calm = steps(Vec::new());
+    let stalled = steps(vec![
+        Stall {
+            at_s: 0.5,
+            periods: 40,
+        },
+        Stall {
+            at_s: 1.25,
+            periods: 40,
+        },
+    ]);
+    assert_eq!(calm - stalled, 2 * 7, "{calm} against {stalled}");
+}
