@@ -232,7 +232,8 @@ pub fn run(
         .iter()
         .map(|f| f.name.clone())
         .collect();
-    if !plan.deterministic && !(plan.stalls.is_empty() && plan.slow_stalls.is_empty()) {
+    let injected = !plan.stalls.is_empty() || !plan.slow_stalls.is_empty();
+    if injected && !plan.deterministic {
         anyhow::bail!(
             "injected stalls (--stall, --slow-stall) need a deterministic run (--deterministic)"
         );

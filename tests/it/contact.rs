@@ -144,6 +144,29 @@ fn the_stack_slides_as_a_column() {
     // μ m g = 0.5 × 0.192 kg × 9.81 = 0.94 N.
     let f = s.force_n["index"];
     assert!(f.max > 0.7 && f.max < 2.0, "{f:?}");
+    // While it slides (1.5–2.9 s: after the motors' start-up ramp, before
+    // the hand stops at 3 s) the push is μ m g (within 1 %) and the column
+    // moves at the hand's 2 cm/s (within 2 %).
+    let (a, b) = (1.5, 2.9);
+    let pushed: Vec<f64> = o.recorder.force[0]
+        .points
+        .iter()
+        .filter(|(t, _)| (a..=b).contains(t))
+        .map(|(_, f)| *f)
+        .collect();
+    let push = pushed.iter().sum::<f64>() / pushed.len() as f64;
+    let limit = 0.5 * 3.0 * 0.064 * 9.81;
+    let p = poses(t, "bottom");
+    let speed = (at(&p, b).0.x - at(&p, a).0.x) / (b - a);
+    println!("stack: sliding push {push:.4} N (μ m g {limit:.4} N) at {speed:.5} m/s");
+    assert!((push - limit).abs() < 0.01 * limit, "sliding push {push} N");
+    assert!((speed - 0.02).abs() < 0.02 * 0.02, "slides at {speed} m/s");
+    // A steady slide keeps its contact rows active: the table's rows were
+    // let go and pressed in again (an in-tick activation and a
+    // refactorisation) on every tick of it (2775 in these 4 s), the slow
+    // slip's attempt to stick having tipped the column onto its front edge.
+    let c = s.contact.as_ref().unwrap();
+    assert!(c.activations < 40, "{} in-tick activations", c.activations);
 }
 
 /// The peg lands on the wall's top (felt), is centred, goes 4 cm into the

@@ -8,7 +8,6 @@
 use nalgebra::Vector3;
 
 use super::Program;
-use crate::al::scaling::Role;
 use crate::constraint::witness::Witness;
 use crate::dynamics::coulomb::{self, Slip, Verdict};
 use crate::dynamics::energy::{self, EnergySample};
@@ -387,30 +386,6 @@ impl Program {
             };
             self.anchor_at(k, &end, &fa, &fb);
         }
-    }
-
-    /// Inequality rows (contacts, joint limits) that pulled in the step just
-    /// taken (inertial motion): the step holds every active row as an
-    /// equality, so a contact that should open (a rebound, a body lifted
-    /// off) would be held shut for a tick and lose that tick's motion. They
-    /// are released for the tick's next solve (their start multiplier and
-    /// in-tick activation cleared). Returns true if any was.
-    ///
-    /// # Real-time
-    /// No allocation; O(rows).
-    pub(super) fn release_pulling(&mut self) -> bool {
-        let y = self.projected.multipliers();
-        let tol = 1e-9 * y.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        let mut any = false;
-        for (i, role) in self.scaling.role.iter().enumerate() {
-            let active = self.feedback.row_scale()[i] != 0.0;
-            if matches!(role, Role::Contact | Role::Inequality) && active && y[i] > tol {
-                self.saved_lambda[i] = 0.0;
-                self.feedback.forced[i] = false;
-                any = true;
-            }
-        }
-        any
     }
 
     /// The kinetic moment of friction about the normal on end A of sliding

@@ -65,6 +65,7 @@ mod objective;
 #[cfg(test)]
 mod probe;
 mod refresh;
+mod release;
 mod report;
 mod semantic;
 mod stages;
@@ -144,6 +145,8 @@ pub struct Program {
     design_off: Vec<bool>,
     /// Body velocities, friction states, restitution, energy (`dynamics`).
     inertial: inertial::Inertial,
+    /// Rows released this tick (`release.rs`).
+    released: release::Released,
     lambda: Vec<f64>,
     saved_lambda: Vec<f64>,
     g: Vec<f64>,
@@ -304,6 +307,7 @@ impl Program {
         let mut p = Program {
             objectives,
             inertial,
+            released: release::Released::new(m),
             friction_bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),

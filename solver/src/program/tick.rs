@@ -384,6 +384,7 @@ impl Program {
         dt_s: f64,
     ) -> Result<u32, (TickOutcome, u32)> {
         let mut resolves = 0;
+        self.released.begin();
         loop {
             let done = self.iterations(targets, n)?;
             if let Some(d) = self.diverged_state() {
@@ -393,11 +394,19 @@ impl Program {
                 return Ok(done);
             }
             // A step that held a contact shut by pulling is solved again
-            // before friction is judged on it.
-            let changed = self.release_pulling() || self.decide_friction(dt_s);
-            if !changed || resolves == crate::dynamics::MAX_RESOLVES {
+            // before friction is judged on it; a friction change takes the
+            // released rows back (`release.rs`). One more solve, beyond the
+            // bound, only if a row taken back pulls again.
+            let released = self.release_pulling();
+            let changed = released || self.decide_friction(dt_s);
+            let bound = crate::dynamics::MAX_RESOLVES;
+            let spare = resolves == bound && self.released.repulled();
+            if !changed || (resolves >= bound && !spare) {
                 self.arm_slow_slips();
                 return Ok(done);
+            }
+            if !released {
+                self.readmit_released();
             }
             resolves += 1;
             self.inertial.resolves += 1;

@@ -72,8 +72,9 @@ fn a_block_slides_down_a_steeper_incline_at_g_sin_minus_mu_cos() {
 }
 
 /// A 100 g block on a table, both μ = 0.5, pushed by a frictionless contact
-/// finger whose target moves at 1 cm/s: (block x, |push| felt) per tick.
-fn push(rate: u32, seconds: f64) -> (Vec<f64>, Vec<f64>) {
+/// finger whose target moves at 1 cm/s: (block x, |push| felt, in-tick
+/// activations) per tick.
+fn push(rate: u32, seconds: f64) -> (Vec<f64>, Vec<f64>, Vec<u32>) {
     let mu = 0.5;
     let mut b = ModelBuilder::new();
     b.gravity([0.0, 0.0, -G]);
@@ -94,7 +95,7 @@ fn push(rate: u32, seconds: f64) -> (Vec<f64>, Vec<f64>) {
     b.finger(FingerSpec::contact("index", [x0, 0.0, 0.03], 0.008, 0.0));
     let mut l = lockstep(b.build().unwrap(), rate);
     let dt = 1.0 / f64::from(rate);
-    let (mut x, mut f) = (Vec::new(), Vec::new());
+    let (mut x, mut f, mut act) = (Vec::new(), Vec::new(), Vec::new());
     for k in 0..ticks(seconds, rate) {
         let t = (k + 1) as f64 * dt;
         let target = Vector3::new(x0 + 0.01 * t, 0.0, 0.03);
@@ -102,15 +103,16 @@ fn push(rate: u32, seconds: f64) -> (Vec<f64>, Vec<f64>) {
         assert_eq!(r.status, TickOutcome::Ok, "{rate} Hz tick {k}");
         x.push(l.position("block").x);
         f.push(l.program.finger_outputs()[0].force_n.x.abs());
+        act.push(r.activations);
     }
-    (x, f)
+    (x, f, act)
 }
 
 #[test]
 fn a_pushed_block_starts_to_slide_at_mu_m_g_and_slides_at_it() {
     let limit = 0.5 * 0.1 * G;
     for rate in RATES {
-        let (x, f) = push(rate, 2.0);
+        let (x, f, act) = push(rate, 2.0);
         // Onset: the first tick the block has moved 10 nm; the push then.
         let onset = x.iter().position(|&v| v > 1e-8).expect("it slides");
         let before = f[onset];
@@ -133,5 +135,16 @@ fn a_pushed_block_starts_to_slide_at_mu_m_g_and_slides_at_it() {
             "{rate} Hz: sliding push {sliding} N"
         );
         assert!(rel(speed, 0.01) < 0.05, "{rate} Hz: slides at {speed} m/s");
+        // The slide keeps the table's rows active: none is pressed in again
+        // within a tick (each would be a refactorisation). The rows were let
+        // go and re-activated on every tick of the slide before (the slow
+        // slip's attempt to stick tipped the block onto its front edge).
+        let sliding_act: u32 = act[act.len() - tail..].iter().sum();
+        let all: u32 = act.iter().sum();
+        println!("push {rate} Hz: {all} in-tick activations, {sliding_act} while sliding");
+        assert!(
+            sliding_act * 100 < tail as u32,
+            "{rate} Hz: {sliding_act} activations in the last second's slide"
+        );
     }
 }

@@ -99,7 +99,7 @@ impl EdgeWitness {
     }
 
     /// Value and gradient.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn row(&self, pair: &Pair, x: &Ctx) -> (f64, RowGrad) {
         let (p, s) = ends(self.edge_end);
         let (fp, fs) = (x.frame(pair.frame[p]), x.frame(pair.frame[s]));

@@ -157,8 +157,10 @@ impl ContactRows {
     }
 }
 
-/// Value and gradient of one witness at the context's frames.
-#[inline]
+/// Value and gradient of one witness at the context's frames. Always
+/// inlined: in a value-only evaluation (`NoJacobian`, every projected step)
+/// the gradient is then dead code and not computed.
+#[inline(always)]
 pub(crate) fn row(w: &Witness, pair: &Pair, x: &Ctx) -> (f64, RowGrad) {
     match w {
         Witness::Off => (OFF_VALUE_M, RowGrad::default()),

@@ -68,7 +68,7 @@ pub struct LineWitness {
 
 impl LineWitness {
     /// Value and gradient.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn row(&self, pair: &Pair, x: &Ctx) -> (f64, RowGrad) {
         let (p, s) = ends(self.point_end);
         let (fp, fs) = (x.frame(pair.frame[p]), x.frame(pair.frame[s]));

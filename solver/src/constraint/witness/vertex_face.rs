@@ -58,7 +58,7 @@ impl PlaneWitness {
     }
 
     /// Value and gradient at the evaluation's frames.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn row(&self, pair: &Pair, x: &Ctx) -> (f64, RowGrad) {
         let (p, s) = ends(self.point_end);
         let (fp, fs) = (x.frame(pair.frame[p]), x.frame(pair.frame[s]));

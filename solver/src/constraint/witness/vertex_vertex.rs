@@ -61,7 +61,7 @@ pub struct BallWitness {
 
 impl BallWitness {
     /// Value and gradient.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn row(&self, pair: &Pair, x: &Ctx) -> (f64, RowGrad) {
         let (fa, fb) = (x.frame(pair.frame[0]), x.frame(pair.frame[1]));
         let (la, lb) = (fa.rot * self.point_a, fb.rot * self.point_b);
