@@ -121,6 +121,29 @@ pub struct RunArgs {
     /// object); `[[schedule]] mode` switches it during the run.
     #[arg(long, value_name = "MODE", value_parser = semantic_mode)]
     pub semantic_mode: Option<haptloop_solver::scene::SemanticMode>,
+    /// Injects a host stall on the mock clock (repeatable, deterministic
+    /// runs only): `SECONDS:PERIODS`, the tick at SECONDS is followed by the
+    /// next one PERIODS periods later, as after a real stall (the scheduler
+    /// skips the slots between).
+    #[arg(long, value_name = "SECONDS:PERIODS", requires = "deterministic", value_parser = stall)]
+    pub stall: Vec<session::Stall>,
+    /// Stalls the slow loop in a deterministic run (repeatable):
+    /// `SECONDS:PERIODS`, no slow-loop step (contact witnesses and
+    /// programs, re-projection) for PERIODS periods after SECONDS, as when
+    /// the slow thread is descheduled or a contact program takes long to
+    /// build.
+    #[arg(long, value_name = "SECONDS:PERIODS", requires = "deterministic", value_parser = slow_stall)]
+    pub slow_stall: Vec<session::Stall>,
+}
+
+/// `--slow-stall`'s values.
+fn slow_stall(s: &str) -> Result<session::Stall, String> {
+    session::Stall::parse_flag("--slow-stall", s).map_err(|e| e.to_string())
+}
+
+/// `--stall`'s values.
+fn stall(s: &str) -> Result<session::Stall, String> {
+    session::Stall::parse(s).map_err(|e| e.to_string())
 }
 
 /// `--semantic-mode`'s values.
@@ -160,6 +183,8 @@ impl Default for RunArgs {
             port: 8470,
             device: None,
             semantic_mode: None,
+            stall: Vec::new(),
+            slow_stall: Vec::new(),
         }
     }
 }
@@ -261,6 +286,8 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
     // Everything a flag can get wrong is said before the output directory
     // is claimed.
     let mut plan = Plan::new(&scene, &options)?;
+    plan.stalls = args.stall.clone();
+    plan.slow_stalls = args.slow_stall.clone();
     if let Err(msg) = args.rt.check_spin(plan.rate_hz) {
         return Ok(super::usage_error(&msg));
     }

@@ -127,6 +127,9 @@ fn timing_table(out: &mut String, s: &Summary) {
         s.misses.overrun,
         s.misses.skipped
     );
+    if let Some(line) = s.stalls.line() {
+        let _ = writeln!(out, "{line}");
+    }
 }
 
 /// Constraint violation, finger tracking and the force on each finger.

@@ -131,6 +131,50 @@ pub struct Safety {
     pub device_events: Vec<DeviceEvent>,
 }
 
+/// Ticks that came after skipped grid slots (host stalls) and what the fast
+/// loop did: each stepped the world at most `max_simulated_periods`
+/// periods; the rest were dropped, so the scene's time ended
+/// `world_behind_s` behind the session's (the hand's).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stalls {
+    /// Ticks more than one period after the previous one.
+    pub ticks_after_gap: u64,
+    /// Longest gap between two ticks, periods (0: none ran).
+    pub longest_gap_periods: u64,
+    /// Most periods one tick simulates.
+    pub max_simulated_periods: u64,
+    /// Periods not simulated, in all.
+    pub periods_dropped: u64,
+    /// The scene's time behind the session's at the end, s.
+    pub world_behind_s: f64,
+    /// Ticks whose finger targets were still catching up with the devices
+    /// after a gap (moved at most twice the hand's speed).
+    #[serde(default)]
+    pub catch_up_ticks: u64,
+    /// The largest distance left between a device's target and the one the
+    /// program was given, m.
+    #[serde(default)]
+    pub max_target_lag_m: f64,
+}
+
+impl Stalls {
+    /// The report's line, or `None` when no tick came after a gap.
+    pub fn line(&self) -> Option<String> {
+        (self.ticks_after_gap > 0).then(|| {
+            format!(
+                "stalls: {} ticks came after skipped slots (longest gap {} periods); each stepped the world at most {} period(s): {} periods dropped, the scene's time ended {:.1} ms behind the hand's; the finger targets caught up over {} ticks (at most {:.3} mm behind the devices)",
+                self.ticks_after_gap,
+                self.longest_gap_periods,
+                self.max_simulated_periods,
+                self.periods_dropped,
+                self.world_behind_s * 1e3,
+                self.catch_up_ticks,
+                self.max_target_lag_m * 1e3
+            )
+        })
+    }
+}
+
 /// The initial assembly (Newton-KKT placement) before the clock started.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Assembly {
@@ -474,6 +518,9 @@ pub struct Summary {
     pub faults: u64,
     /// Safety actions.
     pub safety: Safety,
+    /// Host stalls: ticks after skipped slots and the periods dropped.
+    #[serde(default)]
+    pub stalls: Stalls,
     /// Initial assembly (null when skipped with `--no-assembly`).
     pub assembly: Option<Assembly>,
     /// The slow loop's re-projections.
@@ -615,6 +662,15 @@ impl Summary {
                 })
                 .collect(),
             faults: s.faults,
+            stalls: Stalls {
+                ticks_after_gap: s.stalls.ticks_after_gap,
+                longest_gap_periods: s.stalls.longest_gap_periods,
+                max_simulated_periods: crate::session::MAX_SIMULATED_PERIODS,
+                periods_dropped: s.stalls.periods_dropped,
+                world_behind_s: s.stalls.periods_dropped as f64 / f64::from(o.plan.rate_hz),
+                catch_up_ticks: s.stalls.catch_up_ticks,
+                max_target_lag_m: s.stalls.max_target_lag_m,
+            },
             safety: Safety {
                 force_cuts: s.force_cuts,
                 miss_streaks: s.miss_streaks,

@@ -113,6 +113,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         programs: programs_rx,
         refresh: refresh_rx,
         targets: model.initial_targets(),
+        catch_up: super::catch_up::TargetCatchUp::new(n_fingers),
         snapshot,
         trace: trace.clone(),
         stats: RunStats::new(n_fingers),

@@ -38,7 +38,8 @@ pub struct TraceSample {
     pub t_s: f64,
     /// Model finger index.
     pub finger: u16,
-    /// Device tip (finger target), m, scene frame.
+    /// The finger target the program was given, m, scene frame: the device
+    /// tip, or after a stall its catch-up (`catch_up`).
     pub target_m: [f64; 3],
     /// Finger attachment point on the mechanism, m, scene frame.
     pub position_m: [f64; 3],
@@ -72,6 +73,12 @@ pub enum SessionFault {
 /// host to settle, short enough not to feel like a dropout.
 const CUT_SECONDS: f64 = 0.05;
 
+/// Most periods one tick simulates, however many grid slots were skipped
+/// before it (a host stall): the rest are dropped and counted
+/// ([`RunStats::stalls`](super::stats::RunStats)). BENCHMARKS.md, "Contact:
+/// missed ticks", measures the alternative (the gap in one step).
+pub const MAX_SIMULATED_PERIODS: u64 = 1;
+
 /// The fast loop's state. Built on the main thread, moved to the fast thread.
 pub struct FastLoop<C: Clock> {
     pub(super) clock: C,
@@ -85,6 +92,8 @@ pub struct FastLoop<C: Clock> {
     pub(super) broken_m: f64,
     pub(super) rig: Rig,
     pub(super) targets: Vec<FingerTarget>,
+    /// Bounds how fast the targets the program sees catch up after a stall.
+    pub(super) catch_up: super::catch_up::TargetCatchUp,
     pub(super) snapshot: MailboxWriter<Snapshot>,
     pub(super) trace: Arc<ArrayQueue<TraceSample>>,
     pub(super) stats: RunStats,
@@ -217,7 +226,18 @@ impl<C: Clock> TickBody for FastLoop<C> {
             .last_index
             .map_or(1, |last| tick.index.saturating_sub(last).max(1));
         self.last_index = Some(tick.index);
-        let dt = self.periods(steps);
+        // After skipped slots the world is stepped one period, not the gap:
+        // the devices were read at grid time (the hand is where it is), but
+        // every per-tick bound of the program (the contact speed limit, the
+        // inertial allowance, the active set's reach over a slow-loop
+        // cycle, the activation budget) is sized for one period, and a
+        // longer step lets bodies pass through each other. The periods not
+        // simulated are counted: the world's time runs that far behind.
+        let simulated = steps.min(MAX_SIMULATED_PERIODS);
+        self.stats.stalls.record(steps, steps - simulated);
+        let lag = self.catch_up.apply(&mut self.targets, steps, simulated);
+        self.stats.stalls.record_lag(lag);
+        let dt = self.periods(simulated);
         if let Some(r) = &mut self.reference {
             r.before(tick.index, &self.program.program);
             // Saving the state is bookkeeping, not the update's time.

@@ -12,6 +12,7 @@
 //! thread, so two runs produce bit-identical results.
 
 mod build;
+mod catch_up;
 mod contact;
 mod design;
 mod device_limits;
@@ -26,6 +27,7 @@ mod refresh;
 mod rig;
 mod semantic;
 mod slow;
+mod stall;
 mod stats;
 pub mod timing;
 pub mod track;
@@ -34,7 +36,7 @@ pub use build::build;
 pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;
-pub use fast::{FastLoop, SessionFault, TraceSample};
+pub use fast::{FastLoop, MAX_SIMULATED_PERIODS, SessionFault, TraceSample};
 pub use live::{FingerFrame, LiveFrame, LiveHook, LivePointer, LiveSources};
 pub use messages::{Correction, Handover, Snapshot};
 pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
@@ -46,7 +48,8 @@ pub use reference::{
 pub use rig::{Rig, SessionDevice, VirtualOutcome, device_trajectory};
 pub use semantic::{Event, EventKind, SemanticLoop, SemanticPlan, SemanticReport};
 pub use slow::{SlowLoop, SlowStats};
-pub use stats::{FailureKind, FingerStats, RunStats};
+pub use stall::Stall;
+pub use stats::{FailureKind, FingerStats, RunStats, StallStats};
 pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, FingerTrack, TrackSample};
 
@@ -229,6 +232,12 @@ pub fn run(
         .iter()
         .map(|f| f.name.clone())
         .collect();
+    let injected = !plan.stalls.is_empty() || !plan.slow_stalls.is_empty();
+    if injected && !plan.deterministic {
+        anyhow::bail!(
+            "injected stalls (--stall, --slow-stall) need a deterministic run (--deterministic)"
+        );
+    }
     let wall_start = MonotonicClock::new().now();
     let ticks = plan.ticks();
     let mut recorder = Recorder::new(&names, ticks, plan.out_dir.as_deref())?;
@@ -351,6 +360,9 @@ struct Lockstep<'a> {
     trace: &'a ArrayQueue<TraceSample>,
     names: &'a [String],
     error: Option<anyhow::Error>,
+    stalls: stall::StallPlayer,
+    /// The slow-loop cycle of the last slow step.
+    slow_cycle: u64,
 }
 
 impl TickBody for Lockstep<'_> {
@@ -361,7 +373,13 @@ impl TickBody for Lockstep<'_> {
         if self.fast.sampled() {
             self.slow.check_reference();
         }
-        if tick.index % self.every == self.every - 1 {
+        self.stalls.after_tick(tick.index);
+        // One slow step per slow period of session time that ended by this
+        // tick (a tick after skipped slots may close one whose last slot it
+        // skipped).
+        let cycle = (tick.index + 1) / self.every;
+        if cycle > self.slow_cycle && !self.stalls.slow_stalled(tick.index) {
+            self.slow_cycle = cycle;
             self.slow.step();
             if let Err(e) = self.recorder.drain(self.trace, self.names) {
                 self.error.get_or_insert(e);
@@ -389,6 +407,13 @@ fn run_deterministic(
     recorder.attach_device_traces(std::mem::take(&mut built.device_traces));
     recorder.attach_design(built.design.take())?;
     start_live(plan, built.live.take(), recorder);
+    let stalls = stall::StallPlayer::new(
+        &plan.stalls,
+        &plan.slow_stalls,
+        plan.rate_hz,
+        plan.period(),
+        clock.clone(),
+    );
     let (mut periodic, _intervals) = Periodic::new(&plan.schedule(), clock)?;
     let _running = LoopsRunning::start();
     let every = ((SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round() as u64).max(1);
@@ -400,6 +425,8 @@ fn run_deterministic(
         trace: &built.trace,
         names,
         error: None,
+        stalls,
+        slow_cycle: 0,
     };
     periodic.run(&mut body, RunLimit::slots(plan.ticks()), stop);
     body.on_stop();

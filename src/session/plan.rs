@@ -138,6 +138,12 @@ pub struct Plan {
     pub live: Option<super::LiveHook>,
     /// The semantic interaction mode at the start.
     pub semantic_mode: SemanticMode,
+    /// Host stalls injected on the mock clock (deterministic runs only;
+    /// `run --stall`).
+    pub stalls: Vec<super::stall::Stall>,
+    /// Slow-loop stalls injected in the lockstep (deterministic runs only;
+    /// `run --slow-stall`): no slow step for that many periods.
+    pub slow_stalls: Vec<super::stall::Stall>,
 }
 
 impl Plan {
@@ -258,6 +264,8 @@ impl Plan {
             joint_rows: super::joint_length_rows(&scene.compiled.model),
             live: options.live.clone(),
             semantic_mode: options.semantic_mode.unwrap_or_default(),
+            stalls: Vec::new(),
+            slow_stalls: Vec::new(),
         })
     }
 

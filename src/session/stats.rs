@@ -98,6 +98,51 @@ pub struct RunStats {
     pub stages: StageTimes,
     /// The bodies' energy (inertial motion).
     pub energy: super::energy::EnergyStats,
+    /// Ticks after skipped grid slots and the periods the world did not
+    /// simulate.
+    pub stalls: StallStats,
+}
+
+/// Ticks that came after skipped grid slots (a host stall), and what the
+/// fast loop did about them: each such tick simulates at most
+/// `MAX_SIMULATED_PERIODS` periods, the rest are dropped.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StallStats {
+    /// Ticks that came more than one period after the previous one.
+    pub ticks_after_gap: u64,
+    /// Longest gap between two ticks, periods.
+    pub longest_gap_periods: u64,
+    /// Periods not simulated, in all: the world's time is this many
+    /// periods behind the session's (the devices') at the end.
+    pub periods_dropped: u64,
+    /// Ticks whose finger targets were still catching up with the devices
+    /// after a stall (`session::catch_up`).
+    pub catch_up_ticks: u64,
+    /// The largest distance left between a device's target and the one
+    /// the program was given, m.
+    pub max_target_lag_m: f64,
+}
+
+impl StallStats {
+    /// Records one tick `gap` periods after the previous one, of which
+    /// `dropped` were not simulated.
+    #[inline]
+    pub fn record(&mut self, gap: u64, dropped: u64) {
+        if gap > 1 {
+            self.ticks_after_gap += 1;
+            self.longest_gap_periods = self.longest_gap_periods.max(gap);
+        }
+        self.periods_dropped += dropped;
+    }
+
+    /// Records the tick's largest target lag, m (0: none lagged).
+    #[inline]
+    pub fn record_lag(&mut self, lag_m: f64) {
+        if lag_m > 0.0 {
+            self.catch_up_ticks += 1;
+            self.max_target_lag_m = self.max_target_lag_m.max(lag_m);
+        }
+    }
 }
 
 /// Why a tick counted as failed.
@@ -228,6 +273,7 @@ impl RunStats {
             failure_kinds: [0; FailureKind::ALL.len()],
             stages: StageTimes::new(),
             energy: Default::default(),
+            stalls: StallStats::default(),
         }
     }
 

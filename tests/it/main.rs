@@ -36,6 +36,7 @@ mod semantic_schedule;
 mod session;
 mod solver_honesty;
 mod stability;
+mod stall;
 mod sweep;
 mod torque;
 mod trust;
