@@ -1008,25 +1008,97 @@ fn the_stewart_legs_bottoming_out_10_nm_short() {
 }
 
 /// The Peaucellier linkage's dead point (P = Q, the rhombus flat) at about
-/// 2.58 s of its own hand path: the linkage snaps into its other branch.
-/// For a tick or two the violation reaches 0.14–0.83 mm whatever the
-/// iterations (`haptloop sweep peaucellier`, BENCHMARKS.md), within the 1 mm
-/// the scene states; 0.1 s later it is back under 1 µm for good, and the
-/// quaternions' |e|² jump at the snap by about 1.5e-2 and are back within
-/// 1e-4.
+/// 2.58 s of its own hand path. A dead point is a bifurcation: two assembly
+/// branches cross there, and which one the linkage leaves on is decided by
+/// the last bits of the state (the summation order of a kernel, or 1e-12 m
+/// at the start, changes it). It either snaps into its other branch there,
+/// or passes on its own and snaps where the hand brings Q back at about
+/// 3.42 s. Either way, for any round-off: each snap is a transient of a tick
+/// or two (0.05–0.86 mm at the first crossing, `haptloop sweep peaucellier`,
+/// BENCHMARKS.md; 5–33 µm at the second), within the 1 mm the scene states;
+/// every excursion above 1 µm is over within 0.1 s, the run ends under 1 µm,
+/// and the quaternions' |e|² jump at a snap and are back within 1e-4 from
+/// 3.5 s on.
+/// Checked on the scene as shipped and on eight starts moved by
+/// k · 1e-12 m: changes of round-off size that can flip the branch (with
+/// another factor kernel's round-off, one of sixteen such starts passed
+/// the first crossing and snapped at the second; BENCHMARKS.md, issue 23).
 #[test]
 fn the_peaucellier_dead_point() {
-    let mut c = case(
-        "peaucellier dead point".into(),
-        builtin("peaucellier"),
-        options(3.5),
+    let (mut snapped_early, mut snapped_late) = (0, 0);
+    for k in 0..9 {
+        let scene = edited("peaucellier", |t| nudge_body(t, "crank", k as f64 * 1e-12));
+        let mut c = case(
+            format!("peaucellier dead point, start +{k} pm"),
+            scene,
+            options(3.6),
+        );
+        // The second crossing is at 3.42 s: the norms are checked from 3.5 s.
+        c.disturbance_end_s = 3.4;
+        c.settle_s = 0.1;
+        let mut x = Excursions::default();
+        let o = drive_with(&c, &mut |tick, p| x.record(tick, p.last_report()));
+        let o = check_recovered(&c, o);
+        let n = &c.name;
+        assert!(o.violation_max_m <= 1e-3, "{n}: {o:?}");
+        assert!(
+            x.longest <= 100,
+            "{n}: {} ticks above 1 µm: {x:?}",
+            x.longest
+        );
+        assert!(x.last <= 1e-6, "{n}: ended {:e} m off: {x:?}", x.last);
+        assert!(
+            o.norm_max > 1e-5,
+            "{n}: the run went through no snap: {o:?}"
+        );
+        assert!(!x.starts.is_empty(), "{n}: no excursion: {x:?}");
+        snapped_early += usize::from(x.starts.iter().any(|&s| s < 2700));
+        snapped_late += usize::from(x.starts.iter().any(|&s| s >= 2700));
+    }
+    eprintln!(
+        "peaucellier dead point: {snapped_early} of 9 starts snapped at the first crossing, {snapped_late} at the second"
     );
-    c.disturbance_end_s = 2.6;
-    c.settle_s = 0.1;
-    let o = assert_recovers(&c);
-    assert!(o.violation_max_m <= 1e-3, "{o:?}");
-    assert!(o.violation_after_m <= 1e-6, "{o:?}");
-    assert!(o.norm_max > 1e-5, "the run went through the snap: {o:?}");
+}
+
+/// Moves the body `name`'s position by `dx` along x.
+fn nudge_body(t: &mut Table, name: &str, dx: f64) {
+    for b in tables(t, "body") {
+        if b.get("name").and_then(Value::as_str) == Some(name) {
+            let pos = b.get_mut("position").and_then(Value::as_array_mut).unwrap();
+            let x = pos[0].as_float().unwrap();
+            pos[0] = Value::Float(x + dx);
+        }
+    }
+}
+
+/// The runs of consecutive successful ticks whose violation exceeds 1 µm.
+#[derive(Debug, Default)]
+struct Excursions {
+    /// The tick each run started at.
+    starts: Vec<u64>,
+    /// Length of the current run and of the longest, ticks.
+    current: u64,
+    longest: u64,
+    /// The last successful tick's violation, m.
+    last: f64,
+}
+
+impl Excursions {
+    fn record(&mut self, tick: u64, r: &haptloop_solver::TickReport) {
+        if r.status != TickOutcome::Ok {
+            return;
+        }
+        self.last = r.max_violation_m;
+        if r.max_violation_m > 1e-6 {
+            if self.current == 0 {
+                self.starts.push(tick);
+            }
+            self.current += 1;
+            self.longest = self.longest.max(self.current);
+        } else {
+            self.current = 0;
+        }
+    }
 }
 
 /// A million ticks of the default scene (1000 s at 1 kHz, 500 turns of the

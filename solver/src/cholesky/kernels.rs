@@ -292,12 +292,6 @@ fn update_any(
     }
 }
 
-/// Factors one supernode's block in place (its updates already applied):
-/// the w × w diagonal part row by row, then the rows below it two at a time
-/// (independent rows, so their dependency chains interleave). Returns the
-/// number of regularised pivots. `c0`: the block's first column (for the
-/// error's index); `inv`: scratch of at least w.
-#[inline(always)]
 /// [`dense_factor`] of a block that is diagonal (its off-diagonal entries,
 /// below rows included, are zero and stay zero): √ of each pivot, with the
 /// same regularisation.
@@ -322,34 +316,68 @@ fn diagonal_factor(
     Ok(replaced)
 }
 
-fn dense_factor(
+/// Factors one supernode's block in place (its updates already applied):
+/// the w × w diagonal part column by column ([`diagonal_by_columns`]), then
+/// the rows below it two at a time (independent rows, so their dependency
+/// chains interleave). Returns the number of regularised pivots. `c0`: the
+/// block's first column (for the error's index); `inv`: scratch of at
+/// least w.
+#[inline(always)]
+pub(super) fn dense_factor(
     block: &mut [f64],
     w: usize,
     c0: usize,
     reg: Regularization,
     inv: &mut [f64],
 ) -> Result<usize, NotPositive> {
-    let mut replaced = 0;
     let inv = &mut inv[..w];
-    for i in 0..w {
-        let (done, row) = block.split_at_mut(i * w);
-        let row = &mut row[..w];
-        for j in 0..i {
-            let rj = &done[j * w..j * w + w];
-            row[j] = (row[j] - dot(&row[..j], &rj[..j])) * inv[j];
-        }
-        let mut d = row[i] - dot(&row[..i], &row[..i]);
+    let (diag, below) = block.split_at_mut(w * w);
+    let replaced = diagonal_by_columns(diag, w, c0, reg, inv)?;
+    below_rows(diag, below, w, inv);
+    Ok(replaced)
+}
+
+/// The w × w diagonal part of a block factored column by column: the pivot
+/// of column j, then every later row's entry in column j, each an
+/// independent dot product of the row's first j entries with row j's, so
+/// their dependency chains overlap in the pipeline instead of each entry
+/// waiting for the one before it in its row. Each entry is the same
+/// expression as in the row order ([`rows_order`]), only computed in
+/// another order: bit-identical to it (a test checks). Fills `inv` with
+/// the reciprocal pivots.
+#[inline(always)]
+fn diagonal_by_columns(
+    diag: &mut [f64],
+    w: usize,
+    c0: usize,
+    reg: Regularization,
+    inv: &mut [f64],
+) -> Result<usize, NotPositive> {
+    let mut replaced = 0;
+    for j in 0..w {
+        let (pivot, later) = diag[j * w..].split_at_mut(w);
+        let mut d = pivot[j] - dot(&pivot[..j], &pivot[..j]);
         if d <= reg.epsilon {
             d = reg.delta;
             replaced += 1;
         }
         if !(d > 0.0 && d.is_finite()) {
-            return Err(NotPositive { index: c0 + i });
+            return Err(NotPositive { index: c0 + j });
         }
-        row[i] = d.sqrt();
-        inv[i] = 1.0 / row[i];
+        pivot[j] = d.sqrt();
+        inv[j] = 1.0 / pivot[j];
+        let p = &pivot[..j];
+        for r in later.chunks_exact_mut(w) {
+            r[j] = (r[j] - dot(&r[..j], p)) * inv[j];
+        }
     }
-    let (diag, below) = block.split_at_mut(w * w);
+    Ok(replaced)
+}
+
+/// The rows below a factored w × w diagonal part: unrolled for widths
+/// 1–16 ([`below_fixed`]), else [`below_any`].
+#[inline(always)]
+fn below_rows(diag: &[f64], below: &mut [f64], w: usize, inv: &[f64]) {
     macro_rules! fixed {
         ($($n:literal)*) => {
             match w {
@@ -358,8 +386,7 @@ fn dense_factor(
             }
         };
     }
-    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
-    Ok(replaced)
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
 /// The rows below a factored diagonal block: each row x ← x L⁻ᵀ, two rows
@@ -393,7 +420,44 @@ fn below_fixed<const W: usize>(diag: &[f64], below: &mut [f64], inv: &[f64]) {
     }
 }
 
-/// [`below_fixed`] for any width.
+/// The row order [`dense_factor`] replaced (each row of the diagonal part
+/// in turn, every entry waiting for the one before it in its row): kept as
+/// the reference its column order is tested against bit for bit.
+#[cfg(test)]
+pub(super) fn rows_order(
+    block: &mut [f64],
+    w: usize,
+    c0: usize,
+    reg: Regularization,
+    inv: &mut [f64],
+) -> Result<usize, NotPositive> {
+    let mut replaced = 0;
+    let inv = &mut inv[..w];
+    for i in 0..w {
+        let (done, row) = block.split_at_mut(i * w);
+        let row = &mut row[..w];
+        for j in 0..i {
+            let rj = &done[j * w..j * w + w];
+            row[j] = (row[j] - dot(&row[..j], &rj[..j])) * inv[j];
+        }
+        let mut d = row[i] - dot(&row[..i], &row[..i]);
+        if d <= reg.epsilon {
+            d = reg.delta;
+            replaced += 1;
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(NotPositive { index: c0 + i });
+        }
+        row[i] = d.sqrt();
+        inv[i] = 1.0 / row[i];
+    }
+    let (diag, below) = block.split_at_mut(w * w);
+    below_rows(diag, below, w, inv);
+    Ok(replaced)
+}
+
+/// The rows below a factored diagonal block: each row x ← x L⁻ᵀ, two
+/// rows at a time.
 #[inline(always)]
 fn below_any(diag: &[f64], below: &mut [f64], w: usize, inv: &[f64]) {
     let mut pairs = below.chunks_exact_mut(2 * w);

@@ -443,3 +443,5 @@ impl Cholesky {
 mod tests;
 #[cfg(test)]
 mod tests_decoupled;
+#[cfg(test)]
+mod tests_kernels;

@@ -57,6 +57,7 @@ pub(crate) mod inertia;
 mod motion;
 mod output;
 mod pcg;
+mod rank_one;
 mod redundancy;
 mod reference;
 pub(crate) mod small;

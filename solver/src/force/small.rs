@@ -36,6 +36,10 @@ pub(crate) fn min_norm_solve(
     reference: f64,
 ) -> usize {
     let n = b.len();
+    // A 1-DOF mechanism's point finger: rank one, in closed form.
+    if super::rank_one::rank_one_solve(a, b, x, reference) {
+        return 1;
+    }
     if full_rank_solve(a, b, x, v, reference) {
         return n;
     }

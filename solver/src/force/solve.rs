@@ -224,7 +224,8 @@ impl MultiplierSolve {
     /// # Real-time
     /// No allocation, no locks; time bounded by the symbolic factor: one
     /// numeric LLᵀ, one triangular solve pair, and an m_f × m_f Cholesky
-    /// (a Jacobi eigensolve when S is rank deficient).
+    /// (closed form when S is rank one, a Jacobi eigensolve when it is
+    /// otherwise rank deficient).
     pub fn solve(
         &mut self,
         gram: &Gram,

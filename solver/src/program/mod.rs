@@ -48,8 +48,9 @@
 //! with the crate's supernodal Cholesky (symbolic analysis fixed at
 //! construction; a second, and with the projected rule a third, only when a
 //! limit must be released) and one solve through it with the fingers' Schur
-//! complement (an m_f × m_f Cholesky when it has full rank, else a Jacobi
-//! eigensolve; m_f = 3 per point finger, 6 per rigid one), and the guards'
+//! complement (in closed form when it is rank one, an m_f × m_f Cholesky
+//! when it has full rank, else a Jacobi eigensolve; m_f = 3 per point
+//! finger, 6 per rigid one), and the guards'
 //! O(coordinates + rows) passes. All are bounded by the model's size;
 //! nothing iterates to a tolerance. Measured (BENCHMARKS.md, issue 10,
 //! whole session tick without the devices, the scenes' settings): four-bar
