@@ -292,6 +292,22 @@ fn update_any(
     }
 }
 
+/// A pivot d before its square root: replaced by `reg.delta` (counted, 1)
+/// when at or below `reg.epsilon`; an error naming column `index` when it
+/// is still not positive and finite.
+#[inline(always)]
+fn pivot(d: f64, reg: Regularization, index: usize) -> Result<(f64, usize), NotPositive> {
+    let (d, replaced) = if d <= reg.epsilon {
+        (reg.delta, 1)
+    } else {
+        (d, 0)
+    };
+    if !(d > 0.0 && d.is_finite()) {
+        return Err(NotPositive { index });
+    }
+    Ok((d, replaced))
+}
+
 /// [`dense_factor`] of a block that is diagonal (its off-diagonal entries,
 /// below rows included, are zero and stay zero): √ of each pivot, with the
 /// same regularisation.
@@ -303,14 +319,8 @@ fn diagonal_factor(
 ) -> Result<usize, NotPositive> {
     let mut replaced = 0;
     for i in 0..w {
-        let mut d = block[i * w + i];
-        if d <= reg.epsilon {
-            d = reg.delta;
-            replaced += 1;
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(NotPositive { index: c0 + i });
-        }
+        let (d, r) = pivot(block[i * w + i], reg, c0 + i)?;
+        replaced += r;
         block[i * w + i] = d.sqrt();
     }
     Ok(replaced)
@@ -356,14 +366,8 @@ fn diagonal_by_columns(
     let mut replaced = 0;
     for j in 0..w {
         let (pivot, later) = diag[j * w..].split_at_mut(w);
-        let mut d = pivot[j] - dot(&pivot[..j], &pivot[..j]);
-        if d <= reg.epsilon {
-            d = reg.delta;
-            replaced += 1;
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(NotPositive { index: c0 + j });
-        }
+        let (d, r) = self::pivot(pivot[j] - dot(&pivot[..j], &pivot[..j]), reg, c0 + j)?;
+        replaced += r;
         pivot[j] = d.sqrt();
         inv[j] = 1.0 / pivot[j];
         let p = &pivot[..j];
@@ -440,14 +444,8 @@ pub(super) fn rows_order(
             let rj = &done[j * w..j * w + w];
             row[j] = (row[j] - dot(&row[..j], &rj[..j])) * inv[j];
         }
-        let mut d = row[i] - dot(&row[..i], &row[..i]);
-        if d <= reg.epsilon {
-            d = reg.delta;
-            replaced += 1;
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(NotPositive { index: c0 + i });
-        }
+        let (d, r) = pivot(row[i] - dot(&row[..i], &row[..i]), reg, c0 + i)?;
+        replaced += r;
         row[i] = d.sqrt();
         inv[i] = 1.0 / row[i];
     }

@@ -5,29 +5,16 @@
 
 use haptloop_rt::alloc::count;
 use haptloop_solver::geometry::ContactSettings;
-use haptloop_solver::{
-    BodySpec, FingerSpec, FingerTarget, ModelBuilder, SolverSettings, TickOutcome,
-};
+use haptloop_solver::{BodySpec, FingerSpec, FingerTarget, SolverSettings, TickOutcome};
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::common::{Lockstep, cuboid};
+use crate::common::{Lockstep, cuboid, table_and_block};
 
 /// A held 2 cm cube pressed onto a table, dragged and turned into a block
 /// (its faces, edges and corners change witnesses on the way), and two
 /// free boxes on the table in its path.
 fn scene() -> haptloop_solver::Model {
-    let mut b = ModelBuilder::new();
-    b.gravity([0.0, 0.0, -9.81]);
-    b.body(
-        BodySpec::fixed("table")
-            .at([0.0, 0.0, -0.02])
-            .shape(cuboid([0.2, 0.2, 0.02])),
-    );
-    b.body(
-        BodySpec::fixed("block")
-            .at([0.06, 0.0, 0.02])
-            .shape(cuboid([0.02, 0.06, 0.02])),
-    );
+    let mut b = table_and_block(0.06);
     for (k, y) in [-0.03, 0.03].into_iter().enumerate() {
         b.body(
             BodySpec::new(format!("box{k}"))

@@ -10,6 +10,25 @@ pub fn cuboid(h: [f64; 3]) -> Shape {
     Shape::Box { half_extents_m: h }
 }
 
+/// A builder with gravity, a fixed 40 × 40 × 4 cm table whose top is at
+/// z = 0, and a fixed 4 × 12 × 4 cm block standing on it centred at x =
+/// `block_x`: the ground of the dragged-cube tests.
+pub fn table_and_block(block_x: f64) -> ModelBuilder {
+    let mut b = ModelBuilder::new();
+    b.gravity([0.0, 0.0, -9.81]);
+    b.body(
+        BodySpec::fixed("table")
+            .at([0.0, 0.0, -0.02])
+            .shape(cuboid([0.2, 0.2, 0.02])),
+    );
+    b.body(
+        BodySpec::fixed("block")
+            .at([block_x, 0.0, 0.02])
+            .shape(cuboid([0.02, 0.06, 0.02])),
+    );
+    b
+}
+
 /// Three bodies: moving A, moving B, fixed C, each with a shape, and the
 /// contact rows of pairs (A, B) and (A, C) with `slots` rows each, plus
 /// friction rows on (A, B) when `friction`.

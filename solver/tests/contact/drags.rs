@@ -12,22 +12,11 @@ use nalgebra::{UnitQuaternion, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestRunner};
 
-use crate::common::{Lockstep, cuboid};
+use crate::common::{Lockstep, cuboid, table_and_block};
 
 /// A 2 cm cube held in a rigid grasp, a table and a fixed block on it.
 fn dragged_scene(start: [f64; 3], turn: f64) -> haptloop_solver::Model {
-    let mut b = ModelBuilder::new();
-    b.gravity([0.0, 0.0, -9.81]);
-    b.body(
-        BodySpec::fixed("table")
-            .at([0.0, 0.0, -0.02])
-            .shape(cuboid([0.2, 0.2, 0.02])),
-    );
-    b.body(
-        BodySpec::fixed("block")
-            .at([0.05, 0.0, 0.02])
-            .shape(cuboid([0.02, 0.06, 0.02])),
-    );
+    let mut b = table_and_block(0.05);
     let (s, c) = (turn / 2.0).sin_cos();
     b.body(
         BodySpec::new("cube")

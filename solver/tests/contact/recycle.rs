@@ -5,24 +5,13 @@
 //! change of structure.
 
 use haptloop_solver::geometry::ContactSettings;
-use haptloop_solver::{BodySpec, FingerSpec, FingerTarget, ModelBuilder, SolverSettings};
+use haptloop_solver::{BodySpec, FingerSpec, FingerTarget, SolverSettings};
 use nalgebra::Vector3;
 
-use crate::common::{Lockstep, cuboid};
+use crate::common::{Lockstep, cuboid, table_and_block};
 
 fn scene() -> haptloop_solver::Model {
-    let mut b = ModelBuilder::new();
-    b.gravity([0.0, 0.0, -9.81]);
-    b.body(
-        BodySpec::fixed("table")
-            .at([0.0, 0.0, -0.02])
-            .shape(cuboid([0.2, 0.2, 0.02])),
-    );
-    b.body(
-        BodySpec::fixed("block")
-            .at([0.05, 0.0, 0.02])
-            .shape(cuboid([0.02, 0.06, 0.02])),
-    );
+    let mut b = table_and_block(0.05);
     b.body(
         BodySpec::new("cube")
             .at([0.0, 0.0, 0.0105])
