@@ -25,7 +25,10 @@ fn named_paths(text: &str) -> Vec<String> {
 fn assert_named_paths_exist(doc: &str) -> usize {
     let text = std::fs::read_to_string(root().join(doc)).unwrap();
     let paths = named_paths(&text);
-    assert!(paths.len() >= 10, "expected {doc} to name its files: {paths:?}");
+    assert!(
+        paths.len() >= 10,
+        "expected {doc} to name its files: {paths:?}"
+    );
     let missing: Vec<&String> = paths.iter().filter(|p| !root().join(p).exists()).collect();
     assert!(missing.is_empty(), "{doc} names missing paths: {missing:?}");
     text.lines().count()
@@ -35,7 +38,10 @@ fn assert_named_paths_exist(doc: &str) -> usize {
 fn every_path_in_architecture_md_exists() {
     let lines = assert_named_paths_exist("ARCHITECTURE.md");
     // One page: the long form belongs in docs/internals.md.
-    assert!(lines <= 80, "ARCHITECTURE.md is {lines} lines, not one page");
+    assert!(
+        lines <= 80,
+        "ARCHITECTURE.md is {lines} lines, not one page"
+    );
 }
 
 #[test]
