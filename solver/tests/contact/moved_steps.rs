@@ -1,8 +1,10 @@
 //! The projected steps evaluate and multiply only the contact rows of
-//! bodies that move (`al::moved`); a run whose steps evaluate every row
-//! (`Program::set_full_steps`) must move and push exactly the same, tick
-//! for tick, including the in-tick activations of contacts that arrive
-//! in the middle of a tick.
+//! bodies that move (`al::moved`), and an in-tick activation refactors
+//! without a multiplier solve (`program::activation`); a run whose steps
+//! evaluate every row (`Program::set_full_steps`) and whose activations
+//! run the whole `force_active` (`Program::set_full_activation`) must move
+//! and push exactly the same, tick for tick, including the in-tick
+//! activations of contacts that arrive in the middle of a tick.
 
 use haptloop_rt::alloc::count;
 use haptloop_solver::geometry::ContactSettings;
@@ -44,8 +46,9 @@ fn run(full: bool, dynamics: bool) -> Run {
     let start = l.program.model().initial_targets()[0];
     let (mut out, mut skipped, mut allocations) = (Vec::new(), 0, 0);
     for k in 0..ticks() {
-        // A program the slow loop replaces starts with the default.
+        // A program the slow loop replaces starts with the defaults.
         l.program.set_full_steps(full);
+        l.program.set_full_activation(full);
         let before = l.program.step_contacts_skipped();
         let t = [target(start, k)];
         // The tick alone under the counter, then the contact cycle.
