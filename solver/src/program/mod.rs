@@ -56,6 +56,7 @@
 //! whole session tick without the devices, the scenes' settings): four-bar
 //! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
+mod activation;
 mod auxiliary;
 mod contact;
 mod converged;
@@ -167,6 +168,8 @@ pub struct Program {
     prepared: bool,
     /// Witness tables taken with the chord refresh (`contact`).
     chord_refreshes: u64,
+    /// In-tick activations run a whole multiplier solve (`activation`).
+    full_activation: bool,
 }
 
 impl Program {
@@ -338,6 +341,7 @@ impl Program {
             factor_adoptions: 0,
             prepared: false,
             chord_refreshes: 0,
+            full_activation: false,
             feedback,
             ev,
             h,
