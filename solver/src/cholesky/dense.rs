@@ -30,7 +30,7 @@ use super::{NotPositive, Regularization, kernels::pivot};
 /// loop: 0, none. Measured against the supernodal kernels on the four-bar
 /// and Bennett (order 23), Peaucellier (51) and Stewart (103), it was
 /// slower on every one (the four-bar's factor 0.97 against 0.63 µs, a solve
-/// 0.53 against 0.28 µs, the tick 1.17×; BENCHMARKS.md, "Issue 23 — the
+/// 0.53 against 0.28 µs, the tick 1.16×; BENCHMARKS.md, "Issue 23 — the
 /// small linkages' tick, third pass"): at these orders L is nearly dense
 /// already and the supernodal kernels' fixed-width unrolling beats ~250
 /// short variable-length multiply-adds. Kept, tested against the
