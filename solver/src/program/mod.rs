@@ -469,6 +469,12 @@ impl Program {
         self.feedback.factor_nnz()
     }
 
+    /// The force stage (comparisons in `force`'s tests).
+    #[cfg(test)]
+    pub(crate) fn feedback(&self) -> &Feedback {
+        &self.feedback
+    }
+
     /// How far the velocity estimates lag at tick period `dt`: half a tick for
     /// the backward difference plus the low-pass filter's low-frequency group
     /// delay τ/dt ticks. Accelerations lag half a tick more.
