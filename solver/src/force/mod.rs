@@ -65,6 +65,9 @@ mod solve;
 mod torque;
 mod wrench;
 
+#[cfg(test)]
+mod tests_dense;
+
 pub use output::FingerOutput;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
