@@ -265,6 +265,22 @@ fn contact_lines(out: &mut String, c: &super::summary::Contact) {
         units::or_not_measured(c.cycle_us_max, 0, "µs")
     );
     let _ = writeln!(out, "  {}", speed_limit_line(c));
+    if c.backups_held > 0 {
+        let _ = writeln!(
+            out,
+            "  {} cycles held a penetration beyond the tolerance without a backup: \
+             backups in a row did not clear it",
+            c.backups_held
+        );
+    }
+    if c.stale_stopped_ticks > 0 {
+        let _ = writeln!(
+            out,
+            "  slow loop late: the witness rows were too old to move any body in {} ticks \
+             (the most motion asked of rows since their snapshot: {:.1} ticks at the limit)",
+            c.stale_stopped_ticks, c.max_witness_age_ticks
+        );
+    }
 }
 
 /// The fast loop's force against the converged reference.

@@ -427,6 +427,33 @@ pub struct Contact {
     /// The largest finger tracking error in such a tick, m.
     #[serde(default)]
     pub speed_limit_lag_max_m: f64,
+    /// A penetration beyond this means the world came apart, m (the
+    /// contact distance, at least ten times the tolerance).
+    #[serde(default)]
+    pub broken_penetration_m: f64,
+    /// Slow-loop snapshots whose exact penetration was beyond it, and ticks
+    /// whose witness rows were (failed: force cut). Either makes the
+    /// verdict `BROKEN`.
+    #[serde(default)]
+    pub broken_snapshots: u64,
+    /// Same, ticks.
+    #[serde(default)]
+    pub broken_ticks: u64,
+    /// Slow-loop cycles that found a penetration beyond the tolerance and
+    /// held it instead of backing it up: two backups in a row had not
+    /// cleared it (the penetration stays, reported above).
+    #[serde(default)]
+    pub backups_held: u64,
+    /// Ticks in which the witness rows were too old to move any body (the
+    /// slow loop was late; the motion they are trusted for counts from
+    /// their snapshot).
+    #[serde(default)]
+    pub stale_stopped_ticks: u64,
+    /// The most motion since their snapshot the rows in use were asked to
+    /// cover, in ticks at the contact speed limit (the budget is two
+    /// slow-loop cycles).
+    #[serde(default, with = "super::figure")]
+    pub max_witness_age_ticks: f64,
 }
 
 /// How one design-variable component (m) or objective value moved over the
@@ -786,10 +813,19 @@ impl Contact {
             let tol = o.plan.contact.penetration_tolerance_m;
             let failed = s.solver_failures;
             let within = max_pen <= tol;
+            let bound = crate::session::broken_penetration_m(&o.plan.contact);
+            let broken_ticks =
+                s.failure_kinds[crate::session::FailureKind::PenetrationBeyondBroken as usize];
+            let broken = c.broken + broken_ticks;
             Contact {
                 max_penetration_m: max_pen,
                 tolerance_m: tol,
                 verdict: match (measured, failed, within) {
+                    _ if broken > 0 || max_pen > bound => format!(
+                        "BROKEN: bodies came apart ({} snapshots and {broken_ticks} ticks \
+                         penetrated beyond {bound:.1e} m; force cut)",
+                        c.broken
+                    ),
                     (0, _, _) => "not measured: no tick succeeded".into(),
                     (_, 0, true) => "kept".into(),
                     (_, 0, false) => "EXCEEDED".into(),
@@ -827,6 +863,12 @@ impl Contact {
                 speed_limit_m_per_s: o.plan.solver.contact_step_m * f64::from(o.plan.rate_hz),
                 speed_limited_ticks: f.speed_limited_ticks,
                 speed_limit_lag_max_m: f.speed_limit_lag_max_m,
+                broken_penetration_m: bound,
+                broken_snapshots: c.broken,
+                broken_ticks,
+                backups_held: c.held,
+                stale_stopped_ticks: f.stale_stopped_ticks,
+                max_witness_age_ticks: f.max_witness_age,
             }
         })
     }

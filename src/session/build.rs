@@ -105,11 +105,27 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     // apart.
     let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
     let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
+    // Contact: a penetration beyond its bound means the world came apart;
+    // the witness rows' age bounds the motion (`witness_age`).
+    let (broken_penetration_m, witness_age) = match &inbox {
+        Some(_) => {
+            let per_cycle = (super::SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round();
+            (
+                super::contact::broken_penetration_m(&plan.contact),
+                Some(super::witness_age::WitnessAge::new(
+                    per_cycle.max(1.0) as u64
+                )),
+            )
+        }
+        None => (f64::INFINITY, None),
+    };
     let fast = FastLoop {
         clock,
         period: plan.period(),
         program,
         broken_m,
+        broken_penetration_m,
+        witness_age,
         programs: programs_rx,
         refresh: refresh_rx,
         targets: model.initial_targets(),

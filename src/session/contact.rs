@@ -29,7 +29,7 @@ use haptloop_solver::contact::{ContactManager, ContactUpdate};
 use haptloop_solver::geometry::{ContactSettings, Cycle};
 use haptloop_solver::{Model, Program, SolverSettings};
 
-use super::messages::{Correction, Handover};
+use super::messages::{Correction, Handover, RowsStamp};
 use super::track::{ContactPoint, contact_points};
 
 /// The witness table of one model, published by the slow loop.
@@ -41,6 +41,11 @@ pub struct WitnessFrame {
     pub generation: u64,
     /// Grid slot of the snapshot it was computed from.
     pub snapshot_tick: u64,
+    /// That snapshot's [`Snapshot::contact_motion`](super::Snapshot): the
+    /// motion the table is trusted for counts from it (`witness_age`). A
+    /// frame of the same generation again says the table is still the
+    /// active set's at a newer snapshot.
+    pub snapshot_motion: f64,
     /// One entry per slot of the model's contact layout.
     pub table: Vec<Witness>,
 }
@@ -64,6 +69,17 @@ pub struct ContactSlowStats {
     pub frames: u64,
     /// Deepest penetration measured exactly (parry) in a snapshot, m.
     pub max_penetration_m: f64,
+    /// Snapshots whose exact penetration was beyond the session's bound
+    /// for a broken world ([`ContactLoop::broken_m`]): the force is cut
+    /// with the backup that answers them.
+    pub broken: u64,
+    /// Frames that only confirmed the running table at a newer snapshot.
+    pub confirmations: u64,
+    /// Cycles that found a penetration beyond the tolerance and did not
+    /// back it up: two backups in a row had not cleared it (each reset
+    /// came back to the same depth), so it is held and reported, and backed
+    /// up again only if it grows past twice that depth.
+    pub held: u64,
     /// Most pairs tracked at once.
     pub max_tracked: u32,
     /// Largest and total time to build a program for a new structure, ns.
@@ -109,15 +125,39 @@ impl std::fmt::Display for Interpenetration {
 
 impl std::error::Error for Interpenetration {}
 
+/// The penetration beyond which the world counts as broken, like a joint
+/// violation beyond the session's `broken_m`: deeper than the contact
+/// distance (no witness row was there to hold it) and ten times the
+/// tolerance, m.
+pub fn broken_penetration_m(c: &ContactSettings) -> f64 {
+    c.contact_distance_m.max(10.0 * c.penetration_tolerance_m)
+}
+
+/// Where a snapshot was taken: its grid slot and its
+/// [`Snapshot::contact_motion`](super::Snapshot).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct At {
+    /// Grid slot.
+    pub tick: u64,
+    /// Motion so far, ticks' worth of the contact speed limit.
+    pub motion: f64,
+}
+
 /// The slow loop's contact state: the solver's [`ContactManager`] plus the
 /// exchange with the fast loop and timing.
 pub struct ContactLoop {
     manager: ContactManager,
     /// The scene's penetration tolerance, m.
     tolerance_m: f64,
+    /// A penetration beyond this means the world came apart, m.
+    broken_m: f64,
     frames: MailboxWriter<WitnessFrame>,
     generation: u64,
     stats: ContactSlowStats,
+    /// Backups sent in consecutive cycles.
+    backups_in_a_row: u32,
+    /// The manager's backup floor, m (0: every penetration is backed up).
+    floor_m: f64,
 }
 
 impl ContactLoop {
@@ -134,9 +174,12 @@ impl ContactLoop {
         Some(Self {
             manager,
             tolerance_m: contact.penetration_tolerance_m,
+            broken_m: broken_penetration_m(&contact),
             frames,
             generation: 0,
             stats: ContactSlowStats::default(),
+            backups_in_a_row: 0,
+            floor_m: 0.0,
         })
     }
 
@@ -216,12 +259,18 @@ impl ContactLoop {
         (self.manager).set_speeds(speeds, super::SLOW_PERIOD.as_secs_f64());
     }
 
-    /// One slow-loop cycle on a snapshot. Returns true if it sent a program
-    /// (the caller then skips its own re-projection this cycle).
+    /// A penetration beyond this means the world came apart, m.
+    pub fn broken_m(&self) -> f64 {
+        self.broken_m
+    }
+
+    /// One slow-loop cycle on a snapshot taken `at`. Returns true if it
+    /// sent a program (the caller then skips its own re-projection this
+    /// cycle).
     pub fn step(
         &mut self,
         q: &[f64],
-        snapshot_tick: u64,
+        at: At,
         solved: bool,
         programs: &mut ProgramSender<Handover>,
     ) -> bool {
@@ -230,10 +279,26 @@ impl ContactLoop {
         let may_send = programs.in_flight() == 0;
         let (cycle, update) = self.manager.step(q, solved, may_send);
         self.note(&cycle, (clock.now() - start).0);
+        let broken = cycle.max_penetration_m > self.broken_m;
+        let reset = matches!(&update, ContactUpdate::Program { reset: Some(_), .. });
+        let held = !cycle.backups.is_empty() && !reset;
+        self.stats.held += u64::from(held && self.floor_m > 0.0);
+        self.backup_policy(&cycle, reset);
+        self.stats.broken += u64::from(broken);
         match update {
-            ContactUpdate::None => false,
+            ContactUpdate::None => {
+                if (cycle.backups.is_empty() || held) && self.table_is_current() {
+                    // The running rows are still what this snapshot asks
+                    // for: they are trusted from here on.
+                    self.publish(at);
+                    self.stats.confirmations += 1;
+                }
+                false
+            }
             ContactUpdate::Table => {
-                self.publish(snapshot_tick);
+                self.generation += 1;
+                self.publish(at);
+                self.stats.frames += 1;
                 false
             }
             ContactUpdate::Program { program, reset } => {
@@ -247,22 +312,59 @@ impl ContactLoop {
                     self.stats.build_ns_sum += ns;
                 }
                 self.stats.structure_changes += 1;
-                let correction = match reset {
+                let (correction, rows) = match reset {
                     Some(q) => {
                         self.stats.backups += 1;
-                        Correction::Reset(q)
+                        (Correction::Reset(q), RowsStamp::Fresh)
                     }
-                    None => Correction::None,
+                    None => (Correction::None, RowsStamp::At(at.motion)),
                 };
+                // Its table is this generation's: the fast loop takes the
+                // frames that confirm it as stamps only.
+                self.generation += 1;
                 programs
                     .try_send(Box::new(Handover {
                         program: *program,
                         correction,
-                        snapshot_tick: Some(snapshot_tick),
+                        snapshot_tick: Some(at.tick),
+                        rows,
+                        broken,
+                        generation: Some(self.generation),
                     }))
                     .is_ok()
             }
         }
+    }
+
+    /// Backups that do not clear a penetration are not repeated: after two
+    /// in a row the manager holds penetrations up to twice the depth found
+    /// (below the broken bound) until a clean cycle; a backup that happens
+    /// all the same (deeper) starts the count again.
+    fn backup_policy(&mut self, cycle: &Cycle, reset: bool) {
+        let floor = if reset {
+            self.backups_in_a_row += 1;
+            if self.backups_in_a_row >= 2 && self.floor_m == 0.0 {
+                (2.0 * cycle.max_penetration_m).min(0.5 * self.broken_m)
+            } else {
+                0.0
+            }
+        } else if cycle.backups.is_empty() {
+            self.backups_in_a_row = 0;
+            0.0
+        } else {
+            self.floor_m
+        };
+        if floor != self.floor_m {
+            self.floor_m = floor;
+            self.manager.set_backup_floor(floor);
+        }
+    }
+
+    /// The active set's pairs are the running program's and its table the
+    /// one last published: nothing new for the fast loop.
+    fn table_is_current(&self) -> bool {
+        let m = &self.manager;
+        m.active_set().pairs() == m.current_model().contact().specs
     }
 
     fn note(&mut self, c: &Cycle, ns: u64) {
@@ -276,8 +378,9 @@ impl ContactLoop {
         s.max_penetration_m = s.max_penetration_m.max(c.max_penetration_m);
     }
 
-    fn publish(&mut self, snapshot_tick: u64) {
-        self.generation += 1;
+    /// Publishes the running table stamped with the snapshot `at`
+    /// (`generation` unchanged: a confirmation of the table last sent).
+    fn publish(&mut self, at: At) {
         let (id, generation, table) = (
             self.manager.current_model().id(),
             self.generation,
@@ -286,11 +389,11 @@ impl ContactLoop {
         self.frames.publish_with(|f| {
             f.model_id = id;
             f.generation = generation;
-            f.snapshot_tick = snapshot_tick;
+            f.snapshot_tick = at.tick;
+            f.snapshot_motion = at.motion;
             f.table.clear();
             f.table.extend_from_slice(table);
         });
-        self.stats.frames += 1;
     }
 }
 
@@ -306,25 +409,51 @@ impl WitnessInbox {
         Self { frames, applied: 0 }
     }
 
+    /// A program whose table is of `generation` was taken over: frames of
+    /// that generation only confirm it.
+    pub fn taken_over(&mut self, generation: u64) {
+        self.applied = self.applied.max(generation);
+    }
+
     /// Applies the newest frame to `program` if it is for its model and new.
-    /// Returns the frame's snapshot tick when applied.
+    /// Returns its snapshot when applied, or when it confirms the table
+    /// applied last at a newer snapshot (`table: false`).
     ///
     /// # Real-time
     /// No allocation: a mailbox read and a copy of the table into the
     /// program's (same length), then one refactorisation.
-    pub fn apply(&mut self, program: &mut Program) -> Option<u64> {
+    pub fn apply(&mut self, program: &mut Program) -> Option<Received> {
         if !self.frames.refresh() {
             return None;
         }
         let f = self.frames.latest();
-        if f.model_id != program.model().id() || f.generation <= self.applied {
+        if f.model_id != program.model().id() || f.generation < self.applied {
             return None;
+        }
+        let stamp = |table| Received {
+            tick: f.snapshot_tick,
+            motion: f.snapshot_motion,
+            table,
+        };
+        if f.generation == self.applied {
+            return Some(stamp(false));
         }
         if program.apply_witnesses(&f.table) {
             self.applied = f.generation;
-            Some(f.snapshot_tick)
+            Some(stamp(true))
         } else {
             None
         }
     }
+}
+
+/// A witness frame the fast loop took.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Received {
+    /// Its snapshot's grid slot.
+    pub tick: u64,
+    /// Its snapshot's [`Snapshot::contact_motion`](super::Snapshot).
+    pub motion: f64,
+    /// A new table was applied (else a confirmation of the last one).
+    pub table: bool,
 }

@@ -17,7 +17,7 @@
 //! reporter drains (a full queue drops and counts rows). Its run time is
 //! bounded by the program's fixed iteration count and the devices' sub-steps.
 
-use super::messages::{Handover, Snapshot};
+use super::messages::{Handover, RowsStamp, Snapshot};
 use super::rig::Rig;
 use super::stats::{FingerStats, RunStats};
 use super::timing::{Stage, StageClock};
@@ -90,6 +90,12 @@ pub struct FastLoop<C: Clock> {
     /// A tick whose violation exceeds this is treated as a failed solve
     /// (force cut, re-projection): the mechanism has come apart, m.
     pub(super) broken_m: f64,
+    /// Likewise a witness row's penetration beyond this: the world has come
+    /// apart, m (`contact::broken_penetration_m`; infinite without contact).
+    pub(super) broken_penetration_m: f64,
+    /// How far the bodies moved since the snapshot of the witness rows in
+    /// use (scenes with contact): bounds the next ticks' motion.
+    pub(super) witness_age: Option<super::witness_age::WitnessAge>,
     pub(super) rig: Rig,
     pub(super) targets: Vec<FingerTarget>,
     /// Bounds how fast the targets the program sees catch up after a stall.
@@ -191,19 +197,45 @@ impl<C: Clock> TickBody for FastLoop<C> {
         });
         self.stats.programs_swapped += swapped as u64;
         self.stats.contact.prepared_programs += prepared;
-        if swapped > 0
-            && let Some(at) = self.program.snapshot_tick
-        {
-            self.stats
-                .contact
-                .record_latency(tick.index.saturating_sub(at));
+        if swapped > 0 {
+            if let Some(at) = self.program.snapshot_tick {
+                self.stats
+                    .contact
+                    .record_latency(tick.index.saturating_sub(at));
+            }
+            if let Some(age) = &mut self.witness_age {
+                match self.program.rows {
+                    RowsStamp::Keep => {}
+                    RowsStamp::At(motion) => age.rows_from(motion),
+                    RowsStamp::Fresh => age.rows_fresh(),
+                }
+            }
+            if let (Some(g), Some(inbox)) = (self.program.generation, &mut self.inbox) {
+                inbox.taken_over(g);
+            }
+            if self.program.broken {
+                // The slow loop saw the world come apart: no force from
+                // it until the backup has settled.
+                self.cut_forces(tick.index);
+                self.stats.contact.broken_handovers += 1;
+            }
         }
         if let Some(inbox) = &mut self.inbox
-            && let Some(at) = inbox.apply(&mut self.program.program)
+            && let Some(got) = inbox.apply(&mut self.program.program)
         {
-            self.stats
-                .contact
-                .record_latency(tick.index.saturating_sub(at));
+            if got.table {
+                self.stats
+                    .contact
+                    .record_latency(tick.index.saturating_sub(got.tick));
+            }
+            if let Some(age) = &mut self.witness_age {
+                age.table_from(got.motion);
+            }
+        }
+        if let Some(age) = &mut self.witness_age {
+            self.program.program.set_contact_budget(age.budget());
+            self.stats.contact.stale_stopped_ticks = age.stopped_ticks;
+            self.stats.contact.max_witness_age = age.max_age;
         }
         self.switches
             .apply(now.as_secs_f64(), &mut self.program.program);
@@ -247,10 +279,17 @@ impl<C: Clock> TickBody for FastLoop<C> {
             .program
             .program
             .tick_marked(&self.targets, dt, &mut self.timer);
-        // A finite but absurd violation (a linkage that came apart) is a
-        // failure too: never render forces computed from it.
-        let solved =
-            matches!(report.status, TickOutcome::Ok) && report.max_violation_m <= self.broken_m;
+        // A finite but absurd violation (a linkage that came apart) or
+        // penetration (bodies inside each other) is a failure too: never
+        // render forces computed from it.
+        let ok = matches!(report.status, TickOutcome::Ok);
+        let apart = ok && report.max_penetration_m > self.broken_penetration_m;
+        let solved = ok && report.max_violation_m <= self.broken_m && !apart;
+        if let Some(age) = &mut self.witness_age
+            && solved
+        {
+            age.moved(self.program.program.last_contact_motion());
+        }
         let cut = !solved || tick.index < self.cut_until;
 
         let t_s = now.as_secs_f64();
@@ -316,7 +355,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 failed: !solved,
             });
         }
-        self.stats.record_tick(&report, solved);
+        self.stats.record_tick(&report, solved, apart);
         if let Some(r) = &mut self.reference {
             let p = &self.program.program;
             self.sampled = r.after(tick.index, p, &self.targets, dt.as_secs_f64(), solved);
@@ -330,6 +369,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
             self.violation_peak_m.max(v)
         };
         let peak = self.violation_peak_m;
+        let motion = self.witness_age.as_ref().map_or(0.0, |a| a.motion());
         self.snapshot.publish_with(|s| {
             s.tick = tick.index;
             s.time = now;
@@ -346,6 +386,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
                     .map(|o| <[f64; 3]>::from(o.force_n)),
             );
             s.peak_violation_m = peak;
+            s.contact_motion = motion;
             program.body_speeds(&mut s.speeds);
         });
         self.timer.lap(Stage::Bookkeeping);

@@ -20,6 +20,19 @@ pub enum Correction {
     Reset(Vec<f64>),
 }
 
+/// Which snapshot the witness rows of a handed-over program were computed
+/// at (`witness_age`: the motion they are trusted for counts from there).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RowsStamp {
+    /// The rows the fast loop runs on now (a re-projection, a semantic
+    /// change: the published table): keep counting from their snapshot.
+    Keep,
+    /// Computed at a snapshot that carried this [`Snapshot::contact_motion`].
+    At(f64),
+    /// Computed at the configuration the hand-over resets q to (a backup).
+    Fresh,
+}
+
 /// What the slow loop sends the fast loop.
 pub struct Handover {
     /// The program to run from now on.
@@ -29,6 +42,14 @@ pub struct Handover {
     /// Grid slot of the snapshot it answers (contact changes: the latency
     /// from a witness change to the fast loop using it is measured from it).
     pub snapshot_tick: Option<u64>,
+    /// Which snapshot its witness rows come from.
+    pub rows: RowsStamp,
+    /// The slow loop found the world broken (a penetration beyond the
+    /// session's bound): the fast loop cuts the force when it takes this
+    /// over, as after a failed tick.
+    pub broken: bool,
+    /// The witness-frame generation of its table (contact programs).
+    pub generation: Option<u64>,
 }
 
 impl Handover {
@@ -38,6 +59,9 @@ impl Handover {
             program,
             correction: Correction::None,
             snapshot_tick: None,
+            rows: RowsStamp::Keep,
+            broken: false,
+            generation: None,
         }
     }
 
@@ -95,4 +119,7 @@ pub struct Snapshot {
     /// Per model body: speed (m/s) and angular speed (rad/s) over the tick
     /// (the contact cycle tracks pairs as far ahead as they will move).
     pub speeds: Vec<[f64; 2]>,
+    /// The bodies' motion so far, ticks' worth of the contact speed limit
+    /// (`witness_age`): rows computed at this snapshot are stamped with it.
+    pub contact_motion: f64,
 }

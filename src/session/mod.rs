@@ -31,14 +31,18 @@ mod stall;
 mod stats;
 pub mod timing;
 pub mod track;
+mod witness_age;
 
 pub use build::build;
-pub use contact::{ContactLoop, ContactSlowStats, Interpenetration, WitnessFrame, WitnessInbox};
+pub use contact::{
+    At, ContactLoop, ContactSlowStats, Interpenetration, Received, WitnessFrame, WitnessInbox,
+    broken_penetration_m,
+};
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;
 pub use fast::{FastLoop, MAX_SIMULATED_PERIODS, SessionFault, TraceSample};
 pub use live::{FingerFrame, LiveFrame, LiveHook, LivePointer, LiveSources};
-pub use messages::{Correction, Handover, Snapshot};
+pub use messages::{Correction, Handover, RowsStamp, Snapshot};
 pub use plan::{DEFAULT_REFERENCE_EVERY, Plan, SessionOptions};
 pub use recorder::{Recorder, Series};
 pub use reference::{
@@ -52,6 +56,7 @@ pub use stall::Stall;
 pub use stats::{FailureKind, FingerStats, RunStats, StallStats};
 pub use timing::{Stage, StageClock, StageTimes};
 pub use track::{BodyTrack, FingerTrack, TrackSample};
+pub use witness_age::{WINDOW_CYCLES, WitnessAge};
 
 use crate::scenes::Scene;
 use anyhow::{Context, Result};

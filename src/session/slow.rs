@@ -5,7 +5,7 @@
 //! loop hands back. It never blocks the fast loop: it only polls the mailbox
 //! and the queue.
 
-use super::messages::{Correction, Handover, Snapshot};
+use super::messages::{Correction, Handover, RowsStamp, Snapshot};
 use haptloop_rt::clock::{Clock, MonotonicClock};
 use haptloop_rt::exchange::{MailboxReader, ProgramSender};
 use haptloop_rt::hist::{LatencyHistogram, Summary};
@@ -173,8 +173,12 @@ impl SlowLoop {
         let snap = self.snapshots.latest();
         if let Some(c) = &mut self.contact {
             let q = snap.q.clone();
+            let at = super::contact::At {
+                tick: snap.tick,
+                motion: snap.contact_motion,
+            };
             c.set_speeds(&snap.speeds);
-            if c.step(&q, snap.tick, snap.solved, &mut self.programs) {
+            if c.step(&q, at, snap.solved, &mut self.programs) {
                 return;
             }
         }
@@ -253,6 +257,9 @@ impl SlowLoop {
                 program,
                 correction,
                 snapshot_tick: None,
+                rows: RowsStamp::Keep,
+                broken: false,
+                generation: None,
             }))
             .is_ok()
         {
@@ -316,6 +323,9 @@ impl SlowLoop {
                     program,
                     correction,
                     snapshot_tick: None,
+                    rows: RowsStamp::Keep,
+                    broken: false,
+                    generation: None,
                 }))
                 .is_ok()
         });

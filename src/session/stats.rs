@@ -165,11 +165,14 @@ pub enum FailureKind {
     DivergedMultiplier,
     /// A violation beyond the model's length scale.
     DivergedViolation,
+    /// The solve succeeded but bodies came apart: a witness row's
+    /// penetration beyond the session's bound for a broken world.
+    PenetrationBeyondBroken,
 }
 
 impl FailureKind {
     /// Every kind, in counting order.
-    pub const ALL: [FailureKind; 8] = [
+    pub const ALL: [FailureKind; 9] = [
         FailureKind::ViolationBeyondBroken,
         FailureKind::NonFinite,
         FailureKind::Eval,
@@ -178,6 +181,7 @@ impl FailureKind {
         FailureKind::DivergedStep,
         FailureKind::DivergedMultiplier,
         FailureKind::DivergedViolation,
+        FailureKind::PenetrationBeyondBroken,
     ];
 
     /// Name in reports and `summary.json`.
@@ -191,6 +195,7 @@ impl FailureKind {
             FailureKind::DivergedStep => "diverged_step",
             FailureKind::DivergedMultiplier => "diverged_multiplier",
             FailureKind::DivergedViolation => "diverged_violation",
+            FailureKind::PenetrationBeyondBroken => "penetration_beyond_broken",
         }
     }
 }
@@ -224,6 +229,15 @@ pub struct ContactStats {
     /// The largest finger tracking error of such a tick, m: how far the
     /// limit left a fingertip behind its device.
     pub speed_limit_lag_max_m: f64,
+    /// Backups the slow loop sent because the world came apart (force cut
+    /// when taken over).
+    pub broken_handovers: u64,
+    /// Ticks in which the witness rows in use were too old to move the
+    /// bodies at all (`witness_age`: the slow loop was late).
+    pub stale_stopped_ticks: u64,
+    /// The most motion since their snapshot the rows in use were asked to
+    /// cover, ticks' worth of the contact speed limit.
+    pub max_witness_age: f64,
 }
 
 impl ContactStats {
@@ -279,7 +293,8 @@ impl RunStats {
 
     /// Records one tick's solver diagnostics.
     #[inline]
-    pub fn record_tick(&mut self, r: &TickReport, solved: bool) {
+    /// `apart`: it failed on a penetration beyond the broken bound.
+    pub fn record_tick(&mut self, r: &TickReport, solved: bool, apart: bool) {
         self.ticks += 1;
         self.iterations += u64::from(r.iterations);
         self.energy.record(&r.energy, solved);
@@ -291,6 +306,7 @@ impl RunStats {
         } else {
             self.solver_failures += 1;
             let k = match r.status {
+                TickOutcome::Ok if apart => FailureKind::PenetrationBeyondBroken,
                 TickOutcome::Ok => FailureKind::ViolationBeyondBroken,
                 TickOutcome::NonFinite => FailureKind::NonFinite,
                 TickOutcome::Eval(_) => FailureKind::Eval,

@@ -34,6 +34,7 @@ mod seeds;
 mod semantic;
 mod semantic_schedule;
 mod session;
+mod slow_late;
 mod solver_honesty;
 mod stability;
 mod stall;

@@ -78,6 +78,9 @@ pub struct ContactManager {
     expected: Vec<f64>,
     /// Bodies out of the scene (a semantic schedule's removals): in no pair.
     absent: Vec<u32>,
+    /// A penetration (not a tunnel) this deep or shallower is not backed up
+    /// ([`set_backup_floor`](Self::set_backup_floor)); 0: every one is.
+    backup_floor_m: f64,
 }
 
 /// How many contact programs were built new and how many taken from the
@@ -124,6 +127,7 @@ impl ContactManager {
             builds: BuildCounts::default(),
             expected: Vec::new(),
             absent: Vec::new(),
+            backup_floor_m: 0.0,
         })
     }
 
@@ -189,6 +193,21 @@ impl ContactManager {
         out
     }
 
+    /// Backs up only penetrations deeper than `depth_m` (and tunnels) from
+    /// now on; 0 (the default) backs up every one beyond the tolerance. The
+    /// session raises it when backups in a row do not clear a penetration
+    /// (the rows put the bodies back where the exact check finds them
+    /// inside each other, and each reset only pulls the world back to a
+    /// configuration the hand has left), and lowers it again after a clean
+    /// cycle. A cycle it holds still never counts as clean.
+    pub fn set_backup_floor(&mut self, depth_m: f64) {
+        self.backup_floor_m = if depth_m.is_finite() {
+            depth_m.max(0.0)
+        } else {
+            0.0
+        };
+    }
+
     /// How the contact programs so far were obtained.
     pub fn builds(&self) -> BuildCounts {
         self.builds
@@ -225,7 +244,11 @@ impl ContactManager {
         if !may_send_program {
             return (cycle, self.table_update());
         }
-        if penetrating && let Some(clean) = self.last_clean.clone() {
+        let held = cycle.tunnels == 0 && cycle.max_penetration_m <= self.backup_floor_m;
+        if penetrating
+            && !held
+            && let Some(clean) = self.last_clean.clone()
+        {
             // Backup (§3.2): revert to the last clean configuration, where the
             // pairs that penetrated are tracked (they were seen moving that
             // far), and retry from there.

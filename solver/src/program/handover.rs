@@ -98,4 +98,30 @@ impl Program {
     pub fn refresh_factor(&mut self) -> bool {
         matches!(self.refresh(), TickOutcome::Ok)
     }
+
+    /// Bounds the motion of the next ticks by the age of the witness data
+    /// they run on: at most `ticks` ticks' worth of the contact speed limit
+    /// (`SolverSettings::contact_step_m`, per shaped body), 1 a tick as
+    /// before when more is left, none at all at 0 (the bodies stop where they
+    /// are). The session sets it every tick from the motion since the
+    /// snapshot its witness rows were computed at, so a slow loop that is
+    /// late (a long program build, a descheduled thread) slows the bodies to
+    /// a stop instead of letting them run past rows built for where they
+    /// were. No effect without a contact speed limit.
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn set_contact_budget(&mut self, ticks: f64) {
+        self.contact_budget = if ticks.is_nan() { 0.0 } else { ticks };
+    }
+
+    /// How much of the contact speed limit the last tick used, in ticks'
+    /// worth (0–1; 0 without a contact speed limit or after a failed tick):
+    /// the largest motion of a shaped body's points over its allowance.
+    pub fn last_contact_motion(&self) -> f64 {
+        if !self.contact_step_m.is_finite() || !self.tick_budget.is_finite() {
+            return 0.0;
+        }
+        (self.tick_budget - self.step_budget_m).clamp(0.0, 1.0)
+    }
 }

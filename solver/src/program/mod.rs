@@ -127,6 +127,13 @@ pub struct Program {
     contact_step_m: f64,
     /// What is left of it in the current tick.
     step_budget_m: f64,
+    /// The most motion, in ticks' worth of `contact_step_m`, the next tick
+    /// may use ([`set_contact_budget`](Self::set_contact_budget)); infinite
+    /// unless the caller bounds it.
+    contact_budget: f64,
+    /// The budget the current tick started with (its motion is this minus
+    /// `step_budget_m`).
+    tick_budget: f64,
     /// The contact speed limit held a body back in this tick.
     speed_limited: bool,
     /// Scratch: each finger's coupling error at the last force solve.
@@ -321,6 +328,8 @@ impl Program {
             activations: 0,
             last_dt_s: 1e-3,
             step_budget_m: f64::INFINITY,
+            contact_budget: f64::INFINITY,
+            tick_budget: f64::INFINITY,
             speed_limited: false,
             contact_step_m: settings.contact_step_m,
             prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],

@@ -202,13 +202,21 @@ impl Program {
         self.activations = 0;
         // The contact speed limit is a budget for the whole tick: a
         // fraction of each shaped body's allowance (`set_allowances`).
+        // ... and at most what the caller's budget leaves (the session
+        // counts it from the age of the witness data: `set_contact_budget`).
         self.step_budget_m = if self.contact_step_m.is_finite() {
-            1.0
+            self.contact_budget.clamp(0.0, 1.0)
         } else {
             f64::INFINITY
         };
+        self.tick_budget = self.step_budget_m;
         self.speed_limited = false;
         self.projected.begin();
+        if self.step_budget_m <= 0.0 {
+            // No motion left for the witness rows this program runs on.
+            self.speed_limited = true;
+            return Ok(0);
+        }
         let mut k = 0;
         while k < n {
             let done = match self.settings.update {
