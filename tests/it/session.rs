@@ -706,7 +706,7 @@ fn the_fast_loop_tick_allocates_nothing_with_contacts_switching() {
 #[test]
 fn the_fast_loop_tick_allocates_nothing_with_semantic_rows() {
     use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
     let scene = resolve("room").unwrap();
     let plan = Plan::new(&scene, &deterministic(10.0)).unwrap();
     let clock = MockClock::new(Nanos(0));
@@ -718,9 +718,15 @@ fn the_fast_loop_tick_allocates_nothing_with_semantic_rows() {
     } = session::build(&scene, &plan, clock.clone()).unwrap();
     let done = Arc::new(AtomicBool::new(false));
     let flag = done.clone();
+    // The slow loop's steps, so the fast loop can wait for two after each
+    // chunk: on a loaded machine a free-running slow thread may otherwise
+    // fall behind and send fewer programs than the room's session makes.
+    let steps = Arc::new(AtomicU64::new(0));
+    let stepped = steps.clone();
     let slow_thread = std::thread::spawn(move || {
         while !flag.load(Ordering::Acquire) {
             slow.step();
+            stepped.fetch_add(1, Ordering::Release);
             std::thread::yield_now();
         }
         slow
@@ -733,7 +739,10 @@ fn the_fast_loop_tick_allocates_nothing_with_semantic_rows() {
         for _ in 0..chunks {
             periodic.run(&mut fast, RunLimit::slots(50), &stop);
             while trace.pop().is_some() {}
-            std::thread::yield_now();
+            let after = steps.load(Ordering::Acquire) + 2;
+            while steps.load(Ordering::Acquire) < after {
+                std::thread::yield_now();
+            }
         }
     });
     done.store(true, Ordering::Release);
