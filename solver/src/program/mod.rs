@@ -192,7 +192,10 @@ impl Program {
         settings.validate()?;
         // The fused gradient pass holds at most six rows per constraint; a
         // contact pair's witness rows are one constraint of many rows.
-        if matches!(settings.force_solver, crate::ForceSolver::Matvec { .. }) {
+        if matches!(
+            settings.force_solver,
+            crate::ForceSolver::Matvec { .. } | crate::ForceSolver::Tree { .. }
+        ) {
             if model.contact().slots > 0 {
                 return Err(ProgramError::Unsupported(
                     "the matvec-only tick (`--force-solver matvec`) does not cover contact \
@@ -448,6 +451,12 @@ impl Program {
     /// right-hand sides (0 with the Cholesky).
     pub fn force_cg_iterations(&self) -> u32 {
         self.feedback.cg_iterations()
+    }
+
+    /// The tree tick (`ForceSolver::Tree`): its preconditioner's shape and
+    /// its projected steps' iterations so far (`None` otherwise).
+    pub fn tree_stats(&self) -> Option<crate::TreeStats> {
+        self.feedback.tree_stats()
     }
 
     /// The matvec-only tick (`ForceSolver::Matvec`): conjugate-gradient
