@@ -168,4 +168,18 @@ mod tests {
         assert!(reference_ms("0").is_ok() && reference_ms("-1").is_err());
         assert!(fraction("1").is_ok() && fraction("0").is_err() && fraction("1.5").is_err());
     }
+
+    /// `tree` and `tree:N` parse to the tree tick and print back as typed;
+    /// a cap outside 1–1000 is refused naming the value.
+    #[test]
+    fn the_tree_force_solver_parses_and_prints_back() {
+        for s in ["tree", "tree:1", "tree:1000", "matvec", "cg:64"] {
+            assert_eq!(force_solver(s).map(|f| f.label()), Ok(s.to_string()));
+        }
+        assert_eq!(force_solver("tree"), Ok(haptloop_solver::ForceSolver::TREE));
+        for bad in ["tree:0", "tree:1001", "tree:x"] {
+            let e = force_solver(bad).unwrap_err();
+            assert!(e.contains(&bad[5..]), "{e}");
+        }
+    }
 }

@@ -98,7 +98,9 @@ impl ForceSolver {
     /// The tree tick with its default cap: 500 iterations a solve, a
     /// safety bound (each solve stops at its tolerance; BENCHMARKS.md,
     /// issue 23, the spanning-tree preconditioner).
-    pub const TREE: ForceSolver = ForceSolver::Tree { max_iterations: 500 };
+    pub const TREE: ForceSolver = ForceSolver::Tree {
+        max_iterations: 500,
+    };
 }
 
 /// Whether and how [`Program::new`](crate::Program::new) looks for redundant

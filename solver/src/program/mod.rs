@@ -198,13 +198,13 @@ impl Program {
         ) {
             if model.contact().slots > 0 {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`--force-solver matvec`) does not cover contact \
+                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover contact \
                      rows: this scene needs the Cholesky force solver",
                 ));
             }
             if !model.layout().design_vars().is_empty() {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`--force-solver matvec`) does not cover design \
+                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover design \
                      variables: this scene needs the Cholesky force solver",
                 ));
             }

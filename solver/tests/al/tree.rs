@@ -146,8 +146,18 @@ fn tree_ticks_allocate_nothing() {
 /// command line's spelling.
 #[test]
 fn what_the_tree_tick_accepts() {
-    assert!(settings(ForceSolver::Tree { max_iterations: 0 }).validate().is_err());
-    assert!(settings(ForceSolver::Tree { max_iterations: 1001 }).validate().is_err());
+    assert!(
+        settings(ForceSolver::Tree { max_iterations: 0 })
+            .validate()
+            .is_err()
+    );
+    assert!(
+        settings(ForceSolver::Tree {
+            max_iterations: 1001
+        })
+        .validate()
+        .is_err()
+    );
     assert!(settings(ForceSolver::TREE).validate().is_ok());
     assert_eq!(ForceSolver::TREE.label(), "tree");
     assert_eq!(ForceSolver::Tree { max_iterations: 16 }.label(), "tree:16");

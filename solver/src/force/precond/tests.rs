@@ -49,7 +49,11 @@ fn dense(gram: &Gram) -> Vec<f64> {
 fn the_tree_factor_solves_the_dense_p() {
     let (r, c) = sphere_toy_shape(33).unwrap();
     for (name, model, loops) in [
-        ("sphere toy 33", sphere_toy_sized(r, c).build().unwrap(), true),
+        (
+            "sphere toy 33",
+            sphere_toy_sized(r, c).build().unwrap(),
+            true,
+        ),
         ("chain 10", chain_sized(10).build().unwrap(), false),
     ] {
         let (gram, group) = assembled(&model);
