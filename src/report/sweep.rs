@@ -219,6 +219,18 @@ fn sci(v: f64) -> String {
 
 /// The table printed at the end of a sweep.
 pub fn table(s: &Sweep) -> String {
+    let mut out = header(s);
+    for (i, p) in s.points.iter().enumerate() {
+        out.push_str(&row(s, i, p));
+    }
+    out.push('\n');
+    out.push_str(&front_line(s));
+    out.push_str(&recommendation(s));
+    out
+}
+
+/// The title line and the column heads.
+fn header(s: &Sweep) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -256,81 +268,80 @@ pub fn table(s: &Sweep) -> String {
         "track mm",
         "failed",
     );
-    for (i, p) in s.points.iter().enumerate() {
-        let k = &p.knobs;
-        let (tp50, tp99, over) = p.timing.map_or(("–".into(), "–".into(), "–".into()), |t| {
-            (
-                format!("{:.1}", t.p50_ns as f64 / 1e3),
-                format!("{:.1}", t.p99_ns as f64 / 1e3),
-                t.over_period.to_string(),
-            )
-        });
-        let load = if p.load().is_finite() {
-            format!("{:.1}%", 100.0 * p.load())
-        } else {
-            "–".into()
-        };
-        let (viol, fmax, frms, track, failed) = match &p.accuracy {
-            Ok(a) => (
-                sci(a.violation_m.max),
-                sci(a.force_error_n.max),
-                sci(a.force_error_n.rms),
-                if a.tracking_m.rms.is_finite() {
-                    format!("{:.2}", a.tracking_m.rms * 1e3)
-                } else {
-                    "–".into()
-                },
-                a.failed_ticks.to_string(),
-            ),
-            Err(_) => ("–".into(), "–".into(), "–".into(), "–".into(), "–".into()),
-        };
-        let mark = match (p.pareto, s.recommended == Some(i)) {
-            (_, true) => "* ◀ recommended",
-            (true, false) => "*",
-            (false, false) => " ",
-        };
-        let verdict = match (&p.accuracy, p.verdict) {
-            (Err(e), _) => format!("not run: {e}"),
-            (_, Verdict::Recommendable) => String::new(),
-            (_, v) => v.as_str().to_string(),
-        };
-        let _ = writeln!(
-            out,
-            "  {i:>3} {:<16} {:>3} {:>7} {:>6} {:>5} {tp50:>8} {tp99:>8} {load:>6} {over:>5} {viol:>9} {fmax:>9} {frms:>9} {track:>8} {failed:>6}  {mark} {verdict}",
-            rule_label(k),
-            k.iterations,
-            format!("{}", k.gain),
-            k.rate_hz,
-            format!("{}", k.velocity_filter_ms),
-        );
-    }
-    let _ = writeln!(out);
+    out
+}
+
+/// One point's row: a point not timed or not run shows "–", never 0.
+fn row(s: &Sweep, i: usize, p: &Point) -> String {
+    let k = &p.knobs;
+    let (tp50, tp99, over) = p.timing.map_or(("–".into(), "–".into(), "–".into()), |t| {
+        (
+            format!("{:.1}", t.p50_ns as f64 / 1e3),
+            format!("{:.1}", t.p99_ns as f64 / 1e3),
+            t.over_period.to_string(),
+        )
+    });
+    let load = if p.load().is_finite() {
+        format!("{:.1}%", 100.0 * p.load())
+    } else {
+        "–".into()
+    };
+    let (viol, fmax, frms, track, failed) = match &p.accuracy {
+        Ok(a) => (
+            sci(a.violation_m.max),
+            sci(a.force_error_n.max),
+            sci(a.force_error_n.rms),
+            if a.tracking_m.rms.is_finite() {
+                format!("{:.2}", a.tracking_m.rms * 1e3)
+            } else {
+                "–".into()
+            },
+            a.failed_ticks.to_string(),
+        ),
+        Err(_) => ("–".into(), "–".into(), "–".into(), "–".into(), "–".into()),
+    };
+    let mark = match (p.pareto, s.recommended == Some(i)) {
+        (_, true) => "* ◀ recommended",
+        (true, false) => "*",
+        (false, false) => " ",
+    };
+    let verdict = match (&p.accuracy, p.verdict) {
+        (Err(e), _) => format!("not run: {e}"),
+        (_, Verdict::Recommendable) => String::new(),
+        (_, v) => v.as_str().to_string(),
+    };
+    format!(
+        "  {i:>3} {:<16} {:>3} {:>7} {:>6} {:>5} {tp50:>8} {tp99:>8} {load:>6} {over:>5} {viol:>9} {fmax:>9} {frms:>9} {track:>8} {failed:>6}  {mark} {verdict}\n",
+        rule_label(k),
+        k.iterations,
+        format!("{}", k.gain),
+        k.rate_hz,
+        format!("{}", k.velocity_filter_ms),
+    )
+}
+
+/// What the front is drawn against, and why when it is not the force error.
+fn front_line(s: &Sweep) -> String {
     match s.axis {
-        Axis::None => {
-            let _ = writeln!(
-                out,
-                "no Pareto front: neither the force error, a violation nor a penetration is measured in this scene"
-            );
-        }
+        Axis::None => "no Pareto front: neither the force error, a violation nor a penetration is measured in this scene\n".to_string(),
         a => {
-            let _ = writeln!(
-                out,
-                "front (*): CPU load (tick p50 × rate) against {}{}",
-                a.as_str(),
-                if matches!(a, Axis::Violation | Axis::Penetration) {
-                    let why = s
-                        .points
-                        .iter()
-                        .find_map(|p| p.accuracy.as_ref().ok()?.reference_missing.clone())
-                        .unwrap_or_default();
-                    format!(" (force error not measured: {why})")
-                } else {
-                    String::new()
-                }
-            );
+            let why = if matches!(a, Axis::Violation | Axis::Penetration) {
+                let why = s
+                    .points
+                    .iter()
+                    .find_map(|p| p.accuracy.as_ref().ok()?.reference_missing.clone())
+                    .unwrap_or_default();
+                format!(" (force error not measured: {why})")
+            } else {
+                String::new()
+            };
+            format!("front (*): CPU load (tick p50 × rate) against {}{why}\n", a.as_str())
         }
     }
-    // Only the criteria a figure was measured for are named.
+}
+
+/// The criteria a recommended point meets, naming only what was measured.
+fn criteria(s: &Sweep) -> String {
     let measured = |f: fn(&crate::sweep::Accuracy) -> f64| {
         s.points
             .iter()
@@ -357,10 +368,16 @@ pub fn table(s: &Sweep) -> String {
     } else {
         String::new()
     };
-    let crit = format!(
+    format!(
         "no failed tick, {violation}{force}{penetration}p99 tick within half the period, coupling passive \
          at the rate for a relaxed grip"
-    );
+    )
+}
+
+/// The recommended point, or why each point misses.
+fn recommendation(s: &Sweep) -> String {
+    let crit = criteria(s);
+    let mut out = String::new();
     match s.recommended {
         Some(i) => {
             let p = &s.points[i];

@@ -117,23 +117,7 @@ impl ModelBuilder {
                 field: "gravity",
             });
         }
-        let tips = self
-            .fingers
-            .iter()
-            .filter_map(|f| f.tip.map(|t| tip_body(f, &t)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let bodies = self
-            .bodies
-            .iter()
-            .chain(&tips)
-            .enumerate()
-            .map(|(i, s)| body(i, s))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut bodies = bodies;
-        let first_tip = self.bodies.len();
-        for b in &mut bodies[first_tip..] {
-            b.fingertip = true;
-        }
+        let bodies = self.compile_bodies()?;
         let mut by_name = HashMap::new();
         for (i, b) in bodies.iter().enumerate() {
             if by_name.insert(b.name.as_str(), BodyId(i as u32)).is_some() {
@@ -151,6 +135,78 @@ impl ModelBuilder {
         let mut frames: Vec<BodyFrame> = bodies.iter().map(initial_frame).collect();
         frames.push(BodyFrame::IDENTITY);
         let mut cx = Compiler::new(&bodies, &by_name, &frames, &body_cols, col);
+        let origin_cols = self.design_columns(&bodies, &mut cx);
+
+        let mut out = Assembler::default();
+        let joints = self.compile_joints(&mut cx, &mut out)?;
+        self.compile_gears(&cx, &origin_cols, &mut out)?;
+        let fingers = if with_fingers {
+            self.compile_fingers(&mut cx, &mut out)?
+        } else {
+            Vec::new()
+        };
+        let fin = cx.finish()?;
+        push_norms(&bodies, &body_cols, &mut out);
+        let (rolling, equality_rows) =
+            push_tail_rows(joints.rolls, joints.limits, &fin.design_vars, &mut out);
+        let q0 = initial_q(&bodies, &fin.q0_tail, fin.len);
+        Ok(Model {
+            id: next_model_id(),
+            bodies,
+            fingers,
+            layout: Layout {
+                body_cols,
+                origin_cols,
+                design_vars: fin.design_vars,
+                body_coords: col,
+                aux: fin.aux,
+                len: fin.len,
+            },
+            geometry: out.geometry,
+            constraints: out.infos,
+            rows: out.rows,
+            q0,
+            gravity: Vector3::from(self.gravity),
+            equality_rows,
+            characteristic_length: fin.lever,
+            contact: super::ContactLayout::default(),
+            semantic: super::SemanticLayout::default(),
+            torque_joints: joints.torque,
+            flexible: fin.flex_bodies,
+            flex_anchors: fin.anchors,
+            surfaces: fin.surfaces,
+            rolling,
+            colliding_joints: (self.joints.iter().enumerate())
+                .filter(|(_, j)| j.collide)
+                .map(|(k, _)| ConstraintId(k as u32))
+                .collect(),
+        })
+    }
+
+    /// The scene's bodies, then one body per finger with a tip (marked as
+    /// fingertips).
+    fn compile_bodies(&self) -> Result<Vec<Body>, BuildError> {
+        let tips = self
+            .fingers
+            .iter()
+            .filter_map(|f| f.tip.map(|t| tip_body(f, &t)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut bodies = self
+            .bodies
+            .iter()
+            .chain(&tips)
+            .enumerate()
+            .map(|(i, s)| body(i, s))
+            .collect::<Result<Vec<_>, _>>()?;
+        for b in &mut bodies[self.bodies.len()..] {
+            b.fingertip = true;
+        }
+        Ok(bodies)
+    }
+
+    /// Registers flexible bodies and the free positions of fixed bodies (the
+    /// first design columns); returns each body's origin column.
+    fn design_columns(&self, bodies: &[Body], cx: &mut Compiler) -> Vec<Option<usize>> {
         for (i, s) in self.bodies.iter().enumerate() {
             if let Some(beam) = s.flexible {
                 let id = BodyId(i as u32);
@@ -158,7 +214,6 @@ impl ModelBuilder {
                 cx.flexible(id, crate::flexible::body::FlexBody::new(id, beam));
             }
         }
-        // Free positions of fixed bodies: the first design columns.
         let mut origin_cols = vec![None; bodies.len()];
         for (i, s) in self.bodies.iter().enumerate() {
             if s.free.contains(&DesignParam::Position) {
@@ -168,21 +223,29 @@ impl ModelBuilder {
                     Some(cx.free(owner, &s.name, DesignParam::Position, &s.position_m, bounds));
             }
         }
+        origin_cols
+    }
 
-        let mut out = Assembler::default();
-        let mut limits = Vec::new();
-        let mut rolls = Vec::new();
+    /// The joints' rows, in scene order; their limits and rolling rows come
+    /// back to be appended after the equalities.
+    fn compile_joints(
+        &self,
+        cx: &mut Compiler,
+        out: &mut Assembler,
+    ) -> Result<CompiledJoints, BuildError> {
+        let mut joints = CompiledJoints::default();
         let mut joint_names = HashMap::new();
-        let mut torque_joints = Vec::new();
         for (k, spec) in self.joints.iter().enumerate() {
-            let (info, geometry, limit, roll) = compile_joint(k, spec, &mut cx)?;
-            rolls.extend(roll);
+            let (info, geometry, limit, roll) = compile_joint(k, spec, cx)?;
+            joints.rolls.extend(roll);
             if spec.name.is_some() && joint_names.insert(info.name.clone(), ()).is_some() {
                 return Err(BuildError::DuplicateName {
                     owner: Owner::Joint(info.name),
                 });
             }
-            limits.extend(limit.map(|(info, g)| (info, g, ConstraintId(k as u32))));
+            joints
+                .limits
+                .extend(limit.map(|(info, g)| (info, g, ConstraintId(k as u32))));
             if spec.report_torque {
                 if !matches!(
                     info.kind,
@@ -193,14 +256,24 @@ impl ModelBuilder {
                         kind: spec.kind,
                     });
                 }
-                torque_joints.push(ConstraintId(k as u32));
+                joints.torque.push(ConstraintId(k as u32));
             }
             out.push(info, geometry);
         }
+        Ok(joints)
+    }
+
+    /// The gears' rows, after the joints they couple.
+    fn compile_gears(
+        &self,
+        cx: &Compiler,
+        origin_cols: &[Option<usize>],
+        out: &mut Assembler,
+    ) -> Result<(), BuildError> {
         let n_joints = self.joints.len();
         for spec in &self.gears {
             let (info, geometry) =
-                super::gears::compile_gear(spec, &out, n_joints, &cx, &origin_cols)?;
+                super::gears::compile_gear(spec, out, n_joints, cx, origin_cols)?;
             if out.infos[..n_joints].iter().any(|j| j.name == info.name)
                 || out.infos[n_joints..].iter().any(|g| g.name == info.name)
             {
@@ -210,100 +283,101 @@ impl ModelBuilder {
             }
             out.push(info, geometry);
         }
+        Ok(())
+    }
+
+    /// The fingers' rows.
+    fn compile_fingers(
+        &self,
+        cx: &mut Compiler,
+        out: &mut Assembler,
+    ) -> Result<Vec<super::Finger>, BuildError> {
         let mut fingers = Vec::with_capacity(self.fingers.len());
-        let finger_specs = if with_fingers { &self.fingers[..] } else { &[] };
-        for (k, spec) in finger_specs.iter().enumerate() {
+        for (k, spec) in self.fingers.iter().enumerate() {
             if fingers.iter().any(|f: &super::Finger| f.name == spec.name) {
                 return Err(BuildError::DuplicateName {
                     owner: Owner::Finger(spec.name.clone()),
                 });
             }
             let constraint = ConstraintId(out.infos.len() as u32);
-            let (finger, info, geometry) = compile_finger(k, spec, constraint, &mut cx)?;
+            let (finger, info, geometry) = compile_finger(k, spec, constraint, cx)?;
             fingers.push(finger);
             out.push(info, geometry);
         }
-        let fin = cx.finish()?;
-        let (design_vars, len, characteristic_length) = (fin.design_vars, fin.len, fin.lever);
-        for (i, b) in bodies.iter().enumerate() {
-            if let Some(col) = body_cols[i] {
-                let info = ConstraintInfo {
-                    name: format!("{}.norm", b.name),
-                    kind: ConstraintKind::QuaternionNorm,
-                    rows: 0..0,
-                    bodies: [Some(BodyId(i as u32)), None],
-                    finger: None,
-                    limits: None,
-                };
-                out.push(info, Geometry::QuatNorm(QuatNorm { col }));
-            }
-        }
-        // Rolling joints' no-slip rows (equalities; anchors per tick).
-        let mut rolling = Vec::with_capacity(rolls.len());
-        for (slot, (info, mut g)) in rolls.into_iter().enumerate() {
-            if let Geometry::Rolling(r) = &mut g {
-                r.slot = slot as u32;
-            }
-            rolling.push(out.infos.len());
-            out.push(info, g);
-        }
-        // Pinned design components (equalities), then the joint limits and
-        // the design bounds (inequalities).
-        let bounds = design_bounds(&design_vars);
-        for (info, g) in bounds.iter().filter(|(_, g)| g.lo == g.hi) {
-            out.push(info.clone(), Geometry::Bound(*g));
-        }
-        let equality_rows = out.rows.len();
-        for (mut info, geometry, joint) in limits {
-            info.limits = Some(joint);
-            out.push(info, geometry);
-        }
-        for (info, g) in bounds.iter().filter(|(_, g)| g.lo != g.hi) {
-            out.push(info.clone(), Geometry::Bound(*g));
-        }
-
-        let mut q0 = Vec::with_capacity(len);
-        for b in bodies.iter().filter(|b| !b.fixed) {
-            let o = b.orientation.quaternion();
-            q0.extend_from_slice(b.position_m.as_slice());
-            q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
-        }
-        q0.extend_from_slice(&fin.q0_tail);
-        q0.resize(len, 0.0); // undeformed flexible bodies
-        let body_coords = col;
-        let model = Model {
-            id: next_model_id(),
-            bodies,
-            fingers,
-            layout: Layout {
-                body_cols,
-                origin_cols,
-                design_vars,
-                body_coords,
-                aux: fin.aux,
-                len,
-            },
-            geometry: out.geometry,
-            constraints: out.infos,
-            rows: out.rows,
-            q0,
-            gravity: Vector3::from(self.gravity),
-            equality_rows,
-            characteristic_length,
-            contact: super::ContactLayout::default(),
-            semantic: super::SemanticLayout::default(),
-            torque_joints,
-            flexible: fin.flex_bodies,
-            flex_anchors: fin.anchors,
-            surfaces: fin.surfaces,
-            rolling,
-            colliding_joints: (self.joints.iter().enumerate())
-                .filter(|(_, j)| j.collide)
-                .map(|(k, _)| ConstraintId(k as u32))
-                .collect(),
-        };
-        Ok(model)
+        Ok(fingers)
     }
+}
+
+/// What compiling the joints leaves for later: limit rows (with their
+/// joint), rolling rows, the joints whose torque is reported.
+#[derive(Default)]
+struct CompiledJoints {
+    limits: Vec<(ConstraintInfo, Geometry, ConstraintId)>,
+    rolls: Vec<(ConstraintInfo, Geometry)>,
+    torque: Vec<ConstraintId>,
+}
+
+/// One quaternion-norm row per free body.
+fn push_norms(bodies: &[Body], body_cols: &[Option<usize>], out: &mut Assembler) {
+    for (i, b) in bodies.iter().enumerate() {
+        if let Some(col) = body_cols[i] {
+            let info = ConstraintInfo {
+                name: format!("{}.norm", b.name),
+                kind: ConstraintKind::QuaternionNorm,
+                rows: 0..0,
+                bodies: [Some(BodyId(i as u32)), None],
+                finger: None,
+                limits: None,
+            };
+            out.push(info, Geometry::QuatNorm(QuatNorm { col }));
+        }
+    }
+}
+
+/// Rolling joints' no-slip rows and pinned design components (equalities),
+/// then the joint limits and the design bounds (inequalities). Returns the
+/// rolling constraints' indices and the number of equality rows.
+fn push_tail_rows(
+    rolls: Vec<(ConstraintInfo, Geometry)>,
+    limits: Vec<(ConstraintInfo, Geometry, ConstraintId)>,
+    design_vars: &[DesignVar],
+    out: &mut Assembler,
+) -> (Vec<usize>, usize) {
+    let mut rolling = Vec::with_capacity(rolls.len());
+    for (slot, (info, mut g)) in rolls.into_iter().enumerate() {
+        if let Geometry::Rolling(r) = &mut g {
+            r.slot = slot as u32;
+        }
+        rolling.push(out.infos.len());
+        out.push(info, g);
+    }
+    let bounds = design_bounds(design_vars);
+    for (info, g) in bounds.iter().filter(|(_, g)| g.lo == g.hi) {
+        out.push(info.clone(), Geometry::Bound(*g));
+    }
+    let equality_rows = out.rows.len();
+    for (mut info, geometry, joint) in limits {
+        info.limits = Some(joint);
+        out.push(info, geometry);
+    }
+    for (info, g) in bounds.iter().filter(|(_, g)| g.lo != g.hi) {
+        out.push(info.clone(), Geometry::Bound(*g));
+    }
+    (rolling, equality_rows)
+}
+
+/// q at the scene's poses: each free body's position and quaternion, then
+/// the design and auxiliary tail (undeformed flexible bodies at 0).
+fn initial_q(bodies: &[Body], tail: &[f64], len: usize) -> Vec<f64> {
+    let mut q0 = Vec::with_capacity(len);
+    for b in bodies.iter().filter(|b| !b.fixed) {
+        let o = b.orientation.quaternion();
+        q0.extend_from_slice(b.position_m.as_slice());
+        q0.extend_from_slice(&[o.w, o.i, o.j, o.k]);
+    }
+    q0.extend_from_slice(tail);
+    q0.resize(len, 0.0);
+    q0
 }
 
 /// Appends constraints, assigning their row ranges and row metadata.
