@@ -9,6 +9,8 @@ use crate::model::initial_frame;
 use crate::rotation::BodyFrame;
 use crate::{BodyId, FingerId, Model};
 
+mod partial;
+
 /// Where a finger should be this tick (world frame). Not a coordinate: changing
 /// it never rebuilds anything.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -24,6 +24,8 @@ use nalgebra::DMatrix;
 use crate::Model;
 use crate::constraint::block::SLOTS;
 
+mod masked;
+
 /// A vector passed to a product has the wrong length.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[error("vector of length {got} where {expected} was needed")]

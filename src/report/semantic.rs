@@ -63,9 +63,21 @@ pub struct Semantic {
     /// See `adds`.
     #[serde(default)]
     pub removes: u64,
-    /// See `adds`.
+    /// See `adds`. Such an add is tried again every 50 ms until it fits
+    /// (`adds_late`) or its remove comes.
     #[serde(default)]
     pub add_failures: u64,
+    /// Adds that found no place at their time and were placed later, and the
+    /// longest wait, s (null: none).
+    #[serde(default)]
+    pub adds_late: u64,
+    /// See `adds_late`.
+    #[serde(with = "super::figure")]
+    pub add_wait_max_s: f64,
+    /// Adds still waiting for a valid place at the end: those bodies never
+    /// entered the scene.
+    #[serde(default)]
+    pub adds_waiting_at_end: usize,
     /// Shaped objects in the scene at the end.
     #[serde(default)]
     pub objects_at_end: usize,
@@ -113,6 +125,9 @@ impl From<&SemanticReport> for Semantic {
             adds: r.adds,
             removes: r.removes,
             add_failures: r.add_failures,
+            adds_late: r.adds_late,
+            add_wait_max_s: r.add_wait_max_s,
+            adds_waiting_at_end: r.adds_waiting_at_end,
             objects_at_end: r.present_at_end,
             constraints_at_end: r.constraints_at_end,
             mode_at_end: r.mode_at_end.to_owned(),
@@ -170,7 +185,10 @@ pub fn lines(out: &mut String, s: &Semantic) {
             "let_go" => format!("{} lets go of {}", e.offer_body, e.binding_body),
             "add" if e.offer_body.is_empty() => format!("{} added", e.binding_body),
             "add" => format!("{} added onto {}", e.binding_body, e.offer_body),
-            "add_failed" => format!("{} not added: no valid place", e.binding_body),
+            "add_failed" => format!(
+                "{} not added: no valid place yet (tried again every 50 ms)",
+                e.binding_body
+            ),
             "remove" => format!("{} removed", e.binding_body),
             "mode" => format!("{} mode", e.offer_body),
             other => format!("{other} {} {}", e.binding_body, e.offer_body),
@@ -186,12 +204,20 @@ pub fn lines(out: &mut String, s: &Semantic) {
         );
     }
     if s.adds + s.removes + s.add_failures > 0 || s.mode_at_end == "unconstrained" {
+        let late = if s.adds_late > 0 {
+            format!(
+                " ({} of them late: no valid place at first, added after up to {:.2} s)",
+                s.adds_late, s.add_wait_max_s
+            )
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             out,
-            "objects: {} added, {} removed, {} not added; {} in the scene and {} constraints at the end; {} mode",
+            "objects: {} added{late}, {} removed, {} never added (still no valid place at the end); {} in the scene and {} constraints at the end; {} mode",
             s.adds,
             s.removes,
-            s.add_failures,
+            s.adds_waiting_at_end,
             s.objects_at_end,
             s.constraints_at_end,
             s.mode_at_end

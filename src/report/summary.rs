@@ -591,12 +591,6 @@ impl Summary {
                 (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt(),
             )
         };
-        let measured = s.solved_ticks();
-        let (v_max, v_rad) = if measured == 0 || o.joint_rows == 0 {
-            (f64::NAN, f64::NAN)
-        } else {
-            (s.violation_max_m, s.violation_max_rad)
-        };
         Summary {
             scene: o.plan.scene.clone(),
             seconds: o.plan.seconds,
@@ -624,26 +618,7 @@ impl Summary {
             } else {
                 "real time: every timing figure is measured on the monotonic clock".into()
             },
-            violation: Violation {
-                max: v_max,
-                rms: if o.joint_rows == 0 {
-                    f64::NAN
-                } else {
-                    s.violation_rms_m()
-                },
-                max_rad: v_rad,
-                tolerance: o.plan.violation_tolerance_m,
-                rows: o.joint_rows,
-                ticks_measured: measured,
-                ticks_failed: s.solver_failures,
-                verdict: Violation::verdict(
-                    v_max,
-                    o.plan.violation_tolerance_m,
-                    measured,
-                    s.solver_failures,
-                    o.joint_rows,
-                ),
-            },
+            violation: Violation::of(o),
             tracking_m: MaxRms {
                 max: tracking_max,
                 rms: tracking_rms,
@@ -662,35 +637,8 @@ impl Summary {
                 })
                 .collect(),
             faults: s.faults,
-            stalls: Stalls {
-                ticks_after_gap: s.stalls.ticks_after_gap,
-                longest_gap_periods: s.stalls.longest_gap_periods,
-                max_simulated_periods: crate::session::MAX_SIMULATED_PERIODS,
-                periods_dropped: s.stalls.periods_dropped,
-                world_behind_s: s.stalls.periods_dropped as f64 / f64::from(o.plan.rate_hz),
-                catch_up_ticks: s.stalls.catch_up_ticks,
-                max_target_lag_m: s.stalls.max_target_lag_m,
-            },
-            safety: Safety {
-                force_cuts: s.force_cuts,
-                miss_streaks: s.miss_streaks,
-                solver_failures: s.solver_failures,
-                failure_kinds: crate::session::FailureKind::ALL
-                    .iter()
-                    .zip(&s.failure_kinds)
-                    .filter(|(_, n)| **n > 0)
-                    .map(|(k, n)| (k.as_str().to_string(), *n))
-                    .collect(),
-                device_events: o
-                    .device_events
-                    .iter()
-                    .map(|(d, e, c)| DeviceEvent {
-                        device: d.clone(),
-                        event: e.clone(),
-                        count: *c,
-                    })
-                    .collect(),
-            },
+            stalls: Stalls::of(o),
+            safety: Safety::of(o),
             assembly: o.assembly.map(|a| Assembly {
                 iterations: a.iterations,
                 residual_m: a.residual_length_m,
@@ -706,62 +654,7 @@ impl Summary {
             },
             reference: Reference::of(o),
             programs_swapped: s.programs_swapped,
-            contact: o.slow.contact.map(|c| {
-                let f = &s.contact;
-                let mean = |sum: u64, n: u64| {
-                    if n == 0 {
-                        f64::NAN
-                    } else {
-                        sum as f64 / n as f64
-                    }
-                };
-                let max_pen = c.max_penetration_m.max(f.max_penetration_m);
-                let tol = o.plan.contact.penetration_tolerance_m;
-                let failed = s.solver_failures;
-                let within = max_pen <= tol;
-                Contact {
-                    max_penetration_m: max_pen,
-                    tolerance_m: tol,
-                    verdict: match (measured, failed, within) {
-                        (0, _, _) => "not measured: no tick succeeded".into(),
-                        (_, 0, true) => "kept".into(),
-                        (_, 0, false) => "EXCEEDED".into(),
-                        (_, f, w) => format!(
-                            "FAILED TICKS: {f} ticks failed and are not covered; over the {measured} that succeeded: {}",
-                            if w { "within the tolerance" } else { "EXCEEDED" }
-                        ),
-                    },
-                    max_penetration_exact_m: c.max_penetration_m,
-                    max_penetration_rows_m: f.max_penetration_m,
-                    max_active: f.max_active,
-                    witness_changes: c.witness_changes,
-                    backups: c.backups,
-                    expansions: c.expansions,
-                    structure_changes: c.structure_changes,
-                    witness_tables: c.frames,
-                    max_tracked_pairs: c.max_tracked,
-                    activations: f.activations,
-                    activation_limit_ticks: f.activation_limit_ticks,
-                    max_sticking: f.max_sticking,
-                    updates: f.updates,
-                    latency_ticks_mean: mean(f.latency_sum_ticks, f.updates),
-                    latency_ticks_max: f.latency_max_ticks,
-                    cycle_us_mean: mean(c.cycle_ns_sum, c.cycles) / 1e3,
-                    cycle_us_max: c.cycle_ns_max as f64 / 1e3,
-                    build_us_mean: mean(c.build_ns_sum, c.structure_changes - c.reused) / 1e3,
-                    build_us_max: c.build_ns_max as f64 / 1e3,
-                    reused: c.reused,
-                    reuse_us_mean: mean(c.reuse_ns_sum, c.reused) / 1e3,
-                    reuse_us_max: if c.reused == 0 {
-                        f64::NAN
-                    } else {
-                        c.reuse_ns_max as f64 / 1e3
-                    },
-                    speed_limit_m_per_s: o.plan.solver.contact_step_m * f64::from(o.plan.rate_hz),
-                    speed_limited_ticks: f.speed_limited_ticks,
-                    speed_limit_lag_max_m: f.speed_limit_lag_max_m,
-                }
-            }),
+            contact: Contact::of(o),
             semantic: o.semantic.as_ref().map(Into::into),
             energy: super::energy::Energy::of(o),
             virtual_devices: o.virtual_devices.clone(),
@@ -800,5 +693,141 @@ impl Summary {
                 .map(|(n, r)| (n.clone(), (*r).into()))
                 .collect(),
         }
+    }
+}
+
+impl Violation {
+    fn of(o: &SessionOutcome) -> Violation {
+        let s = &o.stats;
+        let measured = s.solved_ticks();
+        let (v_max, v_rad) = if measured == 0 || o.joint_rows == 0 {
+            (f64::NAN, f64::NAN)
+        } else {
+            (s.violation_max_m, s.violation_max_rad)
+        };
+        Violation {
+            max: v_max,
+            rms: if o.joint_rows == 0 {
+                f64::NAN
+            } else {
+                s.violation_rms_m()
+            },
+            max_rad: v_rad,
+            tolerance: o.plan.violation_tolerance_m,
+            rows: o.joint_rows,
+            ticks_measured: measured,
+            ticks_failed: s.solver_failures,
+            verdict: Violation::verdict(
+                v_max,
+                o.plan.violation_tolerance_m,
+                measured,
+                s.solver_failures,
+                o.joint_rows,
+            ),
+        }
+    }
+}
+
+impl Stalls {
+    fn of(o: &SessionOutcome) -> Stalls {
+        let s = &o.stats;
+        Stalls {
+            ticks_after_gap: s.stalls.ticks_after_gap,
+            longest_gap_periods: s.stalls.longest_gap_periods,
+            max_simulated_periods: crate::session::MAX_SIMULATED_PERIODS,
+            periods_dropped: s.stalls.periods_dropped,
+            world_behind_s: s.stalls.periods_dropped as f64 / f64::from(o.plan.rate_hz),
+            catch_up_ticks: s.stalls.catch_up_ticks,
+            max_target_lag_m: s.stalls.max_target_lag_m,
+        }
+    }
+}
+
+impl Safety {
+    fn of(o: &SessionOutcome) -> Safety {
+        let s = &o.stats;
+        Safety {
+            force_cuts: s.force_cuts,
+            miss_streaks: s.miss_streaks,
+            solver_failures: s.solver_failures,
+            failure_kinds: crate::session::FailureKind::ALL
+                .iter()
+                .zip(&s.failure_kinds)
+                .filter(|(_, n)| **n > 0)
+                .map(|(k, n)| (k.as_str().to_string(), *n))
+                .collect(),
+            device_events: o
+                .device_events
+                .iter()
+                .map(|(d, e, c)| DeviceEvent {
+                    device: d.clone(),
+                    event: e.clone(),
+                    count: *c,
+                })
+                .collect(),
+        }
+    }
+}
+
+impl Contact {
+    fn of(o: &SessionOutcome) -> Option<Contact> {
+        let s = &o.stats;
+        let measured = s.solved_ticks();
+        o.slow.contact.map(|c| {
+            let f = &s.contact;
+            let mean = |sum: u64, n: u64| {
+                if n == 0 {
+                    f64::NAN
+                } else {
+                    sum as f64 / n as f64
+                }
+            };
+            let max_pen = c.max_penetration_m.max(f.max_penetration_m);
+            let tol = o.plan.contact.penetration_tolerance_m;
+            let failed = s.solver_failures;
+            let within = max_pen <= tol;
+            Contact {
+                max_penetration_m: max_pen,
+                tolerance_m: tol,
+                verdict: match (measured, failed, within) {
+                    (0, _, _) => "not measured: no tick succeeded".into(),
+                    (_, 0, true) => "kept".into(),
+                    (_, 0, false) => "EXCEEDED".into(),
+                    (_, f, w) => format!(
+                        "FAILED TICKS: {f} ticks failed and are not covered; over the {measured} that succeeded: {}",
+                        if w { "within the tolerance" } else { "EXCEEDED" }
+                    ),
+                },
+                max_penetration_exact_m: c.max_penetration_m,
+                max_penetration_rows_m: f.max_penetration_m,
+                max_active: f.max_active,
+                witness_changes: c.witness_changes,
+                backups: c.backups,
+                expansions: c.expansions,
+                structure_changes: c.structure_changes,
+                witness_tables: c.frames,
+                max_tracked_pairs: c.max_tracked,
+                activations: f.activations,
+                activation_limit_ticks: f.activation_limit_ticks,
+                max_sticking: f.max_sticking,
+                updates: f.updates,
+                latency_ticks_mean: mean(f.latency_sum_ticks, f.updates),
+                latency_ticks_max: f.latency_max_ticks,
+                cycle_us_mean: mean(c.cycle_ns_sum, c.cycles) / 1e3,
+                cycle_us_max: c.cycle_ns_max as f64 / 1e3,
+                build_us_mean: mean(c.build_ns_sum, c.structure_changes - c.reused) / 1e3,
+                build_us_max: c.build_ns_max as f64 / 1e3,
+                reused: c.reused,
+                reuse_us_mean: mean(c.reuse_ns_sum, c.reused) / 1e3,
+                reuse_us_max: if c.reused == 0 {
+                    f64::NAN
+                } else {
+                    c.reuse_ns_max as f64 / 1e3
+                },
+                speed_limit_m_per_s: o.plan.solver.contact_step_m * f64::from(o.plan.rate_hz),
+                speed_limited_ticks: f.speed_limited_ticks,
+                speed_limit_lag_max_m: f.speed_limit_lag_max_m,
+            }
+        })
     }
 }

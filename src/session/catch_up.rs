@@ -9,8 +9,10 @@
 //! Instead, the target the program sees moves per simulated period at most
 //! the hand's own motion plus a catch-up of the hand's mean speed over the
 //! gap, so the world sees the hand at most twice as fast as it moved and the
-//! lag closes within about as many ticks as the gap had periods. Without a
-//! gap the targets pass unchanged (bit for bit).
+//! lag closes within about as many ticks as the gap had periods. The
+//! orientation (a rigid grasp's) is caught up the same way, by angle,
+//! independently of the position. Without a gap the targets pass unchanged
+//! (bit for bit).
 
 use haptloop_solver::FingerTarget;
 
@@ -23,6 +25,8 @@ pub(super) struct TargetCatchUp {
     raw_prev: Vec<FingerTarget>,
     /// Catch-up per simulated period, m (0: not lagging).
     catch_up_m: Vec<f64>,
+    /// The same for the orientation, rad.
+    catch_up_rad: Vec<f64>,
     started: bool,
 }
 
@@ -34,6 +38,7 @@ impl TargetCatchUp {
             shown: vec![zero; fingers],
             raw_prev: vec![zero; fingers],
             catch_up_m: vec![0.0; fingers],
+            catch_up_rad: vec![0.0; fingers],
             started: false,
         }
     }
@@ -56,31 +61,66 @@ impl TargetCatchUp {
         let simulated = simulated.max(1) as f64;
         let mut lag_max: f64 = 0.0;
         for (i, t) in targets.iter_mut().enumerate() {
-            let raw = *t;
-            let per_period = (raw.position_m - self.raw_prev[i].position_m).norm() / gap;
-            if gap > simulated {
-                self.catch_up_m[i] = self.catch_up_m[i].max(per_period);
-            }
+            let (raw, prev) = (*t, self.raw_prev[i]);
             self.raw_prev[i] = raw;
-            let allowed = (per_period + self.catch_up_m[i]) * simulated;
-            let d = raw.position_m - self.shown[i].position_m;
-            let dist = d.norm();
-            if dist <= allowed || !dist.is_finite() {
-                self.shown[i] = raw;
-                self.catch_up_m[i] = 0.0;
-                continue;
-            }
-            let f = allowed / dist;
-            let s = &mut self.shown[i];
-            s.position_m += d * f;
-            s.orientation = s
-                .orientation
-                .try_slerp(&raw.orientation, f, 1e-9)
-                .unwrap_or(raw.orientation);
-            lag_max = lag_max.max(dist - allowed);
-            *t = *s;
+            let lag = self.position(i, &raw, &prev, gap, simulated);
+            self.orientation(i, &raw, &prev, gap, simulated);
+            lag_max = lag_max.max(lag);
+            *t = self.shown[i];
         }
         lag_max
+    }
+
+    /// Moves finger `i`'s shown position towards the device's; returns the
+    /// distance left, m.
+    fn position(
+        &mut self,
+        i: usize,
+        raw: &FingerTarget,
+        prev: &FingerTarget,
+        gap: f64,
+        simulated: f64,
+    ) -> f64 {
+        let per_period = (raw.position_m - prev.position_m).norm() / gap;
+        if gap > simulated {
+            self.catch_up_m[i] = self.catch_up_m[i].max(per_period);
+        }
+        let allowed = (per_period + self.catch_up_m[i]) * simulated;
+        let d = raw.position_m - self.shown[i].position_m;
+        let dist = d.norm();
+        if dist <= allowed || !dist.is_finite() {
+            self.shown[i].position_m = raw.position_m;
+            self.catch_up_m[i] = 0.0;
+            return 0.0;
+        }
+        self.shown[i].position_m += d * (allowed / dist);
+        dist - allowed
+    }
+
+    /// The same for the orientation, by angle.
+    fn orientation(
+        &mut self,
+        i: usize,
+        raw: &FingerTarget,
+        prev: &FingerTarget,
+        gap: f64,
+        simulated: f64,
+    ) {
+        let per_period = prev.orientation.angle_to(&raw.orientation) / gap;
+        if gap > simulated {
+            self.catch_up_rad[i] = self.catch_up_rad[i].max(per_period);
+        }
+        let allowed = (per_period + self.catch_up_rad[i]) * simulated;
+        let shown = &mut self.shown[i].orientation;
+        let angle = shown.angle_to(&raw.orientation);
+        if angle <= allowed || !angle.is_finite() {
+            *shown = raw.orientation;
+            self.catch_up_rad[i] = 0.0;
+            return;
+        }
+        *shown = shown
+            .try_slerp(&raw.orientation, allowed / angle, 1e-9)
+            .unwrap_or(raw.orientation);
     }
 }
 
@@ -125,5 +165,48 @@ mod tests {
             ticks += 1;
         }
         assert_eq!(ticks, 8, "8 mm of lag closes at 1 mm a tick");
+    }
+
+    /// A hand turning 0.01 rad a period about z with its position still,
+    /// a 10-period gap: the orientation is caught up at twice the hand's
+    /// angular speed (0.02 rad a tick), never past the device's, and the
+    /// position stays where it is.
+    #[test]
+    fn an_orientation_is_caught_up_at_twice_the_hands_angular_speed() {
+        let turn = |a: f64| FingerTarget {
+            position_m: Vector3::new(0.1, 0.0, 0.0),
+            orientation: nalgebra::UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a),
+        };
+        let mut c = TargetCatchUp::new(1);
+        let mut a = 0.0;
+        let mut t = [turn(a)];
+        c.apply(&mut t, 1, 1);
+        a += 0.01;
+        t = [turn(a)];
+        c.apply(&mut t, 1, 1);
+        assert_eq!(t[0].orientation, turn(a).orientation, "no gap: unchanged");
+        let mut shown = a;
+        a += 0.10;
+        t = [turn(a)];
+        assert_eq!(c.apply(&mut t, 10, 1), 0.0, "the position does not lag");
+        let angle = |t: &FingerTarget| t.orientation.angle();
+        assert!(
+            (angle(&t[0]) - shown - 0.02).abs() < 1e-12,
+            "{}",
+            angle(&t[0])
+        );
+        shown = angle(&t[0]);
+        let mut ticks = 1;
+        while shown < a - 1e-12 {
+            a += 0.01;
+            t = [turn(a)];
+            c.apply(&mut t, 1, 1);
+            let step = angle(&t[0]) - shown;
+            assert!(step <= 0.02 + 1e-12 && angle(&t[0]) <= a + 1e-12, "{step}");
+            assert_eq!(t[0].position_m, turn(a).position_m);
+            shown = angle(&t[0]);
+            ticks += 1;
+        }
+        assert_eq!(ticks, 9, "0.09 rad of lag closes at 0.01 rad a tick");
     }
 }

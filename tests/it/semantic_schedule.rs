@@ -362,3 +362,151 @@ fn the_cli_sets_the_starting_mode() {
         assert!(err.contains(expected), "{args:?}: {err}");
     }
 }
+
+/// A 4 cm block to be added onto a pad that only it fits, while the
+/// fingertip sits where the block would go: the add at 0.2 s finds no valid
+/// place; `{hand}` either moves the fingertip 6 cm east over 0.4–0.6 s or
+/// keeps it still.
+fn blocked_add_scene(hand: &str) -> String {
+    format!(
+        r#"
+[scene]
+name = "add-blocked"
+description = "an add blocked by the fingertip"
+
+[semantic]
+snap_distance = 0.01
+snap_angle = 0.35
+snap_speed = 0.05
+snap_force = 2.0
+break_force = 3.0
+
+[labels]
+"sits" = ["pad"]
+
+[[device]]
+name = "right"
+model = "phantom-premium-1.5"
+scale = 2.0
+hand = {{ waypoints = [{hand}] }}
+
+[[body]]
+name = "pad"
+fixed = true
+position = [0.0, 0.0, -0.01]
+shape = {{ box = [0.02, 0.02, 0.01] }}
+
+[[body.offer]]
+label = "pad"
+polygon = [[-0.02, -0.02, 0.01], [0.02, -0.02, 0.01], [0.02, 0.02, 0.01], [-0.02, 0.02, 0.01]]
+normal = [0.0, 0.0, 1.0]
+
+[[body]]
+name = "block"
+position = [0.0, 0.0, 0.02]
+shape = {{ box = [0.02, 0.02, 0.02] }}
+mass = 0.05
+inertia = [1e-3, 1e-3, 1e-3]
+
+[[body.binding]]
+label = "sits"
+polygon = [[-0.02, -0.02, -0.02], [-0.02, 0.02, -0.02], [0.02, 0.02, -0.02], [0.02, -0.02, -0.02]]
+normal = [0.0, 0.0, -1.0]
+
+[[finger]]
+name = "index"
+device = "right"
+grasp = "contact"
+position = [0.0, 0.0, 0.03]
+radius = 0.008
+
+[[schedule]]
+at = 0.2
+add = "block"
+"#
+    )
+}
+
+/// Gösele & Stuerzlinger §3.3 put an added object at the nearest valid
+/// place; when there is none (here the fingertip is in the way) the add
+/// waits: it is tried again every 50 ms, lands once the hand has moved away
+/// (on the pad's centre: the only spot it fits), and is reported as late.
+/// With the hand still, it never lands and the report says so.
+#[test]
+fn an_add_the_fingertip_blocks_lands_once_the_hand_moves_away() {
+    let tmp = tempfile::tempdir().unwrap();
+    let moving = "[0.0, 0.0, 0.0, 0.0], [0.4, 0.0, 0.0, 0.0], [0.6, 0.06, 0.0, 0.0]";
+    let still = "[0.0, 0.0, 0.0, 0.0], [0.6, 0.0, 0.0, 0.0]";
+    let mut out = Vec::new();
+    for (name, hand) in [("moving", moving), ("still", still)] {
+        let file = tmp.path().join(format!("{name}.toml"));
+        std::fs::write(&file, blocked_add_scene(hand)).unwrap();
+        let dir = tmp.path().join(name);
+        let s = Command::new(env!("CARGO_BIN_EXE_haptloop"))
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "--deterministic",
+                "--seconds",
+                "1.0",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+        let summary: Summary =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        out.push((summary, dir));
+    }
+    let (moved, moved_dir) = &out[0];
+    let sem = moved.semantic.as_ref().unwrap();
+    assert_eq!(moved.safety.solver_failures, 0);
+    assert_eq!(
+        (
+            sem.adds,
+            sem.add_failures,
+            sem.adds_late,
+            sem.adds_waiting_at_end
+        ),
+        (1, 1, 1, 0)
+    );
+    // The fingertip (8 mm) clears the block's 2 cm half-width at 0.49 s on
+    // its path; the retry after that lands it.
+    let added_at: Vec<f64> = sem
+        .events
+        .iter()
+        .chain(&sem.other_events)
+        .filter(|e| e.kind == "add")
+        .map(|e| e.t_s)
+        .collect();
+    assert_eq!(added_at.len(), 1, "{:?}", sem.events);
+    assert!(
+        (0.49..0.6).contains(&added_at[0])
+            && (sem.add_wait_max_s - (added_at[0] - 0.2)).abs() < 1e-6,
+        "added at {added_at:?}, waited {}",
+        sem.add_wait_max_s
+    );
+    let end = track(moved_dir, "block").last().unwrap().1;
+    assert!(
+        end[0].abs() < 1e-9 && end[1].abs() < 1e-9 && (end[2] - 0.02).abs() < 1e-9,
+        "block at {end:?}"
+    );
+    assert_eq!(sem.objects_at_end, 2);
+
+    let (still, _) = &out[1];
+    let sem = still.semantic.as_ref().unwrap();
+    assert_eq!(
+        (
+            sem.adds,
+            sem.add_failures,
+            sem.adds_late,
+            sem.adds_waiting_at_end
+        ),
+        (0, 1, 0, 1)
+    );
+    assert!(sem.add_wait_max_s.is_nan());
+    assert_eq!(sem.objects_at_end, 1, "only the pad is in the scene");
+}

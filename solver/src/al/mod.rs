@@ -46,6 +46,7 @@
 pub(crate) mod design;
 mod design_closure;
 pub(crate) mod fused;
+mod moved;
 pub(crate) mod projected;
 pub(crate) mod scaling;
 mod settings;

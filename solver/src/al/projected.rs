@@ -52,6 +52,7 @@
 //! into its other branch instead of flying apart.
 
 use super::design::DesignStep;
+use super::moved::Moved;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
 use crate::{EvalError, Evaluation, FingerTarget, Model};
@@ -119,6 +120,8 @@ pub(crate) struct Projected {
     speed_limited: bool,
     /// The design columns' correction (models with design variables).
     design: Option<DesignStep>,
+    /// Which contact rows a step can change (`moved`).
+    moved: Moved,
 }
 
 /// The virtual coupling of contact-finger proxies, as the projected step
@@ -194,6 +197,7 @@ impl Projected {
             moved_m: 0.0,
             speed_limited: false,
             design: None,
+            moved: Moved::new(model),
         }
     }
 
@@ -206,6 +210,18 @@ impl Projected {
     /// every step.
     pub fn begin(&mut self) {
         self.jd_current = false;
+        self.moved.begin();
+    }
+
+    /// Evaluates and multiplies every row in every step (`full`), or only
+    /// the contact rows that can change (the default; see `moved`).
+    pub fn set_full_steps(&mut self, full: bool, model: &Model) {
+        self.moved.set_full(full, model);
+    }
+
+    /// Contact constraints the steps' evaluations left out, summed.
+    pub fn skipped_contacts(&self) -> u64 {
+        self.moved.skipped()
     }
 
     /// Switches design column `k` (among the design columns) off or on.
@@ -282,7 +298,8 @@ impl Projected {
         coupling: &CouplingStep,
         lambda: &mut [f64],
     ) -> Result<Step, StepError> {
-        ev.evaluate_values(model, q, targets)
+        self.moved
+            .evaluate(model, ev, q, targets)
             .map_err(StepError::Eval)?;
         let mut moved = false;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
@@ -362,7 +379,8 @@ impl Projected {
         for (y, sc) in self.y.iter_mut().zip(scale) {
             *y *= sc;
         }
-        jac.mul_t_vec(&self.y, &mut self.g)
+        self.moved
+            .mul_t_vec(jac, &self.y, &mut self.g)
             .map_err(|_| StepError::NonFinite)?;
         fb.apply_inverse_mass(&self.g, &mut self.mg);
         if let Some(design) = &self.design {
@@ -415,7 +433,8 @@ impl Projected {
         }
         // Predicted values of the inactive inequality rows after the step
         // (and the update of C_q d).
-        jac.mul_vec(&self.mg, &mut self.jm)
+        self.moved
+            .mul_vec(jac, &self.mg, &mut self.jm)
             .map_err(|_| StepError::NonFinite)?;
         let c = ev.values();
         let mut activate = false;

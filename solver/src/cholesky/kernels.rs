@@ -296,7 +296,11 @@ fn update_any(
 /// when at or below `reg.epsilon`; an error naming column `index` when it
 /// is still not positive and finite.
 #[inline(always)]
-fn pivot(d: f64, reg: Regularization, index: usize) -> Result<(f64, usize), NotPositive> {
+pub(super) fn pivot(
+    d: f64,
+    reg: Regularization,
+    index: usize,
+) -> Result<(f64, usize), NotPositive> {
     let (d, replaced) = if d <= reg.epsilon {
         (reg.delta, 1)
     } else {

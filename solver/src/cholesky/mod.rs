@@ -31,11 +31,14 @@
 //! run in time fixed by the pattern: Σ over supernode updates of their dense
 //! products, nnz(L) for each right-hand side.
 
+mod dense;
 mod dissection;
 mod kernels;
 mod symbolic;
 mod triangular;
 
+pub(crate) use dense::DENSE_MAX;
+use dense::Dense;
 use symbolic::Symbolic;
 
 /// Dynamic regularisation of the pivots (faer's LLᵀ rule).
@@ -121,6 +124,9 @@ pub(crate) struct Cholesky {
     /// were decoupled in the last factorisation, see
     /// [`factor_decoupled`](Self::factor_decoupled)).
     diagonal: Vec<bool>,
+    /// `Some`: the dense path (`dense`) factors and solves, in the same
+    /// order and with the same tail; `values` then holds its layout.
+    dense: Option<Dense>,
 }
 
 /// Each column's supernode (the factor's order) and a cleared per-supernode
@@ -207,8 +213,38 @@ impl Cholesky {
             simd: kernels::simd_available(),
             col_supernode,
             diagonal,
+            dense: None,
             sym,
         })
+    }
+
+    /// [`analyze_grouped`](Self::analyze_grouped), factored and solved on
+    /// the dense path (`dense`) when the whole order n is at most
+    /// `dense_max` ([`DENSE_MAX`] in the fast loop, 0: never): same order,
+    /// same tail, same pivot rule, the same factor up to each entry's
+    /// summation order. Allocates.
+    pub fn analyze_small_dense(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        groups: &[u32],
+        max_rhs: usize,
+        dense_max: usize,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let mut llt = Self::analyze_grouped(n, tail, entries, cliques, groups, max_rhs)?;
+        if n <= dense_max {
+            let d = Dense::new(n, tail, &llt.sym.iperm, entries);
+            llt.values = vec![0.0; d.len_values()];
+            llt.dense = Some(d);
+        }
+        Ok(llt)
+    }
+
+    /// Whether this factor takes the dense path.
+    #[cfg(test)]
+    pub fn is_dense(&self) -> bool {
+        self.dense.is_some()
     }
 
     /// Stored values of L (the blocks, including the unused upper halves of
@@ -256,6 +292,7 @@ impl Cholesky {
             simd: kernels::simd_available(),
             col_supernode,
             diagonal,
+            dense: None,
             sym,
         }
     }
@@ -334,6 +371,11 @@ impl Cholesky {
     }
 
     fn numeric(&mut self, a: &[f64], reg: Regularization) -> Result<(), NotPositive> {
+        if let Some(d) = &self.dense {
+            self.diagonal.fill(false);
+            self.regularized = d.factor(&mut self.values, a, reg, self.simd)?;
+            return Ok(());
+        }
         let done = kernels::numeric(
             &self.sym,
             &mut self.values,
@@ -361,6 +403,9 @@ impl Cholesky {
     /// complement A_TT − A_TL A_LL⁻¹ A_LT, row-major, lower triangle (the
     /// upper half is zero).
     pub fn tail_block(&self) -> &[f64] {
+        if let Some(d) = &self.dense {
+            return d.tail_block(&self.values);
+        }
         match self.sym.supernodes.get(self.sym.lead_supernodes) {
             Some(sn) => {
                 let t = sn.w as usize;
@@ -391,6 +436,15 @@ impl Cholesky {
         for (i, &xi) in x.iter().enumerate() {
             work[self.sym.iperm[i] as usize] = xi;
         }
+        if let Some(d) = &self.dense {
+            d.forward(&self.values, work, self.simd);
+            let out = tail_solve(d.tail_block(&self.values), &mut work[lead..]);
+            d.backward(&self.values, work, self.simd);
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi = work[self.sym.iperm[i] as usize];
+            }
+            return out;
+        }
         triangular::forward(&self.sym, &self.values, work, 1, self.simd, &self.diagonal);
         let t = self.sym.tail;
         let block = match self.sym.supernodes.get(self.sym.lead_supernodes) {
@@ -415,6 +469,22 @@ impl Cholesky {
     pub fn solve(&mut self, x: &mut [f64], k: usize) {
         let n = self.sym.n - self.sym.tail;
         let full = self.sym.n;
+        if let Some(d) = &self.dense {
+            let work = &mut self.work[..full];
+            for col in x[..k * n].chunks_exact_mut(n) {
+                for (i, &xi) in col.iter().enumerate() {
+                    work[self.sym.iperm[i] as usize] = xi;
+                }
+                d.forward(&self.values, work, self.simd);
+                // A leading-block solve: the tail takes no part.
+                work[n..].fill(0.0);
+                d.backward(&self.values, work, self.simd);
+                for (i, xi) in col.iter_mut().enumerate() {
+                    *xi = work[self.sym.iperm[i] as usize];
+                }
+            }
+            return;
+        }
         let mut first = 0;
         while first < k {
             let kk = (k - first).min(self.max_rhs);
@@ -443,5 +513,7 @@ impl Cholesky {
 mod tests;
 #[cfg(test)]
 mod tests_decoupled;
+#[cfg(test)]
+mod tests_dense;
 #[cfg(test)]
 mod tests_kernels;

@@ -494,6 +494,29 @@ impl Feedback {
         self.solve.set_simd(on);
     }
 
+    /// Builds the multiplier solve again with the small-matrix dense path
+    /// up to order `dense_max` (0: off; comparisons, the Cholesky force
+    /// solver).
+    #[cfg(test)]
+    pub fn set_dense(&mut self, model: &Model, dense_max: usize) {
+        let groups = contact_groups(model, &self.gram);
+        self.solve = MultiplierSolve::with_path(&self.gram, None, None, &groups, dense_max)
+            .expect("the pattern analysed once already");
+    }
+
+    /// Whether the multiplier solve takes the dense path.
+    #[cfg(test)]
+    pub fn is_dense(&self) -> bool {
+        self.solve.is_dense()
+    }
+
+    /// A, the scaled right-hand side and the known finger multipliers of
+    /// the last force solve (comparisons).
+    #[cfg(test)]
+    pub(crate) fn last_system(&self) -> (&Gram, &[f64], &[Option<f64>]) {
+        (&self.gram, &self.cy, &self.known)
+    }
+
     /// One assembly of A at the last force solve's state (timing).
     #[cfg(test)]
     pub fn reassemble(&mut self, ev: &Evaluation) {

@@ -66,6 +66,9 @@ mod solve;
 mod torque;
 mod wrench;
 
+#[cfg(test)]
+mod tests_dense;
+
 pub use output::FingerOutput;
 pub use precond::tree::TreeStats;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};

@@ -112,6 +112,25 @@ impl MultiplierSolve {
         matvec_iterations: Option<u32>,
         groups: &[u32],
     ) -> Result<Self, faer::sparse::FaerError> {
+        Self::with_path(
+            gram,
+            cg_iterations,
+            matvec_iterations,
+            groups,
+            crate::cholesky::DENSE_MAX,
+        )
+    }
+
+    /// [`new`](Self::new) with the small-matrix dense path (`cholesky`'s
+    /// `dense`) taken up to order `dense_max` (0: never, every order takes
+    /// the supernodal kernels).
+    pub fn with_path(
+        gram: &Gram,
+        cg_iterations: Option<u32>,
+        matvec_iterations: Option<u32>,
+        groups: &[u32],
+        dense_max: usize,
+    ) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
         // The matvec-only tick preconditions all 1 + m_f columns at once.
         let max_rhs = if matvec_iterations.is_some() {
@@ -119,13 +138,14 @@ impl MultiplierSolve {
         } else {
             1
         };
-        let llt = Cholesky::analyze_grouped(
+        let llt = Cholesky::analyze_small_dense(
             n + m,
             m,
             &gram.factor_entries(),
             &gram.cliques(),
             groups,
             max_rhs,
+            dense_max,
         )?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
         let pcg = matvec_iterations.map(|it| Pcg::new(n, 1 + m, it));
@@ -233,6 +253,12 @@ impl MultiplierSolve {
     #[cfg(test)]
     pub fn set_simd(&mut self, on: bool) {
         self.llt.set_simd(on);
+    }
+
+    /// Whether the factor takes the small-matrix dense path.
+    #[cfg(test)]
+    pub fn is_dense(&self) -> bool {
+        self.llt.is_dense()
     }
 
     /// The Cholesky factor's shape and operation counts.

@@ -94,6 +94,20 @@ impl Program {
         self.chord_refreshes
     }
 
+    /// Makes every projected step evaluate C and multiply C_q over every
+    /// row (`full`), or only over the contact rows of bodies that move (the
+    /// default, `al::moved`: the same values bit for bit). For comparisons.
+    pub fn set_full_steps(&mut self, full: bool) {
+        self.projected.set_full_steps(full, &self.model);
+    }
+
+    /// Contact constraints (a pair's witness rows) the projected steps
+    /// left unevaluated because neither body had moved, summed over the
+    /// program's life.
+    pub fn step_contacts_skipped(&self) -> u64 {
+        self.projected.skipped_contacts()
+    }
+
     /// The copy of [`apply_witnesses`](Self::apply_witnesses), without the
     /// refresh.
     pub(super) fn copy_witnesses(&mut self, table: &[Witness]) -> bool {

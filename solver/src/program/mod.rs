@@ -56,6 +56,7 @@
 //! whole session tick without the devices, the scenes' settings): four-bar
 //! 4.3 µs, Stewart 21 µs, sphere toy 0.27 ms.
 
+mod activation;
 mod auxiliary;
 mod contact;
 mod converged;
@@ -167,6 +168,8 @@ pub struct Program {
     prepared: bool,
     /// Witness tables taken with the chord refresh (`contact`).
     chord_refreshes: u64,
+    /// In-tick activations run a whole multiplier solve (`activation`).
+    full_activation: bool,
 }
 
 impl Program {
@@ -341,6 +344,7 @@ impl Program {
             factor_adoptions: 0,
             prepared: false,
             chord_refreshes: 0,
+            full_activation: false,
             feedback,
             ev,
             h,
@@ -472,6 +476,12 @@ impl Program {
     /// Stored values of the Eq. 7 Cholesky factor (a size measure).
     pub fn force_factor_nnz(&self) -> usize {
         self.feedback.factor_nnz()
+    }
+
+    /// The force stage (comparisons in `force`'s tests).
+    #[cfg(test)]
+    pub(crate) fn feedback(&self) -> &Feedback {
+        &self.feedback
     }
 
     /// How far the velocity estimates lag at tick period `dt`: half a tick for

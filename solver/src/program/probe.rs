@@ -171,6 +171,45 @@ fn probe() {
                 best[1][k] = best[1][k].min(s.elapsed().as_secs_f64() / reps as f64);
             }
         }
+        // The supernodal kernels against the dense path (forced at any
+        // size), interleaved, best of 9: factor, one solve, one projected
+        // step.
+        let mut path = [[f64::INFINITY; 3]; 2];
+        let saved = p.q.clone();
+        for _ in 0..9 {
+            for (k, dense_max) in [0, usize::MAX].into_iter().enumerate() {
+                p.feedback.set_dense(&model, dense_max);
+                p.feedback.refactor().unwrap();
+                p.refresh();
+                let s = Instant::now();
+                for _ in 0..reps {
+                    p.feedback.refactor().unwrap();
+                }
+                path[k][0] = path[k][0].min(s.elapsed().as_secs_f64() / reps as f64);
+                let s = Instant::now();
+                for r in 0..reps {
+                    x.fill(r as f64);
+                    p.feedback.solve_joint(&mut x);
+                }
+                path[k][1] = path[k][1].min(s.elapsed().as_secs_f64() / reps as f64);
+                let s = Instant::now();
+                for _ in 0..reps {
+                    let _ = p.iterate(&targets, 1);
+                    p.q.copy_from_slice(&saved);
+                }
+                path[k][2] = path[k][2].min(s.elapsed().as_secs_f64() / reps as f64);
+            }
+        }
+        p.feedback.set_dense(&model, crate::cholesky::DENSE_MAX);
+        println!(
+            "  best of 9, supernodal / dense: factor {:.2} / {:.2} µs, solve {:.2} / {:.2} µs, projected step {:.2} / {:.2} µs",
+            path[0][0] * 1e6,
+            path[1][0] * 1e6,
+            path[0][1] * 1e6,
+            path[1][1] * 1e6,
+            path[0][2] * 1e6,
+            path[1][2] * 1e6
+        );
         p.refresh();
         println!(
             "  Eq. 7 factorisations a tick: {:.2} ({factorisations} in {motion_ticks} ticks of motion)",

@@ -240,11 +240,7 @@ impl Program {
                 Ok(Step::Activate) if self.activations < MAX_ACTIVATIONS => {
                     self.activations += 1;
                     *pending = true;
-                    if self
-                        .feedback
-                        .force_active(&self.scaling, &self.settings, &self.ev, &self.lambda)
-                        .is_err()
-                    {
+                    if !self.activate_in_tick() {
                         return Err((TickOutcome::ForceSolve, k));
                     }
                 }

@@ -148,6 +148,12 @@ impl Lockstep {
     /// One tick, then a contact cycle when due.
     pub fn tick(&mut self, targets: &[FingerTarget]) -> TickReport {
         let r = self.program.tick(targets, self.dt);
+        self.cycle_after(r)
+    }
+
+    /// What [`tick`](Self::tick) does after the program's tick `r`: the
+    /// contact cycle when due.
+    pub fn cycle_after(&mut self, r: TickReport) -> TickReport {
         self.ticks += 1;
         if self.ticks.is_multiple_of(self.every) {
             self.last_snapshot_q = self.program.q().to_vec();

@@ -73,6 +73,9 @@ pub struct SemanticLoop {
     /// not yet seen in a snapshot (not mirrored until then).
     placements: Vec<(BodyId, Pose3)>,
     arriving: Vec<(BodyId, Pose3)>,
+    /// Adds that found no valid place: the body, when it was scheduled and
+    /// when it is tried next (s); retried until it fits or is removed.
+    waiting: Vec<schedule::Waiting>,
     /// An add or remove changed which bodies are absent.
     absent_changed: bool,
 }
@@ -135,6 +138,7 @@ impl SemanticLoop {
             report: SemanticReport {
                 loaded,
                 arrival_max_s: f64::NAN,
+                add_wait_max_s: f64::NAN,
                 ..SemanticReport::default()
             },
             ops: plan.ops.clone(),
@@ -142,6 +146,7 @@ impl SemanticLoop {
             mode: plan.mode,
             placements: Vec::new(),
             arriving: Vec::new(),
+            waiting: Vec::new(),
             absent_changed: false,
         };
         s.check();
@@ -231,6 +236,7 @@ impl SemanticLoop {
             .collect();
         r.graph.sort();
         r.pending_at_end = self.pending.len();
+        r.adds_waiting_at_end = self.waiting.len();
         r.present_at_end = self
             .scene
             .objects()

@@ -108,6 +108,14 @@ pub struct SemanticReport {
     pub removes: u64,
     /// See `adds`.
     pub add_failures: u64,
+    /// Of the adds that found no valid place at their time, those added on
+    /// a later try (the hand or another body moved out of the way), and the
+    /// longest wait, s (NaN: none).
+    pub adds_late: u64,
+    /// See `adds_late`.
+    pub add_wait_max_s: f64,
+    /// Adds still waiting for a valid place at the end (never added).
+    pub adds_waiting_at_end: usize,
     /// Objects in the scene at the end (declared ones minus removed and
     /// not-yet-added).
     pub present_at_end: usize,

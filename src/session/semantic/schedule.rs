@@ -5,7 +5,9 @@
 //!  add b:     SemanticScene::add (the valid place nearest b's declared pose, clear of the
 //!             fingertips) ─► a placement: the program that follows carries it as a Shift
 //!             of b's coordinates (the fast loop adopts it at a tick boundary); until the
-//!             snapshots show b there, b is not mirrored
+//!             snapshots show b there, b is not mirrored; no valid place (a fingertip
+//!             or a body in the way): add_failed, and b is tried again every RETRY_S
+//!             until it fits (an add, late) or its remove comes
 //!  remove b:  the hand lets go of b; SemanticScene::remove (its constraints broken, its
 //!             successors released, or re-bound by Algorithm 1 as pending snaps)
 //!  mode m:    unconstrained: the held object's constraints released (no pull, no exception
@@ -26,9 +28,25 @@ use super::{EventKind, SemanticLoop};
 /// body within this of it, m.
 pub const ADOPTED_M: f64 = 1e-6;
 
+/// How often an add that found no valid place is tried again, s: the search
+/// costs a slow-loop cycle's worth, and a hand moves out of the way in
+/// tenths of a second.
+pub const RETRY_S: f64 = 0.05;
+
+/// An add waiting for a valid place.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Waiting {
+    body: BodyId,
+    /// When the add was scheduled, s.
+    since_s: f64,
+    /// When it is tried next, s.
+    next_s: f64,
+}
+
 impl SemanticLoop {
     /// Runs the schedule's entries whose time has come.
     pub(super) fn run_schedule(&mut self, t_s: f64) {
+        self.retry_adds(t_s);
         while let Some(d) = self.ops.get(self.next_op).copied() {
             if d.at_s > t_s {
                 break;
@@ -43,13 +61,50 @@ impl SemanticLoop {
         }
     }
 
+    /// Tries again the adds whose retry time has come.
+    fn retry_adds(&mut self, t_s: f64) {
+        let mut k = 0;
+        while k < self.waiting.len() {
+            let w = self.waiting[k];
+            if w.next_s > t_s {
+                k += 1;
+                continue;
+            }
+            if self.try_add(w.body, t_s) {
+                self.waiting.swap_remove(k);
+                let wait = t_s - w.since_s;
+                self.report.adds_late += 1;
+                self.report.add_wait_max_s = self.report.add_wait_max_s.max(wait);
+                self.check();
+            } else {
+                self.waiting[k].next_s = t_s + RETRY_S;
+                k += 1;
+            }
+        }
+    }
+
+    /// A scheduled add: placed now, or reported and put on the waiting list.
     fn add(&mut self, b: BodyId, t_s: f64) {
+        if !self.try_add(b, t_s) {
+            self.report.add_failures += 1;
+            self.event(t_s, EventKind::AddFailed, b, "");
+            self.waiting.push(Waiting {
+                body: b,
+                since_s: t_s,
+                next_s: t_s + RETRY_S,
+            });
+        }
+    }
+
+    /// Puts `b` at the valid place nearest its declared pose; false when
+    /// there is none (nothing changes then).
+    fn try_add(&mut self, b: BodyId, t_s: f64) -> bool {
         let near = match (
             self.base.body_position(self.base.q0(), b),
             self.base.body_rotation(self.base.q0(), b),
         ) {
             (Some(r), Some(rot)) => Pose3 { r, rot },
-            _ => return,
+            _ => return false,
         };
         let balls: Vec<_> = self
             .tips
@@ -69,15 +124,15 @@ impl SemanticLoop {
                 self.event(t_s, EventKind::Add, b, &on);
                 self.dirty = true;
                 self.absent_changed = true;
+                true
             }
-            Err(_) => {
-                self.report.add_failures += 1;
-                self.event(t_s, EventKind::AddFailed, b, "");
-            }
+            Err(_) => false,
         }
     }
 
     fn remove(&mut self, b: BodyId, t_s: f64) {
+        // An add still waiting for a place is called off: the body never came.
+        self.waiting.retain(|w| w.body != b);
         let before = self.holds.len();
         self.holds.retain(|h| h.body != b);
         if self.holds.len() != before {
