@@ -44,7 +44,11 @@ pub struct RunArgs {
     /// refreshes, a solve that reaches the cap redone with a factorisation;
     /// not for contact; measured slower than `cholesky` on every mechanism,
     /// BENCHMARKS.md), `matvec:N` to cap its iterations at N (default 64),
-    /// `cg:N` (Jacobi-preconditioned, gradient update only).
+    /// `tree` (experimental: no full factor, conjugate gradients
+    /// preconditioned by a spanning tree of the mechanism; not for contact;
+    /// measured slower than `cholesky` on meshes, BENCHMARKS.md), `tree:N`
+    /// to cap its iterations a solve at N (default 500), `cg:N`
+    /// (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the

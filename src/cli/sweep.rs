@@ -34,8 +34,9 @@ pub struct SweepArgs {
     pub update: Vec<UpdateRule>,
     /// Eq. 7 solvers: `cholesky`, `matvec` (the matvec-only tick, each
     /// conjugate-gradient solve to its tolerance within a cap of 64
-    /// iterations), `matvec:N`, `cg:N` (Jacobi-preconditioned, gradient
-    /// update only).
+    /// iterations), `matvec:N`, `tree` (conjugate gradients preconditioned
+    /// by a spanning tree, no full factor; cap 500), `tree:N`, `cg:N`
+    /// (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_delimiter = ',', default_value = "cholesky", value_parser = values::force_solver)]
     pub force_solver: Vec<haptloop_solver::ForceSolver>,
     /// Constraint gains K (each finite, > 0). Default: the scene's.

@@ -100,7 +100,10 @@ pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
 /// preconditioned by a factor the slow loop refreshes, each solve to its
 /// tolerance within a cap of 64 iterations), `matvec:N` for a cap of N
 /// (1–1000), `cg:N` (Jacobi-preconditioned conjugate gradients, at most N
-/// iterations per right-hand side, 1–1000; gradient update only).
+/// iterations per right-hand side, 1–1000; gradient update only), `tree`
+/// or `tree:N` (conjugate gradients preconditioned by a spanning tree of
+/// the mechanism, no full factor; a cap of N iterations a solve, default
+/// 500).
 pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
     use haptloop_solver::ForceSolver;
     let s = s.trim();
@@ -113,6 +116,13 @@ pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
                 "`{n}` is not an iteration cap of 1–1000 (as in `matvec:8`)"
             )),
         },
+        None if s == "tree" => Ok(ForceSolver::TREE),
+        Some(("tree", n)) => match n.trim().parse::<u32>() {
+            Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::Tree { max_iterations }),
+            _ => Err(format!(
+                "`{n}` is not an iteration cap of 1–1000 (as in `tree:200`)"
+            )),
+        },
         Some(("cg", n)) => match n.trim().parse::<u32>() {
             Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::ConjugateGradient { max_iterations }),
             _ => Err(format!(
@@ -120,7 +130,7 @@ pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
             )),
         },
         _ => Err(format!(
-            "unknown force solver `{s}` (expected `cholesky`, `matvec`, `matvec:N` or `cg:N`)"
+            "unknown force solver `{s}` (expected `cholesky`, `matvec`, `matvec:N`, `tree`, `tree:N` or `cg:N`)"
         )),
     }
 }
@@ -157,5 +167,19 @@ mod tests {
         assert!(rate("99").is_err() && rate("20001").is_err() && rate("").is_err());
         assert!(reference_ms("0").is_ok() && reference_ms("-1").is_err());
         assert!(fraction("1").is_ok() && fraction("0").is_err() && fraction("1.5").is_err());
+    }
+
+    /// `tree` and `tree:N` parse to the tree tick and print back as typed;
+    /// a cap outside 1–1000 is refused naming the value.
+    #[test]
+    fn the_tree_force_solver_parses_and_prints_back() {
+        for s in ["tree", "tree:1", "tree:1000", "matvec", "cg:64"] {
+            assert_eq!(force_solver(s).map(|f| f.label()), Ok(s.to_string()));
+        }
+        assert_eq!(force_solver("tree"), Ok(haptloop_solver::ForceSolver::TREE));
+        for bad in ["tree:0", "tree:1001", "tree:x"] {
+            let e = force_solver(bad).unwrap_err();
+            assert!(e.contains(&bad[5..]), "{e}");
+        }
     }
 }

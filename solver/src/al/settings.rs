@@ -53,6 +53,24 @@ pub enum ForceSolver {
         /// ([`Program::matvec_unconverged`](crate::Program::matvec_unconverged)).
         max_iterations: u32,
     },
+    /// The tree tick (`haptloop run --force-solver tree`): Eq. 7's joint
+    /// block by conjugate gradients (all right-hand sides in lockstep,
+    /// warm-started from the previous tick's solutions, to a relative
+    /// residual of 1e-12) preconditioned by the exact Gram block of a
+    /// spanning tree of the body graph plus each loop-closing joint's own
+    /// block, factored from the tick's own A: that pattern has no fill, so
+    /// a factorisation and an application cost O(nnz(C_q)), not the full
+    /// factor's fill (`force::precond::tree`). The projected update's
+    /// steps solve one column each with the same preconditioner (to 1e-6)
+    /// and the force solve's A_JJ⁻¹ A_JF; the gradient update needs no
+    /// solve. Not for contact rows or design variables.
+    Tree {
+        /// Cap on the conjugate-gradient iterations per solve; a solve
+        /// stopped by it is counted
+        /// ([`Program::matvec_unconverged`](crate::Program::matvec_unconverged))
+        /// and its result used as it is.
+        max_iterations: u32,
+    },
 }
 
 impl ForceSolver {
@@ -64,6 +82,8 @@ impl ForceSolver {
             f if f == ForceSolver::MATVEC => "matvec".into(),
             ForceSolver::Matvec { max_iterations } => format!("matvec:{max_iterations}"),
             ForceSolver::ConjugateGradient { max_iterations } => format!("cg:{max_iterations}"),
+            f if f == ForceSolver::TREE => "tree".into(),
+            ForceSolver::Tree { max_iterations } => format!("tree:{max_iterations}"),
         }
     }
 
@@ -74,6 +94,13 @@ impl ForceSolver {
     /// Gauss–Newton steps let the violation grow until the tick's guard
     /// failed it (661 of 1000 ticks on Bennett; BENCHMARKS.md, issue 23).
     pub const MATVEC: ForceSolver = ForceSolver::Matvec { max_iterations: 64 };
+
+    /// The tree tick with its default cap: 500 iterations a solve, a
+    /// safety bound (each solve stops at its tolerance; BENCHMARKS.md,
+    /// issue 23, the spanning-tree preconditioner).
+    pub const TREE: ForceSolver = ForceSolver::Tree {
+        max_iterations: 500,
+    };
 }
 
 /// Whether and how [`Program::new`](crate::Program::new) looks for redundant
@@ -353,7 +380,8 @@ impl SolverSettings {
                 );
             }
         }
-        if let ForceSolver::Matvec { max_iterations } = self.force_solver
+        if let ForceSolver::Matvec { max_iterations } | ForceSolver::Tree { max_iterations } =
+            self.force_solver
             && (max_iterations == 0 || max_iterations > 1000)
         {
             return bad(

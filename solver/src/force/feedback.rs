@@ -165,9 +165,18 @@ impl Feedback {
         let (cg, matvec) = match settings.force_solver {
             ForceSolver::Cholesky => (None, None),
             ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
-            ForceSolver::Matvec { max_iterations } => (None, Some(max_iterations)),
+            ForceSolver::Matvec { max_iterations } | ForceSolver::Tree { max_iterations } => {
+                (None, Some(max_iterations))
+            }
         };
-        let solve = MultiplierSolve::new(&gram, cg, matvec, &contact_groups(model, &gram))?;
+        let mut solve = MultiplierSolve::new(&gram, cg, matvec, &contact_groups(model, &gram))?;
+        if let ForceSolver::Tree { max_iterations } = settings.force_solver {
+            let group: Vec<usize> = (gram.j_rows.iter())
+                .map(|&r| model.rows()[r].constraint.index())
+                .collect();
+            let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
+            solve.set_tree(tree, max_iterations);
+        }
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -391,6 +400,11 @@ impl Feedback {
         self.generation = self.generation.wrapping_add(1);
         self.assemble_regularized(ev, settings);
         self.solve.factor_for_steps(&self.gram)
+    }
+
+    /// See `MultiplierSolve::tree_stats`.
+    pub fn tree_stats(&self) -> Option<super::precond::tree::TreeStats> {
+        self.solve.tree_stats(&self.gram)
     }
 
     /// Conjugate-gradient iterations of the last solve (0 with the Cholesky).

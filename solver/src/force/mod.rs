@@ -57,6 +57,7 @@ pub(crate) mod inertia;
 mod motion;
 mod output;
 mod pcg;
+mod precond;
 mod rank_one;
 mod redundancy;
 mod reference;
@@ -69,6 +70,7 @@ mod wrench;
 mod tests_dense;
 
 pub use output::FingerOutput;
+pub use precond::tree::TreeStats;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
     FingerWrench, INEQUALITY_ACTIVE_BAND, ReferenceError, reference_finger_wrenches,

@@ -79,6 +79,21 @@ impl Pcg {
     /// # Real-time
     /// No allocation; see the module docs.
     pub fn solve(&mut self, gram: &Gram, llt: &mut Cholesky, rhs: &mut [f64]) {
+        self.solve_with(gram, rhs, |z, k| llt.solve(z, k));
+    }
+
+    /// [`solve`](Self::solve) with the preconditioner `precondition`, which
+    /// replaces its argument's k columns v by M⁻¹ v (the tree
+    /// preconditioner, `precond::tree`).
+    ///
+    /// # Real-time
+    /// No allocation; see the module docs.
+    pub fn solve_with(
+        &mut self,
+        gram: &Gram,
+        rhs: &mut [f64],
+        mut precondition: impl FnMut(&mut [f64], usize),
+    ) {
         let (n, k) = (gram.n_j, self.k);
         self.iterations = 0;
         // A failed solve (a non-finite A) must not poison the warm start.
@@ -101,7 +116,7 @@ impl Pcg {
         }
         rhs.copy_from_slice(&self.prev);
         self.z.copy_from_slice(&self.r);
-        llt.solve(&mut self.z, k);
+        precondition(&mut self.z, k);
         self.p.copy_from_slice(&self.z);
         for c in 0..k {
             let col = c * n..(c + 1) * n;
@@ -156,7 +171,7 @@ impl Pcg {
                 }
             }
             self.z.copy_from_slice(&self.r);
-            llt.solve(&mut self.z, k);
+            precondition(&mut self.z, k);
             for c in 0..k {
                 if self.done[c] {
                     continue;

@@ -35,6 +35,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::cg::Cg;
 use super::gram::{Gram, Slot};
 use super::pcg::{Bordered, Pcg};
+use super::precond::step::{STEP_TOLERANCE, StepCg};
+use super::precond::tree::TreePrecond;
 use super::small::{cholesky_solve, min_norm_solve};
 use crate::cholesky::{Cholesky, Regularization};
 
@@ -70,6 +72,12 @@ pub(crate) struct MultiplierSolve {
     /// factor), and its projected steps' CG.
     pub pcg: Option<Pcg>,
     bordered: Option<Bordered>,
+    /// `Some`: the tree tick (`ForceSolver::Tree`): `pcg` preconditioned
+    /// by the spanning-tree preconditioner, and its projected steps' solve.
+    tree: Option<(TreePrecond, StepCg)>,
+    /// The tree tick has solved once (`rhs` holds A_JJ⁻¹ A_JF, `schur_keep`
+    /// S of the A the projected steps use).
+    tree_solved: bool,
     /// The factor holds a factorisation of this solve's A (made here or
     /// adopted): the matvec-only tick may precondition with it.
     seeded: bool,
@@ -161,9 +169,25 @@ impl MultiplierSolve {
             cg,
             pcg,
             bordered,
+            tree: None,
+            tree_solved: false,
             seeded: false,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         })
+    }
+
+    /// Switches this solve (made with `matvec_iterations`) to the tree
+    /// tick: `tree` preconditions the force solve's conjugate gradients,
+    /// and the projected steps solve with it (at most `max_iterations`).
+    pub fn set_tree(&mut self, tree: TreePrecond, max_iterations: u32) {
+        let n = self.lambda_j.len();
+        self.tree = Some((tree, StepCg::new(n, max_iterations)));
+    }
+
+    /// The tree tick's preconditioner's shape and step iterations (`None`
+    /// for the other solvers).
+    pub fn tree_stats(&self, gram: &Gram) -> Option<super::precond::tree::TreeStats> {
+        (self.tree.as_ref()).map(|(t, s)| t.stats(gram.nnz(), s.total_iterations))
     }
 
     /// The id a refreshed factor must carry to be adopted.
@@ -205,7 +229,7 @@ impl MultiplierSolve {
     pub fn cg_iterations(&self) -> u32 {
         match (&self.cg, &self.pcg) {
             (Some(c), _) => c.iterations,
-            (None, Some(p)) if self.seeded => p.iterations,
+            (None, Some(p)) if self.seeded || self.tree.is_some() => p.iterations,
             _ => 0,
         }
     }
@@ -216,6 +240,7 @@ impl MultiplierSolve {
     pub fn matvec_unconverged(&self) -> u64 {
         self.pcg.as_ref().map_or(0, |p| p.unconverged)
             + self.bordered.as_ref().map_or(0, |b| b.unconverged)
+            + self.tree.as_ref().map_or(0, |t| t.1.unconverged)
     }
 
     /// Number of stored values of the Cholesky factor L (its supernodes'
@@ -260,6 +285,14 @@ impl MultiplierSolve {
     ) -> Result<(), FactorError> {
         if self.cg.is_some() {
             return self.solve_cg(gram, r, known);
+        }
+        if let Some((tree, _)) = &mut self.tree {
+            // The tick's own A: O(nnz) for a fill-free pattern.
+            tree.factor(gram)?;
+            self.tree_solved = false;
+            self.solve_cg(gram, r, known)?;
+            self.tree_solved = true;
+            return Ok(());
         }
         if self.seeded
             && let Some(before) = self.pcg.as_ref().map(|p| p.unconverged)
@@ -335,7 +368,10 @@ impl MultiplierSolve {
         if let Some(cg) = &mut self.cg {
             cg.solve(gram, &mut self.rhs);
         } else if let Some(pcg) = &mut self.pcg {
-            pcg.solve(gram, &mut self.llt, &mut self.rhs);
+            match &mut self.tree {
+                Some((tree, _)) => pcg.solve_with(gram, &mut self.rhs, |z, k| tree.apply(z, k)),
+                None => pcg.solve(gram, &mut self.llt, &mut self.rhs),
+            }
         }
         for f in 0..m {
             let a_f = &a_fj[f * n..(f + 1) * n];
@@ -445,6 +481,9 @@ impl MultiplierSolve {
         if self.cg.is_some() {
             // The projected update needs the factor (checked by Program::new).
             return Err(FactorError);
+        }
+        if self.tree.is_some() {
+            return self.project_tree(gram, r, k_inv, y);
         }
         self.gather(gram, r);
         let Self {
@@ -556,6 +595,65 @@ impl MultiplierSolve {
             cholesky_solve(small, s)
         });
         if ok { Ok(()) } else { Err(FactorError) }
+    }
+
+    /// [`project`](Self::project) for the tree tick, with the last force
+    /// solve's A_JJ⁻¹ A_JF (`rhs`) and S: y_F = (S + diag(k_inv))⁻¹
+    /// (r_F − A_FJ t) and y_J = t − A_JJ⁻¹ A_JF y_F, t = A_JJ⁻¹ r_J by
+    /// conjugate gradients with the tree preconditioner (one column).
+    fn project_tree(
+        &mut self,
+        gram: &Gram,
+        r: &[f64],
+        k_inv: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FactorError> {
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        if !self.tree_solved {
+            // No force solve yet on this A: it leaves A_JJ⁻¹ A_JF and S
+            // (its multipliers are the next force solve's to set).
+            self.solve(gram, r, &[])?;
+        }
+        self.gather(gram, r);
+        let Self {
+            x,
+            rhs,
+            schur_keep,
+            small,
+            tree,
+            ..
+        } = self;
+        let Some((tree, step)) = tree else {
+            return Err(FactorError);
+        };
+        let (xj, xf) = x.split_at_mut(n);
+        let rel = step.solve(gram, xj, STEP_TOLERANCE, |v| tree.apply(v, 1));
+        if !rel.is_finite() {
+            return Err(FactorError);
+        }
+        let a_fj = &gram.values[nnz..nnz + m * n];
+        for f in 0..m {
+            xf[f] -= dot(&a_fj[f * n..(f + 1) * n], xj);
+        }
+        small.copy_from_slice(schur_keep);
+        for (f, k) in k_inv.iter().enumerate() {
+            small[f * m + f] += k;
+        }
+        if !cholesky_solve(small, xf) {
+            return Err(FactorError);
+        }
+        for (f, &yf) in xf.iter().enumerate() {
+            for (xj, a) in xj.iter_mut().zip(&rhs[(1 + f) * n..(2 + f) * n]) {
+                *xj -= a * yf;
+            }
+        }
+        for (j, &row) in gram.j_rows.iter().enumerate() {
+            y[row] = xj[j];
+        }
+        for (f, &row) in gram.finger_rows.iter().enumerate() {
+            y[row] = xf[f];
+        }
+        Ok(())
     }
 
     /// Scaled multiplier λ̃_J of the j-th joint row at the last solve:

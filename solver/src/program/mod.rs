@@ -202,16 +202,19 @@ impl Program {
         settings.validate()?;
         // The fused gradient pass holds at most six rows per constraint; a
         // contact pair's witness rows are one constraint of many rows.
-        if matches!(settings.force_solver, crate::ForceSolver::Matvec { .. }) {
+        if matches!(
+            settings.force_solver,
+            crate::ForceSolver::Matvec { .. } | crate::ForceSolver::Tree { .. }
+        ) {
             if model.contact().slots > 0 {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`--force-solver matvec`) does not cover contact \
+                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover contact \
                      rows: this scene needs the Cholesky force solver",
                 ));
             }
             if !model.layout().design_vars().is_empty() {
                 return Err(ProgramError::Unsupported(
-                    "the matvec-only tick (`--force-solver matvec`) does not cover design \
+                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover design \
                      variables: this scene needs the Cholesky force solver",
                 ));
             }
@@ -461,6 +464,12 @@ impl Program {
     /// right-hand sides (0 with the Cholesky).
     pub fn force_cg_iterations(&self) -> u32 {
         self.feedback.cg_iterations()
+    }
+
+    /// The tree tick (`ForceSolver::Tree`): its preconditioner's shape and
+    /// its projected steps' iterations so far (`None` otherwise).
+    pub fn tree_stats(&self) -> Option<crate::TreeStats> {
+        self.feedback.tree_stats()
     }
 
     /// The matvec-only tick (`ForceSolver::Matvec`): conjugate-gradient

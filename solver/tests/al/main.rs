@@ -17,4 +17,5 @@ mod program;
 mod redundant;
 mod rules;
 mod torque;
+mod tree;
 mod unreachable;

@@ -374,8 +374,14 @@ fn probe_matvec_scaling() {
                 force_solver: ForceSolver::Cholesky,
                 ..s
             };
+            let tr = SolverSettings {
+                force_solver: ForceSolver::TREE,
+                ..s
+            };
             let mut fast = Program::new(model.clone(), s).unwrap();
             let mut exact = Program::new(model.clone(), e).unwrap();
+            let mut tree = Program::new(model.clone(), tr).unwrap();
+            let (mut t_tr, mut cg_tr) = (Vec::new(), 0u64);
             let mut refresher = fast.factor_refresher().unwrap();
             let mut f = refresher.buffer();
             let ticks = 40;
@@ -396,6 +402,10 @@ fn probe_matvec_scaling() {
                     let s0 = Instant::now();
                     assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok);
                     t_ch.push(s0.elapsed().as_secs_f64());
+                    let s0 = Instant::now();
+                    assert_eq!(tree.tick(&t, DT).status, TickOutcome::Ok);
+                    t_tr.push(s0.elapsed().as_secs_f64());
+                    cg_tr += u64::from(tree.force_cg_iterations());
                     k_all += 1;
                 }
             }
@@ -403,7 +413,19 @@ fn probe_matvec_scaling() {
                 v.sort_by(|a, b| a.partial_cmp(b).unwrap());
                 v[v.len() / 2] * 1e6
             };
-            let (mv, ch) = (med(&mut t_mv), med(&mut t_ch));
+            let (mv, ch, tt) = (med(&mut t_mv), med(&mut t_ch), med(&mut t_tr));
+            let st = tree.tree_stats().unwrap();
+            println!(
+                "{family} {bodies} bodies: tree {tt:.1} µs ({:.2}× cholesky), force CG {:.1} it./tick, step CG {:.1} it./tick, unconverged {}, A nnz {}, P nnz {}, P factor {} values, loop rows {}",
+                tt / ch,
+                cg_tr as f64 / k_all as f64,
+                st.step_iterations as f64 / k_all as f64,
+                tree.matvec_unconverged(),
+                st.a_nnz,
+                st.p_nnz,
+                st.factor_values,
+                st.loop_rows
+            );
             println!(
                 "{family} {bodies} bodies ({} rows, factor {} values): cholesky {ch:.1} µs, matvec {mv:.1} µs ({:.2}×), force CG {:.1} it./tick, solves at the cap {:.2}/tick",
                 model.n_rows(),
@@ -412,9 +434,11 @@ fn probe_matvec_scaling() {
                 cg as f64 / k_all as f64,
                 fast.matvec_unconverged() as f64 / k_all as f64
             );
-            pts.push((bodies as f64, ch, mv));
+            pts.push((bodies as f64, ch, mv, tt));
         }
-        let fit = |y: &dyn Fn(&(f64, f64, f64)) -> f64| {
+        // (bodies, cholesky µs, matvec µs, tree µs)
+        type Point = (f64, f64, f64, f64);
+        let fit = |y: &dyn Fn(&Point) -> f64| {
             let n = pts.len() as f64;
             let (mx, my) = (
                 pts.iter().map(|p| p.0.ln()).sum::<f64>() / n,
@@ -425,9 +449,10 @@ fn probe_matvec_scaling() {
             sxy / sxx
         };
         println!(
-            "{family}: exponent cholesky {:.2}, matvec {:.2}",
+            "{family}: exponent cholesky {:.2}, matvec {:.2}, tree {:.2}",
             fit(&|p| p.1),
-            fit(&|p| p.2)
+            fit(&|p| p.2),
+            fit(&|p| p.3)
         );
     }
 }
