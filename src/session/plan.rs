@@ -168,9 +168,12 @@ impl Plan {
             solver.update = u;
         }
         if let Some(f) = options.force_solver {
-            if matches!(f, ForceSolver::Matvec { .. }) && scene.compiled.shaped_bodies > 0 {
+            if matches!(f, ForceSolver::Matvec { .. } | ForceSolver::Tree { .. })
+                && scene.compiled.shaped_bodies > 0
+            {
                 bail!(
-                    "--force-solver matvec does not cover contact: scene `{}` has shaped bodies",
+                    "--force-solver {} does not cover contact: scene `{}` has shaped bodies",
+                    f.label(),
                     scene.compiled.name
                 );
             }

@@ -295,3 +295,32 @@ fn the_matvec_point_fails_no_tick_on_bennett_and_the_lattice() {
         );
     }
 }
+
+/// Both conjugate-gradient ticks are refused on a scene with shaped bodies
+/// before the run starts, with the solver and the scene named.
+#[test]
+fn the_cg_ticks_refuse_contact_scenes_before_the_run() {
+    for solver in ["matvec", "tree", "tree:16"] {
+        let o = haptloop()
+            .args([
+                "run",
+                "box-slide",
+                "--deterministic",
+                "--seconds",
+                "0.1",
+                "--no-files",
+                "--force-solver",
+                solver,
+            ])
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!("--force-solver {solver} does not cover contact"))
+                && err.contains("box-slide")
+                && !err.contains("running `"),
+            "{solver}: {err}"
+        );
+    }
+}
