@@ -4,12 +4,12 @@
 //! where it was at the switch while the others keep moving, moves again when
 //! switched back on, and the fast tick that switches allocates nothing.
 
+use crate::mock_session::MockSession;
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{BUILTIN, Scene, check_loaded};
 use haptloop::session::{self, Plan, SessionOptions, SessionOutcome};
 use haptloop_rt::alloc::count;
-use haptloop_rt::clock::{MockClock, Nanos};
-use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag};
+use haptloop_rt::schedule::StopFlag;
 use haptloop_solver::scene;
 
 fn deterministic(seconds: f64) -> SessionOptions {
@@ -243,27 +243,23 @@ fn the_fast_tick_that_switches_allocates_nothing() {
          [[design_flag]]\nat = 0.6\non = [\"foot4.position\"]\n",
     )
     .unwrap();
-    let plan = Plan::new(&scene, &deterministic(2.0)).unwrap();
-    let clock = MockClock::new(Nanos(0));
-    let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
-    let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
-    let stop = StopFlag::new();
-    periodic.run(&mut built.fast, RunLimit::slots(200), &stop);
+    let mut m = MockSession::new(&scene, &deterministic(2.0));
+    m.run(200);
     let index = |name: &str| {
         let vars = scene.compiled.model.layout().design_vars();
         vars.iter().position(|d| d.name == name).unwrap()
     };
     let (f1, f4) = (index("foot1.position"), index("foot4.position"));
-    assert!(built.fast.program().design_active(f1));
+    assert!(m.built.fast.program().design_active(f1));
     let (_, stats) = count(|| {
         for _ in 0..8 {
-            periodic.run(&mut built.fast, RunLimit::slots(100), &stop);
-            while built.trace.pop().is_some() {}
+            m.run(100);
+            while m.built.trace.pop().is_some() {}
         }
     });
     assert_eq!(stats.total(), 0, "the fast loop allocated: {stats:?}");
-    assert_eq!(built.fast.stats().ticks, 1000);
-    let p = built.fast.program();
+    assert_eq!(m.built.fast.stats().ticks, 1000);
+    let p = m.built.fast.program();
     assert!(!p.design_active(f1), "foot1 was not switched off");
     assert!(p.design_active(f4), "foot4 was not switched back on");
 }

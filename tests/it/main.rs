@@ -20,6 +20,7 @@ mod limits;
 mod load_bounds;
 mod matvec;
 mod messages;
+mod mock_session;
 mod papers;
 mod physics;
 mod place;

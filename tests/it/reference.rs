@@ -3,12 +3,12 @@
 //! where it does not apply, and sampling it allocates nothing on the fast
 //! thread.
 
+use crate::mock_session::MockSession;
 use haptloop::report::summary::Summary;
 use haptloop::scenes::resolve;
 use haptloop::session::{self, Plan, SessionOptions};
 use haptloop_rt::alloc::count;
-use haptloop_rt::clock::{MockClock, Nanos};
-use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag};
+use haptloop_rt::schedule::StopFlag;
 use haptloop_solver::UpdateRule;
 use std::time::Duration;
 
@@ -101,21 +101,17 @@ fn sampling_every_tick_allocates_nothing() {
             reference_every: Some(Duration::ZERO),
             ..every_10_ms(30.0)
         };
-        let plan = Plan::new(&scene, &options).unwrap();
-        assert_eq!(plan.reference_every_ticks, 1);
-        let clock = MockClock::new(Nanos(0));
-        let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
-        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
-        let stop = StopFlag::new();
-        periodic.run(&mut built.fast, RunLimit::slots(100), &stop);
-        let (_, stats) = count(|| periodic.run(&mut built.fast, RunLimit::slots(1000), &stop));
+        let mut m = MockSession::new(&scene, &options);
+        assert_eq!(m.plan.reference_every_ticks, 1);
+        m.run(100);
+        let (_, stats) = count(|| m.run(1000));
         assert_eq!(stats.total(), 0, "{name}: {stats:?}");
-        assert!(built.fast.sampled());
-        while built.trace.pop().is_some() {}
+        assert!(m.built.fast.sampled());
+        while m.built.trace.pop().is_some() {}
         // The slow side sees the newest sample; the 1099 before it were
         // overwritten (counted, never silently lost).
-        built.slow.check_reference();
-        let r = built.slow.stats().reference;
+        m.built.slow.check_reference();
+        let r = m.built.slow.stats().reference;
         assert_eq!((r.captured, r.compared, r.overwritten), (1100, 1, 1099));
     }
 }

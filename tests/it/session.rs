@@ -1,6 +1,7 @@
 //! End-to-end sessions: built-in scenes on simulated arms, deterministic runs,
 //! record and replay, the fast loop's zero-allocation rule, a clean early stop.
 
+use crate::mock_session::MockSession;
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{BUILTIN, Scene, resolve};
 use haptloop::session::{self, Plan, SessionOptions, SessionOutcome};
@@ -376,20 +377,16 @@ fn the_fast_loop_tick_allocates_nothing() {
         "dexterity-arm",
     ] {
         let scene = resolve(name).unwrap();
-        let plan = Plan::new(&scene, &deterministic(30.0)).unwrap();
-        let clock = MockClock::new(Nanos(0));
-        let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
-        let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock).unwrap();
-        let stop = StopFlag::new();
-        periodic.run(&mut built.fast, RunLimit::slots(200), &stop);
-        let (_, stats) = count(|| periodic.run(&mut built.fast, RunLimit::slots(2000), &stop));
+        let mut m = MockSession::new(&scene, &deterministic(30.0));
+        m.run(200);
+        let (_, stats) = count(|| m.run(2000));
         assert_eq!(
             stats.total(),
             0,
             "{name}: the fast loop allocated: {stats:?}"
         );
-        assert_eq!(built.fast.stats().ticks, 2200);
-        while built.trace.pop().is_some() {}
+        assert_eq!(m.built.fast.stats().ticks, 2200);
+        while m.built.trace.pop().is_some() {}
     }
 }
 

@@ -6,12 +6,13 @@
 //! finger targets jumping the gap's hand motion at once) every assertion
 //! below failed (BENCHMARKS.md, "Contact: missed ticks").
 
+use crate::mock_session::MockSession;
 use haptloop::report::summary::Summary;
 use haptloop::scenes::{Scene, resolve};
 use haptloop::session::{self, MAX_SIMULATED_PERIODS, Plan, SessionOptions, Stall};
 use haptloop_rt::alloc::count;
 use haptloop_rt::clock::{MockClock, Nanos};
-use haptloop_rt::schedule::{Periodic, RunLimit, StopFlag, Tick, TickBody, TickStatus};
+use haptloop_rt::schedule::{RunLimit, StopFlag, Tick, TickBody, TickStatus};
 
 /// A deterministic session of `scene` for `seconds` with a stall of
 /// `periods` after the tick at every half second from 0.5 s on.
@@ -137,25 +138,21 @@ fn the_tick_after_a_stall_allocates_nothing() {
         deterministic: true,
         ..SessionOptions::default()
     };
-    let plan = Plan::new(&scene, &options).unwrap();
-    let clock = MockClock::new(Nanos(0));
-    let mut built = session::build(&scene, &plan, clock.clone()).unwrap();
-    let (mut periodic, _iv) = Periodic::new(&plan.schedule(), clock.clone()).unwrap();
-    let stop = StopFlag::new();
-    periodic.run(&mut built.fast, RunLimit::slots(200), &stop);
-    let period = plan.period().as_nanos() as u64;
+    let mut m = MockSession::new(&scene, &options);
+    m.run(200);
+    let period = m.plan.period().as_nanos() as u64;
     let mut body = Stalling {
-        body: &mut built.fast,
-        clock,
+        body: &mut m.built.fast,
+        clock: m.clock.clone(),
         every: 97,
         stall: Nanos(12 * period),
     };
-    let (_, stats) = count(|| periodic.run(&mut body, RunLimit::slots(2000), &stop));
+    let (_, stats) = count(|| m.periodic.run(&mut body, RunLimit::slots(2000), &m.stop));
     assert_eq!(stats.total(), 0, "the fast loop allocated: {stats:?}");
-    let st = built.fast.stats().stalls;
+    let st = m.built.fast.stats().stalls;
     assert!(st.ticks_after_gap >= 10, "{st:?}");
     assert!(st.catch_up_ticks > 0, "the catch-up path never ran: {st:?}");
-    while built.trace.pop().is_some() {}
+    while m.built.trace.pop().is_some() {}
 }
 
 /// `--slow-stall` holds the lockstep slow loop back: after a 40-period
