@@ -101,6 +101,26 @@ pub struct Evaluation {
 }
 
 impl Evaluation {
+    /// Every moving body's frame from `q` (those `moved` marks false kept:
+    /// an empty `moved` recomputes all), then the freed origins' positions.
+    fn set_frames(&mut self, model: &Model, q: &[f64], moved: &[bool]) -> Result<(), EvalError> {
+        for (body, o) in model.layout.moving_bodies() {
+            if !moved.get(body.index()).copied().unwrap_or(true) {
+                continue;
+            }
+            let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
+            let e = [q[o + 3], q[o + 4], q[o + 5], q[o + 6]];
+            self.frames[body.index()] =
+                BodyFrame::new(r, e).ok_or(EvalError::DegenerateQuaternion { body })?;
+        }
+        for (b, o) in model.layout.origin_cols.iter().enumerate() {
+            if let Some(o) = *o {
+                self.frames[b].r = Vector3::new(q[o], q[o + 1], q[o + 2]);
+            }
+        }
+        Ok(())
+    }
+
     /// Allocates everything an evaluation of `model` needs: C (n_rows), the
     /// Jacobian pattern and per-body scratch.
     pub fn new(model: &Model) -> Self {
@@ -191,17 +211,7 @@ impl Evaluation {
         }
         check_inputs(model, q, targets)?;
         // Frames are scratch: a failure here leaves C and C_q untouched.
-        for (body, o) in model.layout.moving_bodies() {
-            let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
-            let e = [q[o + 3], q[o + 4], q[o + 5], q[o + 6]];
-            self.frames[body.index()] =
-                BodyFrame::new(r, e).ok_or(EvalError::DegenerateQuaternion { body })?;
-        }
-        for (b, o) in model.layout.origin_cols.iter().enumerate() {
-            if let Some(o) = *o {
-                self.frames[b].r = Vector3::new(q[o], q[o + 1], q[o + 2]);
-            }
-        }
+        self.set_frames(model, q, &[])?;
         let Self {
             frames,
             values,

@@ -64,6 +64,28 @@ pub(crate) struct BlockDesc {
 }
 
 impl BlockDesc {
+    /// This block's rows of C_q · x into `out` (its `rows` entries), from
+    /// the Jacobian's values `val`.
+    #[inline(always)]
+    pub(crate) fn mul_vec(&self, val: &[f64], x: &[f64], out: &mut [f64]) {
+        let block = &val[self.start..self.start + self.rows * self.width];
+        for (row, yr) in block.chunks_exact(self.width).zip(out) {
+            let mut acc = 0.0;
+            let mut col = 0;
+            for &(c, w) in self.groups() {
+                let (r, xs) = (&row[col..col + w], &x[c..c + w]);
+                acc += match w {
+                    7 => dot::<7>(r, xs),
+                    4 => dot::<4>(r, xs),
+                    3 => dot::<3>(r, xs),
+                    _ => dot::<1>(r, xs),
+                };
+                col += w;
+            }
+            *yr = acc;
+        }
+    }
+
     #[inline]
     fn groups(&self) -> &[(usize, usize)] {
         &self.groups[..self.n_groups]
@@ -229,23 +251,7 @@ impl Jacobian {
         check(self.nrows(), y.len())?;
         let val = self.values();
         for b in &self.blocks {
-            let block = &val[b.start..b.start + b.rows * b.width];
-            let out = &mut y[b.row0..b.row0 + b.rows];
-            for (row, yr) in block.chunks_exact(b.width).zip(out) {
-                let mut acc = 0.0;
-                let mut col = 0;
-                for &(c, w) in b.groups() {
-                    let (r, xs) = (&row[col..col + w], &x[c..c + w]);
-                    acc += match w {
-                        7 => dot::<7>(r, xs),
-                        4 => dot::<4>(r, xs),
-                        3 => dot::<3>(r, xs),
-                        _ => dot::<1>(r, xs),
-                    };
-                    col += w;
-                }
-                *yr = acc;
-            }
+            b.mul_vec(val, x, &mut y[b.row0..b.row0 + b.rows]);
         }
         Ok(())
     }

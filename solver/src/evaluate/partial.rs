@@ -7,12 +7,9 @@
 //! wrote. On a cluttered table the tick's steps move a handful of bodies:
 //! the other ~95 % of the witness slots keep their values.
 
-use nalgebra::Vector3;
-
 use super::{Evaluation, all_finite, check_inputs};
 use crate::constraint::Geometry;
 use crate::constraint::block::{Ctx, NoJacobian};
-use crate::rotation::BodyFrame;
 use crate::{EvalError, FingerTarget, Model};
 
 impl Evaluation {
@@ -38,20 +35,7 @@ impl Evaluation {
             return Err(EvalError::ModelMismatch);
         }
         check_inputs(model, q, targets)?;
-        for (body, o) in model.layout.moving_bodies() {
-            if !moved.get(body.index()).copied().unwrap_or(true) {
-                continue;
-            }
-            let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
-            let e = [q[o + 3], q[o + 4], q[o + 5], q[o + 6]];
-            self.frames[body.index()] =
-                BodyFrame::new(r, e).ok_or(EvalError::DegenerateQuaternion { body })?;
-        }
-        for (b, o) in model.layout.origin_cols.iter().enumerate() {
-            if let Some(o) = *o {
-                self.frames[b].r = Vector3::new(q[o], q[o + 1], q[o + 2]);
-            }
-        }
+        self.set_frames(model, q, moved)?;
         let Self {
             frames,
             values,

@@ -102,6 +102,20 @@ pub(crate) struct Gram {
 }
 
 impl Gram {
+    /// The pivot regularisation every factor of this matrix uses: a pivot
+    /// at most 1e-14 of the largest diagonal is replaced by 1e-10 of it.
+    pub(crate) fn regularization(&self) -> crate::cholesky::Regularization {
+        let max_diag = self
+            .diag
+            .iter()
+            .map(|&d| self.values[d])
+            .fold(0.0, f64::max);
+        crate::cholesky::Regularization {
+            delta: 1e-10 * max_diag,
+            epsilon: 1e-14 * max_diag,
+        }
+    }
+
     /// The pattern of `model`'s A from its Jacobian pattern, without the rows
     /// `excluded` marks (empty: none). Allocates.
     pub fn new(model: &Model, jac: &Jacobian, masses: &[BodyMass], excluded: &[bool]) -> Self {

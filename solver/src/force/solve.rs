@@ -38,7 +38,7 @@ use super::pcg::{Bordered, Pcg};
 use super::precond::step::{STEP_TOLERANCE, StepCg};
 use super::precond::tree::TreePrecond;
 use super::small::{cholesky_solve, min_norm_solve};
-use crate::cholesky::{Cholesky, Regularization};
+use crate::cholesky::Cholesky;
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
@@ -432,15 +432,7 @@ impl MultiplierSolve {
         // Whatever this factors (a redundancy test matrix, a refresh), the
         // solve seeds itself again before preconditioning with it.
         self.seeded = false;
-        let max_diag = gram
-            .diag
-            .iter()
-            .map(|&d| gram.values[d])
-            .fold(0.0, f64::max);
-        let reg = Regularization {
-            delta: 1e-10 * max_diag,
-            epsilon: 1e-14 * max_diag,
-        };
+        let reg = gram.regularization();
         // Rows the assembly switched off are decoupled: the factor skips them.
         self.llt
             .factor_decoupled(&gram.values, reg, &gram.decoupled)
@@ -713,7 +705,7 @@ mod timing {
     //! Eq. 7 matrices, interleaved. Prints; asserts only agreement.
     use super::super::gram::Gram;
     use super::super::inertia::BodyMass;
-    use crate::cholesky::{Cholesky, Regularization};
+    use crate::cholesky::Cholesky;
     use crate::mechanisms::{four_bar, sphere_toy, stewart};
     use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
     use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -743,11 +735,7 @@ mod timing {
             gram.assemble(model.q0(), ev.jacobian(), &scale, &masses, &b, &mut y);
             let (n, k) = (gram.n_j, 1 + gram.m_f);
             let a = &gram.values[..gram.nnz()];
-            let max_diag = gram.diag.iter().map(|&d| a[d]).fold(0.0, f64::max);
-            let reg = Regularization {
-                epsilon: 1e-14 * max_diag,
-                delta: 1e-10 * max_diag,
-            };
+            let reg = gram.regularization();
             let mut ours =
                 Cholesky::analyze(n, gram.pattern.col_ptr(), gram.pattern.row_idx(), k).unwrap();
             let sym = factorize_symbolic_cholesky(

@@ -1,7 +1,7 @@
 //! Products with C_q that leave out constraints known to contribute
 //! nothing (the projected step on a scene where few bodies move).
 
-use super::{Jacobian, ShapeError, check, dot};
+use super::{Jacobian, ShapeError, check};
 
 impl Jacobian {
     /// y = C_q · x over the constraints `k` with `skip[k]` false; the rows
@@ -25,22 +25,7 @@ impl Jacobian {
                 out.fill(0.0);
                 continue;
             }
-            let block = &val[b.start..b.start + b.rows * b.width];
-            for (row, yr) in block.chunks_exact(b.width).zip(out) {
-                let mut acc = 0.0;
-                let mut col = 0;
-                for &(c, w) in b.groups() {
-                    let (r, xs) = (&row[col..col + w], &x[c..c + w]);
-                    acc += match w {
-                        7 => dot::<7>(r, xs),
-                        4 => dot::<4>(r, xs),
-                        3 => dot::<3>(r, xs),
-                        _ => dot::<1>(r, xs),
-                    };
-                    col += w;
-                }
-                *yr = acc;
-            }
+            b.mul_vec(val, x, out);
         }
         Ok(())
     }

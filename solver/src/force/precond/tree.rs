@@ -27,7 +27,7 @@ use std::collections::VecDeque;
 
 use super::super::gram::Gram;
 use super::super::solve::FactorError;
-use crate::cholesky::{Cholesky, Regularization};
+use crate::cholesky::Cholesky;
 
 /// The symbolic factor of P, where its values come from in A, and its shape.
 #[derive(Debug, Clone)]
@@ -186,15 +186,7 @@ impl TreePrecond {
                 gram.values[s]
             };
         }
-        let max_diag = gram
-            .diag
-            .iter()
-            .map(|&d| gram.values[d])
-            .fold(0.0, f64::max);
-        let reg = Regularization {
-            delta: 1e-10 * max_diag,
-            epsilon: 1e-14 * max_diag,
-        };
+        let reg = gram.regularization();
         (self.llt)
             .factor_decoupled(&self.values, reg, &[])
             .map_err(|_| FactorError)?;
