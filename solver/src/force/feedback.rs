@@ -20,6 +20,7 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
+mod kept;
 
 /// One finger's rows and where its body's columns sit in each of them.
 #[derive(Debug, Clone)]
@@ -100,6 +101,10 @@ pub(crate) struct Feedback {
     pub generation: u64,
     /// The named joints' motor torques (§5.2; `torque`).
     torques: Option<super::torque::JointTorques>,
+    /// The first solve kept through a release tick's re-solve (`kept`).
+    kept: Option<Box<kept::Kept>>,
+    /// The row scales of this tick's first solve (models with `kept`).
+    scale_first: Vec<f64>,
     /// Per flexible body of the model: its body's column offset (its
     /// deformation columns' b is the elastic force, `crate::flexible`).
     flex_offsets: Vec<usize>,
@@ -218,7 +223,14 @@ impl Feedback {
             })
             .collect::<Vec<_>>();
         let tau = settings.velocity_filter.as_secs_f64();
+        let kept = kept::Kept::new(model, settings, &gram, &solve);
         Ok(Self {
+            scale_first: if kept.is_some() {
+                vec![0.0; model.n_rows()]
+            } else {
+                Vec::new()
+            },
+            kept,
             motion: Motion::new(
                 model.q0(),
                 masses.len(),
@@ -378,6 +390,9 @@ impl Feedback {
             }
         }
         self.solve_multipliers(ev, settings)?;
+        if self.kept.is_some() {
+            self.scale_first.copy_from_slice(&self.scale);
+        }
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
         // again: the bound keeps the tick's cost fixed.
@@ -451,19 +466,26 @@ impl Feedback {
             return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
+        let projected = settings.update == UpdateRule::Projected;
+        if projected {
+            let first = std::mem::take(&mut self.scale_first);
+            self.keep_first(&first);
+            self.scale_first = first;
+        }
         self.solve_multipliers(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
         self.joint_torques(q, ev);
         self.wrenches(s, settings, q, ev, targets, out)?;
-        if settings.update == UpdateRule::Projected {
+        if projected {
             // The projected update steps with this factor and must keep the
             // kinematic active set: whether a limit stops the motion the user
             // asks for is its business, not the instantaneous inertial load's
             // (a stop that just halted a rebound "pulls" for a tick). Third
-            // and last factorisation of the tick.
+            // and last factorisation of the tick, or the first one's again
+            // (`kept`).
             self.activate(s, ev.values(), lambda);
-            self.solve_multipliers(ev, settings)?;
+            self.solve_again(ev, settings)?;
         }
         Ok(())
     }
