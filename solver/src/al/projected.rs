@@ -127,6 +127,12 @@ pub(crate) struct Projected {
     prediction: Prediction,
     /// The next step is the last of its sequence (`set_last`).
     last: bool,
+    /// Tests: every step forms the whole product (the old path), and how
+    /// many last steps took the masked one.
+    #[cfg(test)]
+    pub(crate) test_whole: bool,
+    #[cfg(test)]
+    pub(crate) test_lasts: u64,
 }
 
 /// The virtual coupling of contact-finger proxies, as the projected step
@@ -205,6 +211,10 @@ impl Projected {
             moved: Moved::new(model),
             prediction: Prediction::new(model, &s.role),
             last: false,
+            #[cfg(test)]
+            test_whole: false,
+            #[cfg(test)]
+            test_lasts: 0,
         }
     }
 
@@ -227,6 +237,10 @@ impl Projected {
     /// activation test reads it (`prediction`). Applies to one call.
     pub fn set_last(&mut self, last: bool) {
         self.last = last;
+        #[cfg(test)]
+        {
+            self.last &= !self.test_whole;
+        }
     }
 
     /// Evaluates and multiplies every row in every step (`full`), or only
@@ -453,6 +467,10 @@ impl Projected {
         // activation test (no C_q d update follows); with design columns or
         // the contact bookkeeping on, every step forms it as before.
         let last = std::mem::take(&mut self.last) && self.design.is_none() && !self.moved.enabled();
+        #[cfg(test)]
+        {
+            self.test_lasts += u64::from(last);
+        }
         if last {
             self.prediction
                 .last_step_product(jac, &s.role, fb.row_scale(), &self.mg, &mut self.jm)

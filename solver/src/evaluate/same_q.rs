@@ -27,6 +27,9 @@ pub(crate) struct SameQ {
     q: Vec<f64>,
     /// The finger constraints (the rows that read the targets).
     fingers: Vec<usize>,
+    /// Tests: value-only evaluations that took this path.
+    #[cfg(test)]
+    pub(crate) test_taken: u64,
 }
 
 impl SameQ {
@@ -54,7 +57,16 @@ impl SameQ {
                 .filter(|(_, g)| matches!(g, Geometry::Finger(_)))
                 .map(|(k, _)| k)
                 .collect(),
+            #[cfg(test)]
+            test_taken: 0,
         }
+    }
+
+    /// Tests: never take this path (the old one).
+    #[cfg(test)]
+    pub fn disable(&mut self) {
+        self.enabled = false;
+        self.valid = false;
     }
 
     /// The stored values (but the finger rows') are those at `q`.
@@ -64,7 +76,9 @@ impl SameQ {
     pub fn holds(&self, q: &[f64]) -> bool {
         self.valid
             && q.len() == self.q.len()
-            && q.iter().zip(&self.q).all(|(a, b)| a.to_bits() == b.to_bits())
+            && q.iter()
+                .zip(&self.q)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
     }
 
     /// An evaluation at another q follows: the stored values no longer
@@ -111,6 +125,10 @@ impl Evaluation {
             surfaces: &model.surfaces,
             rolling,
         };
+        #[cfg(test)]
+        {
+            same_q.test_taken += 1;
+        }
         for &k in &same_q.fingers {
             let rows = model.constraints[k].rows.clone();
             model.geometry[k].eval(&x, &mut values[rows], &mut NoJacobian);

@@ -34,6 +34,9 @@ pub(super) struct Kept {
     scale: Vec<f64>,
     /// `gram` and `solve` hold the first solve, at `scale`.
     first: bool,
+    /// Tests: third solves that swapped the first back.
+    #[cfg(test)]
+    reused: u64,
 }
 
 impl Kept {
@@ -61,6 +64,8 @@ impl Kept {
                 solve: solve.clone(),
                 scale: vec![0.0; model.n_rows()],
                 first: false,
+                #[cfg(test)]
+                reused: 0,
             })
         })
     }
@@ -74,6 +79,19 @@ impl Kept {
 }
 
 impl Feedback {
+    /// Tests: drop the spare pair (every release tick solves three times,
+    /// the old path).
+    #[cfg(test)]
+    pub(crate) fn drop_kept(&mut self) {
+        self.kept = None;
+    }
+
+    /// Tests: third solves that swapped the first back.
+    #[cfg(test)]
+    pub(crate) fn kept_reused(&self) -> u64 {
+        self.kept.as_ref().map_or(0, |k| k.reused)
+    }
+
     /// Before the release re-solve: the first solve (at `scale_first`, the
     /// scales before the release) moves to the spare pair and the spare
     /// becomes the working one.
@@ -121,6 +139,10 @@ impl Feedback {
         std::mem::swap(&mut self.gram, &mut k.gram);
         std::mem::swap(&mut self.solve, &mut k.solve);
         k.first = false;
+        #[cfg(test)]
+        {
+            k.reused += 1;
+        }
         // As `solve_multipliers` leaves them: one more factorisation
         // counted, and the scaled right-hand side of this set (y = M̃⁻¹ b
         // does not depend on the scales).
