@@ -49,8 +49,10 @@ pub(super) fn full_rank_solve<const N: usize>(
     x.iter().all(|t| t.is_finite())
 }
 
-/// `small::factor_in_place` on N × N rows.
+/// `small::factor_in_place` on N × N rows (its index loops kept as they
+/// are, so the two read alike).
 #[inline(always)]
+#[allow(clippy::needless_range_loop)]
 fn factor<const N: usize>(a: &mut [[f64; N]]) -> bool {
     for j in 0..N {
         let mut d = a[j][j];
