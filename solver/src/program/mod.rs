@@ -237,6 +237,7 @@ impl Program {
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
         let mut ev = model.evaluation();
+        ev.track_unmoved(&model, true);
         ev.anchor_rolling(&model, model.q0());
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
