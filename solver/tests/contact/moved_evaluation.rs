@@ -17,7 +17,7 @@ use crate::common::Lockstep;
 
 /// Ticks of the drag (fewer in unoptimised builds).
 fn ticks() -> usize {
-    if cfg!(debug_assertions) { 260 } else { 600 }
+    if cfg!(debug_assertions) { 120 } else { 600 }
 }
 
 /// A table handed over every this many ticks, besides the slow loop's.
