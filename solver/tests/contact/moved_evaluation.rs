@@ -120,7 +120,12 @@ fn compare(dynamics: bool, skips: bool) {
     if skips {
         assert!(cheap.skipped > 0, "the cheap run wrote every row");
     }
-    assert!(cheap.tables > 0 && cheap.nudges > 0, "no table handed over");
+    assert!(cheap.nudges > 0, "no nudged table handed over");
+    // The slow loop's first table comes with the first new contact (~230
+    // ticks in): the short unoptimised run has only the nudged ones.
+    if !cfg!(debug_assertions) {
+        assert!(cheap.tables > 0, "no slow-loop table handed over");
+    }
     assert_eq!(cheap.allocations, 0, "the cheap evaluations allocated");
     for (k, (a, b)) in cheap.ticks.iter().zip(&full.ticks).enumerate() {
         assert!(a.0 == b.0, "tick {k}: q differs");
