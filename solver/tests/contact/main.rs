@@ -15,6 +15,7 @@ mod expansion;
 #[path = "../solver/fd.rs"]
 mod fd;
 mod friction;
+mod moved_evaluation;
 mod moved_steps;
 mod pinch;
 mod recycle;
