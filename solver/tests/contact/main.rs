@@ -18,6 +18,7 @@ mod friction;
 mod moved_steps;
 mod pinch;
 mod recycle;
+mod release_spare;
 mod rest;
 mod slots;
 mod witness_fd;
