@@ -124,9 +124,10 @@ impl Feedback {
         let (cp, ri) = (g.pattern.col_ptr(), g.pattern.row_idx());
         let (nnz, n_j) = (cp[g.n_j], g.n_j);
         for j in 0..n_j {
-            for p in cp[j]..cp[j + 1] {
-                if g.decoupled[j] || g.decoupled[ri[p]] {
-                    g.values[p] = 0.0;
+            let span = cp[j]..cp[j + 1];
+            for (v, &i) in g.values[span.clone()].iter_mut().zip(&ri[span]) {
+                if g.decoupled[j] || g.decoupled[i] {
+                    *v = 0.0;
                 }
             }
         }
@@ -137,9 +138,9 @@ impl Feedback {
                 }
             }
         }
-        for j in 0..n_j {
-            if !g.decoupled[j] {
-                g.values[g.diag[j]] = raw_diag[j];
+        for ((&d, &off), &raw) in g.diag.iter().zip(&g.decoupled).zip(raw_diag) {
+            if !off {
+                g.values[d] = raw;
             }
         }
     }
