@@ -454,6 +454,21 @@ impl Program {
         self.feedback.releases()
     }
 
+    /// Ticks of the release branch whose last solve (the kinematic active
+    /// set for the projected steps) was the tick's first solve, kept aside,
+    /// instead of a third assembly and factorisation (`force::feedback`'s
+    /// `spare`).
+    pub fn force_first_solves_kept(&self) -> u64 {
+        self.feedback.first_solves_kept()
+    }
+
+    /// Solves every step of the release branch afresh (assembly and
+    /// factorisation), as before the spare: the reference the exactness
+    /// test compares with. Deallocates; not for the fast loop.
+    pub fn drop_release_spare(&mut self) {
+        self.feedback.drop_spare();
+    }
+
     /// The sizes beyond which a tick refuses its result as diverged
     /// ([`TickOutcome::Diverged`]).
     pub fn divergence_limits(&self) -> &DivergenceLimits {
