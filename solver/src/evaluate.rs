@@ -11,6 +11,7 @@ use crate::{BodyId, FingerId, Model};
 
 mod partial;
 mod same_q;
+mod since;
 
 /// Where a finger should be this tick (world frame). Not a coordinate: changing
 /// it never rebuilds anything.
@@ -101,6 +102,8 @@ pub struct Evaluation {
     pub(crate) rolling: Vec<crate::parametric::rolling::RollAnchor>,
     /// The value-only evaluation at an unchanged q (`same_q`).
     pub(crate) same_q: same_q::SameQ,
+    /// What the rows were written from (`since`; off by default).
+    since: since::Since,
 }
 
 impl Evaluation {
@@ -143,6 +146,7 @@ impl Evaluation {
             },
             rolling: vec![crate::parametric::rolling::RollAnchor::OFF; model.rolling.len()],
             same_q: same_q::SameQ::new(model),
+            since: since::Since::default(),
         }
     }
 
@@ -174,6 +178,7 @@ impl Evaluation {
     /// # Real-time
     /// No allocation: the table's length is fixed by the model.
     pub fn witnesses_mut(&mut self) -> &mut [Witness] {
+        self.since.touch();
         &mut self.witnesses
     }
 
@@ -220,12 +225,17 @@ impl Evaluation {
         self.same_q.forget();
         // Frames are scratch: a failure here leaves C and C_q untouched.
         self.set_frames(model, q, &[])?;
+        let tracked = self.since.on();
+        if tracked {
+            self.since.mark(q, &self.witnesses);
+        }
         let Self {
             frames,
             values,
             jacobian,
             witnesses,
             rolling,
+            since,
             ..
         } = self;
         let x = Ctx {
@@ -239,7 +249,16 @@ impl Evaluation {
         };
         let (blocks, vals) = jacobian.blocks_and_values_mut();
         let flexible = !model.flex_anchors.is_empty();
-        for ((g, info), b) in model.geometry.iter().zip(&model.constraints).zip(blocks) {
+        for (k, ((g, info), b)) in model
+            .geometry
+            .iter()
+            .zip(&model.constraints)
+            .zip(blocks)
+            .enumerate()
+        {
+            if tracked && since.keeps(k) {
+                continue;
+            }
             let c = &mut values[info.rows.clone()];
             if jac {
                 let [f0, f1] = g.frames();
@@ -263,7 +282,13 @@ impl Evaluation {
                 g.eval(&x, c, &mut sink);
             } else {
                 g.eval(&x, c, &mut NoJacobian);
+                if tracked {
+                    since.wrote_value(k);
+                }
             }
+        }
+        if tracked && jac {
+            since.wrote_jacobian(q, witnesses);
         }
         if all_finite(values) {
             if jac {

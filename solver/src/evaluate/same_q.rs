@@ -6,7 +6,8 @@
 //! evaluation used, with new targets. On a model whose rows read nothing
 //! but q, the frames built from q and the targets (no contact or semantic
 //! witness slots, rolling anchors, flexible anchors, surface contacts or
-//! freed origins), every other row's value is then the one already stored,
+//! freed origins: disjoint from the contact models `since` serves), every
+//! other row's value is then the one already stored,
 //! bit for bit: the same functions of the same numbers. q is compared bit
 //! for bit, so anything that moved it (a step, a prediction, `set_q`, an
 //! adopted state) evaluates as before.
@@ -37,6 +38,10 @@ impl SameQ {
     /// Allocates.
     pub fn new(model: &Model) -> Self {
         let enabled = model.contact.slots == 0
+            && !model
+                .geometry
+                .iter()
+                .any(|g| matches!(g, Geometry::Contact(_)))
             && model.semantic.slots.is_empty()
             && model.rolling.is_empty()
             && model.flex_anchors.is_empty()

@@ -20,7 +20,8 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
-mod kept;
+/// The release branch's second and third solves from the first.
+mod spare;
 
 /// One finger's rows and where its body's columns sit in each of them.
 #[derive(Debug, Clone)]
@@ -101,10 +102,6 @@ pub(crate) struct Feedback {
     pub generation: u64,
     /// The named joints' motor torques (§5.2; `torque`).
     torques: Option<super::torque::JointTorques>,
-    /// The first solve kept through a release tick's re-solve (`kept`).
-    kept: Option<Box<kept::Kept>>,
-    /// The row scales of this tick's first solve (models with `kept`).
-    scale_first: Vec<f64>,
     /// Per flexible body of the model: its body's column offset (its
     /// deformation columns' b is the elastic force, `crate::flexible`).
     flex_offsets: Vec<usize>,
@@ -121,6 +118,10 @@ pub(crate) struct Feedback {
     /// this plus its multiplier (`row_force`).
     row_known_f: Vec<f64>,
     row_known: Vec<f64>,
+    /// The first solve kept aside by the release branch (`spare`).
+    spare: Option<Box<spare::Spare>>,
+    /// Ticks whose third solve was the first one, kept (`spare`).
+    first_kept: u64,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -185,6 +186,7 @@ impl Feedback {
             let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
             solve.set_tree(tree, max_iterations);
         }
+        let spare = spare::Spare::for_model(model, settings, &gram, &solve);
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -223,14 +225,7 @@ impl Feedback {
             })
             .collect::<Vec<_>>();
         let tau = settings.velocity_filter.as_secs_f64();
-        let kept = kept::Kept::new(model, settings, &gram, &solve);
         Ok(Self {
-            scale_first: if kept.is_some() {
-                vec![0.0; model.n_rows()]
-            } else {
-                Vec::new()
-            },
-            kept,
             motion: Motion::new(
                 model.q0(),
                 masses.len(),
@@ -277,6 +272,8 @@ impl Feedback {
             y: vec![0.0; model.n_coords()],
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
+            spare,
+            first_kept: 0,
         })
     }
 
@@ -390,9 +387,6 @@ impl Feedback {
             }
         }
         self.solve_multipliers(ev, settings)?;
-        if self.kept.is_some() {
-            self.scale_first.copy_from_slice(&self.scale);
-        }
         // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
         // sign). If the solve made one pull, release those rows and solve
         // again: the bound keeps the tick's cost fixed.
@@ -466,26 +460,21 @@ impl Feedback {
             return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
-        let projected = settings.update == UpdateRule::Projected;
-        if projected {
-            let first = std::mem::take(&mut self.scale_first);
-            self.keep_first(&first);
-            self.scale_first = first;
-        }
-        self.solve_multipliers(ev, settings)?;
+        self.solve_released(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
         self.joint_torques(q, ev);
         self.wrenches(s, settings, q, ev, targets, out)?;
-        if projected {
+        if settings.update == UpdateRule::Projected {
             // The projected update steps with this factor and must keep the
             // kinematic active set: whether a limit stops the motion the user
             // asks for is its business, not the instantaneous inertial load's
             // (a stop that just halted a rebound "pulls" for a tick). Third
-            // and last factorisation of the tick, or the first one's again
-            // (`kept`).
+            // and last factorisation of the tick.
             self.activate(s, ev.values(), lambda);
-            self.solve_again(ev, settings)?;
+            if !self.restore_first() {
+                self.solve_multipliers(ev, settings)?;
+            }
         }
         Ok(())
     }
@@ -625,6 +614,11 @@ impl Feedback {
     ) -> Result<(), FactorError> {
         self.generation = self.generation.wrapping_add(1);
         self.assemble_regularized(ev, settings);
+        self.solve_assembled(ev)
+    }
+
+    /// C y scaled, and the solve for λ̃_F with the assembled A.
+    fn solve_assembled(&mut self, ev: &Evaluation) -> Result<(), FactorError> {
         let jac = ev.jacobian();
         jac.mul_vec(&self.y, &mut self.cy)
             .map_err(|_| FactorError)?;
@@ -643,6 +637,14 @@ impl Feedback {
         let q = &self.motion.q_prev;
         self.gram
             .assemble(q, jac, &self.scale, &self.masses, &self.b, &mut self.y);
+        self.note_assembly();
+        self.regularize(settings);
+    }
+
+    /// Adds the Tikhonov term (a fraction of the taking-part rows' mean
+    /// diagonal) and the contact compliance to A's diagonal; unit diagonal
+    /// for dropped rows.
+    fn regularize(&mut self, settings: &SolverSettings) {
         let (mut sum, mut count) = (0.0, 0usize);
         for (&d, &row) in self.gram.diag.iter().zip(&self.gram.j_rows) {
             if self.scale[row] != 0.0 {

@@ -204,9 +204,6 @@ impl Feedback {
     #[cfg(test)]
     pub fn set_simd(&mut self, on: bool) {
         self.solve.set_simd(on);
-        if let Some(k) = self.kept.as_deref_mut() {
-            k.set_solve(&self.solve);
-        }
     }
 
     /// Builds the multiplier solve again with the small-matrix dense path
@@ -217,9 +214,6 @@ impl Feedback {
         let groups = contact_groups(model, &self.gram);
         self.solve = MultiplierSolve::with_path(&self.gram, None, None, &groups, dense_max)
             .expect("the pattern analysed once already");
-        if let Some(k) = self.kept.as_deref_mut() {
-            k.set_solve(&self.solve);
-        }
     }
 
     /// Whether the multiplier solve takes the dense path.
