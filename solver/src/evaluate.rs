@@ -10,6 +10,7 @@ use crate::rotation::BodyFrame;
 use crate::{BodyId, FingerId, Model};
 
 mod partial;
+mod same_q;
 mod since;
 
 /// Where a finger should be this tick (world frame). Not a coordinate: changing
@@ -99,6 +100,8 @@ pub struct Evaluation {
     /// The rolling rows' tick-start anchors (`crate::parametric::rolling`),
     /// off until [`Evaluation::anchor_rolling`] sets them.
     pub(crate) rolling: Vec<crate::parametric::rolling::RollAnchor>,
+    /// The value-only evaluation at an unchanged q (`same_q`).
+    pub(crate) same_q: same_q::SameQ,
     /// What the rows were written from (`since`; off by default).
     since: since::Since,
 }
@@ -142,6 +145,7 @@ impl Evaluation {
                 w
             },
             rolling: vec![crate::parametric::rolling::RollAnchor::OFF; model.rolling.len()],
+            same_q: same_q::SameQ::new(model),
             since: since::Since::default(),
         }
     }
@@ -215,6 +219,10 @@ impl Evaluation {
             return Err(EvalError::ModelMismatch);
         }
         check_inputs(model, q, targets)?;
+        if !jac && self.same_q.holds(q) {
+            return self.finger_values(model, q, targets);
+        }
+        self.same_q.forget();
         // Frames are scratch: a failure here leaves C and C_q untouched.
         self.set_frames(model, q, &[])?;
         let tracked = self.since.on();
@@ -283,6 +291,9 @@ impl Evaluation {
             since.wrote_jacobian(q, witnesses);
         }
         if all_finite(values) {
+            if jac {
+                self.same_q.remember(q);
+            }
             return Ok(());
         }
         let row = values.iter().position(|v| !v.is_finite()).unwrap_or(0);

@@ -47,6 +47,7 @@ pub(crate) mod design;
 mod design_closure;
 pub(crate) mod fused;
 mod moved;
+mod prediction;
 pub(crate) mod projected;
 pub(crate) mod scaling;
 mod settings;

@@ -83,6 +83,11 @@ impl Moved {
         self.valid = false;
     }
 
+    /// Whether steps leave unchanged contact rows out.
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+
     /// Starts a sequence: the next evaluation is whole.
     pub fn begin(&mut self) {
         self.valid = false;

@@ -53,6 +53,7 @@
 
 use super::design::DesignStep;
 use super::moved::Moved;
+use super::prediction::Prediction;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
 use crate::{EvalError, Evaluation, FingerTarget, Model};
@@ -122,6 +123,16 @@ pub(crate) struct Projected {
     design: Option<DesignStep>,
     /// Which contact rows a step can change (`moved`).
     moved: Moved,
+    /// The inequality rows' prediction (`prediction`).
+    prediction: Prediction,
+    /// The next step is the last of its sequence (`set_last`).
+    last: bool,
+    /// Tests: every step forms the whole product (the old path), and how
+    /// many last steps took the masked one.
+    #[cfg(test)]
+    pub(crate) test_whole: bool,
+    #[cfg(test)]
+    pub(crate) test_lasts: u64,
 }
 
 /// The virtual coupling of contact-finger proxies, as the projected step
@@ -198,6 +209,12 @@ impl Projected {
             speed_limited: false,
             design: None,
             moved: Moved::new(model),
+            prediction: Prediction::new(model, &s.role),
+            last: false,
+            #[cfg(test)]
+            test_whole: false,
+            #[cfg(test)]
+            test_lasts: 0,
         }
     }
 
@@ -210,7 +227,20 @@ impl Projected {
     /// every step.
     pub fn begin(&mut self) {
         self.jd_current = false;
+        self.last = false;
         self.moved.begin();
+    }
+
+    /// Tells whether the next [`step`](Self::step) is the last of its
+    /// sequence (the caller takes no further step before the next
+    /// [`begin`](Self::begin)): it then forms C_q M̃⁻¹ g only where the
+    /// activation test reads it (`prediction`). Applies to one call.
+    pub fn set_last(&mut self, last: bool) {
+        self.last = last;
+        #[cfg(test)]
+        {
+            self.last &= !self.test_whole;
+        }
     }
 
     /// Evaluates and multiplies every row in every step (`full`), or only
@@ -433,15 +463,27 @@ impl Projected {
         }
         // Predicted values of the inactive inequality rows after the step
         // (and the update of C_q d).
-        self.moved
-            .mul_vec(jac, &self.mg, &mut self.jm)
-            .map_err(|_| StepError::NonFinite)?;
+        // The last step of a sequence needs the product only for the
+        // activation test (no C_q d update follows); with design columns or
+        // the contact bookkeeping on, every step forms it as before.
+        let last = std::mem::take(&mut self.last) && self.design.is_none() && !self.moved.enabled();
+        #[cfg(test)]
+        {
+            self.test_lasts += u64::from(last);
+        }
+        if last {
+            self.prediction
+                .last_step_product(jac, &s.role, fb.row_scale(), &self.mg, &mut self.jm)
+        } else {
+            self.moved.mul_vec(jac, &self.mg, &mut self.jm)
+        }
+        .map_err(|_| StepError::NonFinite)?;
         let c = ev.values();
         let mut activate = false;
-        for (i, &ci) in c.iter().enumerate() {
+        for &i in self.prediction.rows() {
             if matches!(s.role[i], Role::Inequality | Role::Contact)
                 && fb.row_scale()[i] == 0.0
-                && ci - step * (self.jd[i] + self.jm[i]) < -ACTIVATE_TOLERANCE_M
+                && c[i] - step * (self.jd[i] + self.jm[i]) < -ACTIVATE_TOLERANCE_M
             {
                 fb.forced[i] = true;
                 activate = true;
@@ -453,8 +495,14 @@ impl Projected {
         for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
             *qc -= step * (d + mg);
         }
-        for (jd, jm) in self.jd.iter_mut().zip(&self.jm) {
-            *jd -= step * (*jd + jm);
+        if last {
+            // jm holds only the prediction's rows: C_q d is formed afresh
+            // should another step come before `begin`.
+            self.jd_current = false;
+        } else {
+            for (jd, jm) in self.jd.iter_mut().zip(&self.jm) {
+                *jd -= step * (*jd + jm);
+            }
         }
         for (i, (l, &y)) in lambda.iter_mut().zip(&self.y).enumerate() {
             *l = match s.role[i] {

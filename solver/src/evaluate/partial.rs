@@ -35,6 +35,7 @@ impl Evaluation {
             return Err(EvalError::ModelMismatch);
         }
         check_inputs(model, q, targets)?;
+        self.same_q.forget();
         self.set_frames(model, q, moved)?;
         let Self {
             frames,

@@ -62,6 +62,7 @@ mod rank_one;
 mod redundancy;
 mod reference;
 pub(crate) mod small;
+mod small_fixed;
 mod solve;
 mod torque;
 mod wrench;

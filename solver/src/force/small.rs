@@ -176,9 +176,26 @@ fn sweeps<const N: usize>(a: &mut [f64], v: &mut [f64], scale: f64) {
 /// No allocation; O(n³).
 fn full_rank_solve(a: &[f64], b: &[f64], x: &mut [f64], v: &mut [f64], reference: f64) -> bool {
     let n = b.len();
-    if n == 0 {
-        return false;
+    // The finger blocks' sizes, known at compile time: the same operations
+    // in the same order without bounds checks (`fixed_size`).
+    match n {
+        0 => return false,
+        3 => return super::small_fixed::full_rank_solve::<3>(a, b, x, v, reference),
+        6 => return super::small_fixed::full_rank_solve::<6>(a, b, x, v, reference),
+        _ => {}
     }
+    full_rank_solve_generic(a, b, x, v, reference)
+}
+
+/// [`full_rank_solve`] for any n ≥ 1, with n known at run time.
+pub(super) fn full_rank_solve_generic(
+    a: &[f64],
+    b: &[f64],
+    x: &mut [f64],
+    v: &mut [f64],
+    reference: f64,
+) -> bool {
+    let n = b.len();
     v[..n * n].copy_from_slice(&a[..n * n]);
     let norm = (0..n)
         .map(|c| (0..n).map(|r| a[r * n + c].abs()).sum::<f64>())

@@ -219,6 +219,8 @@ impl Program {
         }
         let mut k = 0;
         while k < n {
+            self.projected
+                .set_last(k + 1 == n && self.settings.update == UpdateRule::Projected);
             let done = match self.settings.update {
                 UpdateRule::Gradient => self.gradient_step(targets).map(|()| {
                     self.hold_design_off();
