@@ -8,8 +8,11 @@ For each scene `haptloop scenes` lists, runs
 binary and prints one Markdown row: summary.json's violation.max,
 reference.force_error_n.max, contact.max_penetration_m and
 violation.ticks_failed, as "main / new" ("—" where the scene has no such
-figure), and the exit statuses when either run failed.
+figure), and the exit statuses when either run failed. Then compares the
+runs' trace.csv, bodies.csv, fingers.csv and contacts.csv byte for byte and
+prints how many are identical and which differ.
 """
+import filecmp
 import json
 import os
 import re
@@ -80,6 +83,29 @@ def main():
         if a["rc"] or b["rc"]:
             row[-1] += f" (exit {a['rc']} / {b['rc']}: {a.get('err', '')}{b.get('err', '')})"
         print("| " + " | ".join(row) + " |", flush=True)
+    same, differ = identical_csv(root)
+    print(f"\n{same} of {same + len(differ)} csv files byte-identical")
+    for f in differ:
+        print(f"  differs: {f}")
+
+
+def identical_csv(root):
+    """(count of byte-identical csv files, the names of the others) over
+    every scene's main-*/new-* pair of run directories under `root`."""
+    same, differ = 0, []
+    for d in sorted(os.listdir(root)):
+        if not d.startswith("main-"):
+            continue
+        other = os.path.join(root, "new-" + d[len("main-"):])
+        for f in ("trace.csv", "bodies.csv", "fingers.csv", "contacts.csv"):
+            a, b = os.path.join(root, d, f), os.path.join(other, f)
+            if not (os.path.exists(a) or os.path.exists(b)):
+                continue
+            if os.path.exists(a) and os.path.exists(b) and filecmp.cmp(a, b, shallow=False):
+                same += 1
+            else:
+                differ.append(f"{d[len('main-'):]}/{f}")
+    return same, differ
 
 
 if __name__ == "__main__":
