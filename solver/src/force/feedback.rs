@@ -20,6 +20,7 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
+mod norms;
 
 /// One finger's rows and where its body's columns sit in each of them.
 #[derive(Debug, Clone)]
@@ -53,6 +54,10 @@ pub(crate) struct Feedback {
     pub motion: Motion,
     gram: Gram,
     solve: MultiplierSolve,
+    /// The coupled pattern for the assemblies where the decoupled one is
+    /// not exact (`norms`); `None` without decoupled norm rows or with a
+    /// force solver other than the Cholesky.
+    coupled: Option<norms::CoupledPattern>,
     fingers: Vec<FingerRows>,
     b: Vec<f64>,
     y: Vec<f64>,
@@ -164,7 +169,8 @@ impl Feedback {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
         let n_bodies = masses.len();
-        let gram = Gram::new(model, jac, &masses, excluded);
+        let decouple = settings.force_solver == ForceSolver::Cholesky;
+        let gram = Gram::with_norms(model, jac, &masses, excluded, decouple);
         let (cg, matvec) = match settings.force_solver {
             ForceSolver::Cholesky => (None, None),
             ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
@@ -180,6 +186,19 @@ impl Feedback {
             let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
             solve.set_tree(tree, max_iterations);
         }
+        let coupled = if decouple {
+            norms::CoupledPattern::new(
+                model,
+                jac,
+                &masses,
+                excluded,
+                &gram,
+                &solve,
+                crate::cholesky::DENSE_MAX,
+            )?
+        } else {
+            None
+        };
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -228,6 +247,7 @@ impl Feedback {
             masses,
             gram,
             solve,
+            coupled,
             prev_error: vec![Vector3::zeros(); fingers.len()],
             releases: 0,
             stick: vec![false; model.n_rows()],
@@ -618,6 +638,7 @@ impl Feedback {
     fn assemble_regularized(&mut self, ev: &Evaluation, settings: &SolverSettings) {
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
+        self.pick_pattern(jac);
         let q = &self.motion.q_prev;
         self.gram
             .assemble(q, jac, &self.scale, &self.masses, &self.b, &mut self.y);

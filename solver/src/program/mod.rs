@@ -72,6 +72,8 @@ mod report;
 mod semantic;
 mod stages;
 mod state;
+#[cfg(test)]
+mod tests_norms;
 mod tick;
 
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};

@@ -82,9 +82,15 @@ fn probe() {
             red.local,
             build.0 * 1e3
         );
+        let (coupled, coupled_cliques, norms) = p.feedback.coupled_entries();
         println!(
-            "  L ({:?}): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
+            "  L ({:?}{}; {norms} norm rows decoupled): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
             shape.ordering,
+            if shape.induced {
+                ", the coupled pattern's"
+            } else {
+                ""
+            },
             shape.supernodes,
             shape.widest,
             shape.values,
@@ -93,7 +99,14 @@ fn probe() {
         );
         let (n, tail, entries, cliques) = p.feedback.factor_entries();
         let (amd, nd) = crate::cholesky::Cholesky::both_shapes(n, tail, &entries, &cliques);
-        for (label, sh) in [("AMD", amd), ("dissection", nd)] {
+        let (camd, cnd) =
+            crate::cholesky::Cholesky::both_shapes(n, tail, &coupled, &coupled_cliques);
+        for (label, sh) in [
+            ("AMD", amd),
+            ("dissection", nd),
+            ("coupled pattern, AMD", camd),
+            ("coupled pattern, dissection", cnd),
+        ] {
             println!(
                 "  {label}: {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd, cost {} k",
                 sh.supernodes,
