@@ -43,6 +43,9 @@ pub(crate) mod universal;
 pub(crate) mod weld;
 pub mod witness;
 
+#[cfg(test)]
+mod tests_scale;
+
 pub use meta::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 
 use block::{Ctx, Groups, Sink, Slot};

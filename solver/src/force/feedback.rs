@@ -169,7 +169,7 @@ impl Feedback {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
         let n_bodies = masses.len();
-        let decouple = settings.force_solver == ForceSolver::Cholesky;
+        let decouple = settings.norm_rows_out && settings.force_solver == ForceSolver::Cholesky;
         let gram = Gram::with_norms(model, jac, &masses, excluded, decouple);
         let (cg, matvec) = match settings.force_solver {
             ForceSolver::Cholesky => (None, None),

@@ -125,13 +125,22 @@ fn decoupled_norm_rows_match_the_coupled_factor() {
         ("cluttered", 2e-3),
     ] {
         let (model, settings) = program(name);
-        let dec = Program::new(model.clone(), settings).unwrap();
+        let out = SolverSettings {
+            norm_rows_out: true,
+            ..settings
+        };
+        let dec = Program::new(model.clone(), out).unwrap();
         assert!(
             dec.feedback.coupled_assemblies().1,
             "{name}: no norm row decoupled"
         );
-        let mut cou = Program::new(model.clone(), settings).unwrap();
+        let mut cou = Program::new(model.clone(), out).unwrap();
         cou.feedback.keep_coupled();
+        let default = Program::new(model.clone(), settings).unwrap();
+        assert!(
+            !default.feedback.coupled_assemblies().1,
+            "{name}: on by default"
+        );
         let mut programs = vec![cou, dec];
         let (d, c) = (&programs[1].feedback, &programs[0].feedback);
         assert!(
@@ -146,7 +155,7 @@ fn decoupled_norm_rows_match_the_coupled_factor() {
             } else {
                 usize::MAX
             };
-            let mut alt = Program::new(model.clone(), settings).unwrap();
+            let mut alt = Program::new(model.clone(), out).unwrap();
             alt.feedback.keep_coupled();
             alt.feedback.set_dense(&model, other);
             programs.push(alt);
