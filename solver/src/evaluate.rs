@@ -10,6 +10,7 @@ use crate::rotation::BodyFrame;
 use crate::{BodyId, FingerId, Model};
 
 mod partial;
+mod since;
 
 /// Where a finger should be this tick (world frame). Not a coordinate: changing
 /// it never rebuilds anything.
@@ -98,6 +99,8 @@ pub struct Evaluation {
     /// The rolling rows' tick-start anchors (`crate::parametric::rolling`),
     /// off until [`Evaluation::anchor_rolling`] sets them.
     pub(crate) rolling: Vec<crate::parametric::rolling::RollAnchor>,
+    /// What the rows were written from (`since`; off by default).
+    since: since::Since,
 }
 
 impl Evaluation {
@@ -139,6 +142,7 @@ impl Evaluation {
                 w
             },
             rolling: vec![crate::parametric::rolling::RollAnchor::OFF; model.rolling.len()],
+            since: since::Since::default(),
         }
     }
 
@@ -170,6 +174,7 @@ impl Evaluation {
     /// # Real-time
     /// No allocation: the table's length is fixed by the model.
     pub fn witnesses_mut(&mut self) -> &mut [Witness] {
+        self.since.touch();
         &mut self.witnesses
     }
 
@@ -212,12 +217,17 @@ impl Evaluation {
         check_inputs(model, q, targets)?;
         // Frames are scratch: a failure here leaves C and C_q untouched.
         self.set_frames(model, q, &[])?;
+        let tracked = self.since.on();
+        if tracked {
+            self.since.mark(q, &self.witnesses);
+        }
         let Self {
             frames,
             values,
             jacobian,
             witnesses,
             rolling,
+            since,
             ..
         } = self;
         let x = Ctx {
@@ -231,7 +241,16 @@ impl Evaluation {
         };
         let (blocks, vals) = jacobian.blocks_and_values_mut();
         let flexible = !model.flex_anchors.is_empty();
-        for ((g, info), b) in model.geometry.iter().zip(&model.constraints).zip(blocks) {
+        for (k, ((g, info), b)) in model
+            .geometry
+            .iter()
+            .zip(&model.constraints)
+            .zip(blocks)
+            .enumerate()
+        {
+            if tracked && since.keeps(k) {
+                continue;
+            }
             let c = &mut values[info.rows.clone()];
             if jac {
                 let [f0, f1] = g.frames();
@@ -255,7 +274,13 @@ impl Evaluation {
                 g.eval(&x, c, &mut sink);
             } else {
                 g.eval(&x, c, &mut NoJacobian);
+                if tracked {
+                    since.wrote_value(k);
+                }
             }
+        }
+        if tracked && jac {
+            since.wrote_jacobian(q, witnesses);
         }
         if all_finite(values) {
             return Ok(());

@@ -545,7 +545,8 @@ fn an_out_of_range_priority_is_a_usage_error_for_run_and_probe() {
 /// deliberately unstable gain fails every tick, so the slow loop keeps
 /// re-projecting), the fault path and its force cut, injected safety events,
 /// device traces recorded into their queues, and the force solve's
-/// release-and-re-solve branch (Stewart's stroke limits). Only the fast
+/// release-and-re-solve branch (Stewart's stroke limits), with its masked
+/// second solve and its first solve taken back. Only the fast
 /// thread is counted; the slow thread allocates freely, as it may.
 #[test]
 fn the_fast_loop_tick_allocates_nothing_on_every_path() {
@@ -556,7 +557,7 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
 
     let cases = [("stewart", None, 6.0), ("four-bar", Some(1e20), 2.0)];
     let mut swapped = 0;
-    let mut releases = 0;
+    let (mut releases, mut kept) = (0, 0);
     for (name, gain, seconds) in cases {
         let dir = tempfile::tempdir().unwrap();
         let scene = resolve(name).unwrap();
@@ -612,6 +613,7 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
         );
         swapped += fast.stats().programs_swapped;
         releases += fast.program().force_releases();
+        kept += fast.program().force_first_solves_kept();
         if gain.is_some() {
             assert_eq!(
                 fast.stats().solver_failures,
@@ -626,6 +628,10 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
         "no program was handed over during the counted ticks"
     );
     assert!(releases > 0, "the release-and-re-solve branch never ran");
+    assert!(
+        kept > 0,
+        "the release branch never took its first solve back"
+    );
 }
 
 /// Contact scenes on the fast thread allocate nothing either, with the slow

@@ -41,6 +41,7 @@ impl Evaluation {
             values,
             witnesses,
             rolling,
+            since,
             ..
         } = self;
         let x = Ctx {
@@ -56,6 +57,8 @@ impl Evaluation {
             let kept = matches!(g, Geometry::Contact(_)) && skip.get(k).copied().unwrap_or(false);
             if !kept {
                 g.eval(&x, &mut values[info.rows.clone()], &mut NoJacobian);
+                // Written at q, not at the Jacobian's inputs (`since`).
+                since.unsync(k);
             }
         }
         if all_finite(values) {

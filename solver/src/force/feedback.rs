@@ -21,6 +21,8 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 /// The small accessors and re-factorisations around `compute`.
 mod access;
 mod norms;
+/// The release branch's second and third solves from the first.
+mod spare;
 
 /// One finger's rows and where its body's columns sit in each of them.
 #[derive(Debug, Clone)]
@@ -121,6 +123,10 @@ pub(crate) struct Feedback {
     /// this plus its multiplier (`row_force`).
     row_known_f: Vec<f64>,
     row_known: Vec<f64>,
+    /// The first solve kept aside by the release branch (`spare`).
+    spare: Option<Box<spare::Spare>>,
+    /// Ticks whose third solve was the first one, kept (`spare`).
+    first_kept: u64,
 }
 
 /// Relative compliance of contact and friction rows in A: their diagonal is
@@ -198,6 +204,13 @@ impl Feedback {
             )?
         } else {
             None
+        };
+        // The spare keeps a second factor of this pattern; with the norm
+        // rows out an assembly may swap in the coupled pattern (`norms`),
+        // which it does not follow: no spare then.
+        let spare = match coupled {
+            Some(_) => None,
+            None => spare::Spare::for_model(model, settings, &gram, &solve),
         };
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
@@ -285,6 +298,8 @@ impl Feedback {
             y: vec![0.0; model.n_coords()],
             cy: vec![0.0; model.n_rows()],
             scale: vec![0.0; model.n_rows()],
+            spare,
+            first_kept: 0,
         })
     }
 
@@ -471,7 +486,7 @@ impl Feedback {
             return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
-        self.solve_multipliers(ev, settings)?;
+        self.solve_released(ev, settings)?;
         self.max_pull_n = self.contact_pull(s);
         self.pair_normal_forces(s);
         self.joint_torques(q, ev);
@@ -483,7 +498,9 @@ impl Feedback {
             // (a stop that just halted a rebound "pulls" for a tick). Third
             // and last factorisation of the tick.
             self.activate(s, ev.values(), lambda);
-            self.solve_multipliers(ev, settings)?;
+            if !self.restore_first() {
+                self.solve_multipliers(ev, settings)?;
+            }
         }
         Ok(())
     }
@@ -623,6 +640,11 @@ impl Feedback {
     ) -> Result<(), FactorError> {
         self.generation = self.generation.wrapping_add(1);
         self.assemble_regularized(ev, settings);
+        self.solve_assembled(ev)
+    }
+
+    /// C y scaled, and the solve for λ̃_F with the assembled A.
+    fn solve_assembled(&mut self, ev: &Evaluation) -> Result<(), FactorError> {
         let jac = ev.jacobian();
         jac.mul_vec(&self.y, &mut self.cy)
             .map_err(|_| FactorError)?;
@@ -642,6 +664,14 @@ impl Feedback {
         let q = &self.motion.q_prev;
         self.gram
             .assemble(q, jac, &self.scale, &self.masses, &self.b, &mut self.y);
+        self.note_assembly();
+        self.regularize(settings);
+    }
+
+    /// Adds the Tikhonov term (a fraction of the taking-part rows' mean
+    /// diagonal) and the contact compliance to A's diagonal; unit diagonal
+    /// for dropped rows.
+    fn regularize(&mut self, settings: &SolverSettings) {
         let (mut sum, mut count) = (0.0, 0usize);
         for (&d, &row) in self.gram.diag.iter().zip(&self.gram.j_rows) {
             if self.scale[row] != 0.0 {

@@ -111,6 +111,11 @@ pub(crate) struct Gram {
     pub decoupled: Vec<bool>,
     /// M̃_e⁻¹ of each body (layout order) at the last assembly.
     minv_e: Vec<Matrix4<f64>>,
+    /// The bits `minv_e[k]` was computed from (Euler parameters, inverse
+    /// principal inertia, norm mass), `None` before the first: a body whose
+    /// rotation and mass did not change since keeps its M̃_e⁻¹ without
+    /// recomputing it (the same bits; on `cluttered` most bodies rest).
+    minv_key: Vec<Option<[u64; 8]>>,
     /// The model's auxiliary blocks (metric and columns).
     aux_blocks: Vec<crate::model::AuxBlock>,
     /// Their rows (empty for a model without auxiliary columns).
@@ -335,6 +340,7 @@ impl Gram {
             live: vec![false; max_entries],
             decoupled: vec![false; n_j],
             minv_e: vec![Matrix4::zeros(); masses.len()],
+            minv_key: vec![None; masses.len()],
             aux_blocks,
             aux,
             aux_cu,
@@ -478,13 +484,10 @@ impl Gram {
         for body in &self.bodies {
             let m = &masses[body.mass];
             let o = m.offset;
-            let e = Vector4::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
-            let r = Vector3::new(q[o], q[o + 1], q[o + 2]);
-            let Some(frame) = BodyFrame::new(r, [e[0], e[1], e[2], e[3]]) else {
+            let k = body.mass;
+            let Some(minv) = body_minv(&mut self.minv_e[k], &mut self.minv_key[k], m, q) else {
                 continue;
             };
-            let minv = m.inv_rotational_mass(&frame, &e);
-            self.minv_e[body.mass] = minv;
             for c in 0..3 {
                 y[o + c] = b[o + c] / m.mass;
             }
@@ -602,6 +605,46 @@ impl Gram {
     }
 }
 
+/// M̃_e⁻¹ of body `m` at `q` into `minv_e`: recomputed only when
+/// its Euler parameters or its mass changed bit for bit since the last
+/// time (`None`, and the entry untouched, for a degenerate rotation).
+///
+/// # Real-time
+/// No allocation; O(1).
+#[inline]
+fn body_minv(
+    minv_e: &mut Matrix4<f64>,
+    minv_key: &mut Option<[u64; 8]>,
+    m: &BodyMass,
+    q: &[f64],
+) -> Option<Matrix4<f64>> {
+    let o = m.offset;
+    let e = Vector4::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
+    let j = &m.inv_inertia;
+    let key = [
+        e[0].to_bits(),
+        e[1].to_bits(),
+        e[2].to_bits(),
+        e[3].to_bits(),
+        j.x.to_bits(),
+        j.y.to_bits(),
+        j.z.to_bits(),
+        m.norm_mass.to_bits(),
+    ];
+    if *minv_key == Some(key) {
+        return Some(*minv_e);
+    }
+    // The frame's rotation reads e only; its position is not used.
+    let Some(frame) = BodyFrame::new(Vector3::zeros(), [e[0], e[1], e[2], e[3]]) else {
+        *minv_key = None;
+        return None;
+    };
+    let minv = m.inv_rotational_mass(&frame, &e);
+    *minv_e = minv;
+    *minv_key = Some(key);
+    Some(minv)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -666,5 +709,41 @@ mod tests {
             }
         }
         assert!(worst < 1e-9 * a.amax(), "worst {worst}, scale {}", a.amax());
+    }
+
+    /// A Gram that keeps the inverse rotational masses of bodies whose
+    /// Euler parameters did not change assembles the same bits as a fresh
+    /// one, after one body turned, after it turned back, and with a
+    /// degenerate rotation in between (which must not leave a stale key).
+    #[test]
+    fn kept_inverse_masses_give_the_bits_of_a_fresh_assembly() {
+        let model = four_bar();
+        let mut ev = model.evaluation();
+        let q0 = model.q0().to_vec();
+        let masses = BodyMass::of_model(&model);
+        let o = masses[1].offset;
+        let mut turned = q0.clone();
+        turned[o + 4] += 0.01;
+        let mut degenerate = q0.clone();
+        degenerate[o + 3..o + 7].fill(0.0);
+        ev.evaluate(&model, &q0, &model.initial_targets()).unwrap();
+        let jac = ev.jacobian();
+        let scale = vec![1.0; model.n_rows()];
+        let b: Vec<f64> = (0..model.n_coords()).map(|k| 0.1 * k as f64).collect();
+        let mut kept = Gram::new(&model, jac, &masses, &[]);
+        let mut y = vec![0.0; model.n_coords()];
+        let mut fresh_y = y.clone();
+        for q in [&q0, &turned, &degenerate, &q0, &turned] {
+            kept.assemble(q, jac, &scale, &masses, &b, &mut y);
+            let mut fresh = Gram::new(&model, jac, &masses, &[]);
+            fresh.assemble(q, jac, &scale, &masses, &b, &mut fresh_y);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&kept.values), bits(&fresh.values));
+            assert_eq!(bits(&y), bits(&fresh_y));
+            let same = kept.minv_e.iter().zip(&fresh.minv_e);
+            if q != &degenerate {
+                assert!(same.clone().all(|(a, b)| a == b));
+            }
+        }
     }
 }

@@ -101,6 +101,27 @@ impl Program {
         self.projected.set_full_steps(full, &self.model);
     }
 
+    /// Makes every evaluation write every row (`full`), or leave alone the
+    /// contact rows whose bodies and witnesses are unchanged since they were
+    /// written (the default, `evaluate::since`: the same values and Jacobian
+    /// bit for bit). For comparisons.
+    pub fn set_full_evaluation(&mut self, full: bool) {
+        self.ev.track_unmoved(&self.model, !full);
+    }
+
+    /// The evaluation the program runs on: C and C_q at the last evaluated
+    /// q, and the witness table (for comparisons).
+    pub fn evaluation(&self) -> &crate::Evaluation {
+        &self.ev
+    }
+
+    /// Contact constraints the Jacobian evaluations left alone because
+    /// neither body had moved and their witnesses were unchanged, summed
+    /// over the program's life.
+    pub fn evaluation_contacts_skipped(&self) -> u64 {
+        self.ev.unmoved_contacts_skipped()
+    }
+
     /// Contact constraints (a pair's witness rows) the projected steps
     /// left unevaluated because neither body had moved, summed over the
     /// program's life.

@@ -239,6 +239,11 @@ impl Program {
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
         let mut ev = model.evaluation();
+        // Quasi-static programs leave resting bodies' contact rows alone
+        // (`evaluate::since`); under inertial motion every body on a
+        // support creeps a few ulps a tick, so every row would be written
+        // anyway and the bookkeeping is overhead (`stack` 2.0 → 2.5 µs).
+        ev.track_unmoved(&model, !settings.dynamics);
         ev.anchor_rolling(&model, model.q0());
         ev.evaluate(&model, model.q0(), &model.initial_targets())?;
         let mut scaling = Scaling::new(&model, &settings);
@@ -449,6 +454,21 @@ impl Program {
     /// would have pulled and solved again (the release-and-re-solve branch).
     pub fn force_releases(&self) -> u64 {
         self.feedback.releases()
+    }
+
+    /// Ticks of the release branch whose last solve (the kinematic active
+    /// set for the projected steps) was the tick's first solve, kept aside,
+    /// instead of a third assembly and factorisation (`force::feedback`'s
+    /// `spare`).
+    pub fn force_first_solves_kept(&self) -> u64 {
+        self.feedback.first_solves_kept()
+    }
+
+    /// Solves every step of the release branch afresh (assembly and
+    /// factorisation), as before the spare: the reference the exactness
+    /// test compares with. Deallocates; not for the fast loop.
+    pub fn drop_release_spare(&mut self) {
+        self.feedback.drop_spare();
     }
 
     /// The sizes beyond which a tick refuses its result as diverged

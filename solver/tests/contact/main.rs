@@ -15,9 +15,11 @@ mod expansion;
 #[path = "../solver/fd.rs"]
 mod fd;
 mod friction;
+mod moved_evaluation;
 mod moved_steps;
 mod pinch;
 mod recycle;
+mod release_spare;
 mod rest;
 mod slots;
 mod witness_fd;
