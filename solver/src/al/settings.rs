@@ -267,6 +267,15 @@ pub struct SolverSettings {
     /// full-rank built-in mechanisms the check costs one extra factorisation
     /// and eight sparse solves (BENCHMARKS.md).
     pub redundancy: RedundancyCheck,
+    /// Takes each body's quaternion-norm row out of the Cholesky force
+    /// factor's pattern where its coupling with the body's other rows is
+    /// zero in exact arithmetic (`force::feedback::norms`): the lattice's
+    /// factor 153 k → 120 k multiply-adds. Default off: the forces agree
+    /// with the coupled factor's to round-off, but that round-off flips
+    /// four knife-edge integration tests (a dead-point snap, cluttered's
+    /// backups); see BENCHMARKS.md, "the quaternion-norm rows out of the
+    /// force factor".
+    pub norm_rows_out: bool,
 }
 
 impl Default for SolverSettings {
@@ -289,6 +298,7 @@ impl Default for SolverSettings {
             force_regularization: 0.0,
             dynamics: false,
             redundancy: RedundancyCheck::Auto,
+            norm_rows_out: false,
         }
     }
 }

@@ -63,6 +63,8 @@ pub(crate) struct NotPositive {
 pub(crate) struct FactorShape {
     /// The fill-reducing order chosen.
     pub ordering: Ordering,
+    /// That order is a superset pattern's ([`Superset`]).
+    pub induced: bool,
     /// Order of the matrix (tail included).
     pub n: usize,
     /// Rows and columns of the unfactored tail.
@@ -91,6 +93,17 @@ impl FactorShape {
 /// Solves per numeric factorisation in a typical tick (three projected
 /// steps and the force solve), for choosing the ordering.
 pub(crate) const SOLVES_PER_FACTOR: usize = 4;
+
+/// A pattern's superset: the same matrix with the entries `extra` (row,
+/// column, any value index) that are zero in exact arithmetic kept, and its
+/// `cliques`. [`Cholesky::analyze_small_dense`] tries its orders too and
+/// keeps the cheapest factor, so leaving structural zeros out of a pattern
+/// never makes its factor dearer than the superset's orders give.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Superset<'a> {
+    pub extra: &'a [(usize, usize, usize)],
+    pub cliques: &'a [Vec<usize>],
+}
 
 /// A fill-reducing order of the leading block.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -194,7 +207,21 @@ impl Cholesky {
         groups: &[u32],
         max_rhs: usize,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let sym = Symbolic::analyze(n, tail, entries, cliques, groups)?;
+        Self::analyze_superset(n, tail, entries, cliques, groups, max_rhs, None)
+    }
+
+    /// [`analyze_grouped`](Self::analyze_grouped), trying the orders of
+    /// `superset` too. Allocates.
+    fn analyze_superset(
+        n: usize,
+        tail: usize,
+        entries: &[(usize, usize, usize)],
+        cliques: &[Vec<usize>],
+        groups: &[u32],
+        max_rhs: usize,
+        superset: Option<Superset>,
+    ) -> Result<Self, faer::sparse::FaerError> {
+        let sym = Symbolic::analyze(n, tail, entries, cliques, groups, superset)?;
         // The solve kernels are specialised up to 8 right-hand sides.
         let max_rhs = max_rhs.clamp(1, 8);
         let widest = sym
@@ -222,7 +249,9 @@ impl Cholesky {
     /// the dense path (`dense`) when the whole order n is at most
     /// `dense_max` ([`DENSE_MAX`] in the fast loop, 0: never): same order,
     /// same tail, same pivot rule, the same factor up to each entry's
-    /// summation order. Allocates.
+    /// summation order; the orders of `superset` are candidates too.
+    /// Allocates.
+    #[allow(clippy::too_many_arguments)]
     pub fn analyze_small_dense(
         n: usize,
         tail: usize,
@@ -231,8 +260,9 @@ impl Cholesky {
         groups: &[u32],
         max_rhs: usize,
         dense_max: usize,
+        superset: Option<Superset>,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let mut llt = Self::analyze_grouped(n, tail, entries, cliques, groups, max_rhs)?;
+        let mut llt = Self::analyze_superset(n, tail, entries, cliques, groups, max_rhs, superset)?;
         if n <= dense_max {
             let d = Dense::new(n, tail, &llt.sym.iperm, entries);
             llt.values = vec![0.0; d.len_values()];

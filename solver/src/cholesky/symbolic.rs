@@ -43,6 +43,8 @@ pub(super) struct Symbolic {
     pub tail: usize,
     /// The fill-reducing order of the leading block.
     pub ordering: Ordering,
+    /// The order came from a superset pattern (`Superset`).
+    pub induced: bool,
     /// Supernodes before the tail's (all of them without a tail).
     pub lead_supernodes: usize,
     /// iperm[original index] = index in the factor's order.
@@ -54,6 +56,50 @@ pub(super) struct Symbolic {
     pub updates: Vec<Update>,
     pub rel: Vec<u32>,
     len_values: usize,
+}
+
+/// The fill-reducing orders `Symbolic::analyze` tries on the `lead`
+/// leading rows of the pattern `entries` (`perm_inv[old] = new`): AMD, and
+/// for a block of at least `MIN_DISSECTION` rows with `cliques` the nested
+/// dissection.
+fn orders(
+    lead: usize,
+    entries: &[(usize, usize, usize)],
+    cliques: &[Vec<usize>],
+) -> Result<Vec<(Vec<usize>, Ordering)>, faer::sparse::FaerError> {
+    let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
+    for &(r, c, _) in entries {
+        if r < lead {
+            cols[c].push(r);
+        }
+    }
+    let mut col_ptr = vec![0usize];
+    let mut row_idx = Vec::new();
+    for c in &mut cols {
+        c.sort_unstable();
+        c.dedup();
+        row_idx.extend_from_slice(c);
+        col_ptr.push(row_idx.len());
+    }
+    let mut out = vec![(
+        dissection::amd_order(lead, &col_ptr, &row_idx)?,
+        Ordering::Amd,
+    )];
+    if lead < MIN_DISSECTION || cliques.is_empty() {
+        return Ok(out);
+    }
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
+    for (c, rows) in cols.iter().enumerate() {
+        for &r in rows {
+            if r != c {
+                adj[c].push(r);
+                adj[r].push(c);
+            }
+        }
+    }
+    let nd = dissection::dissection_order(&adj, cliques, dissection::LEAF_ROWS)?;
+    out.push((nd, Ordering::Dissection));
+    Ok(out)
 }
 
 /// Relaxed amalgamation (as CHOLMOD's `nrelax`/`zrelax`): a merged
@@ -90,6 +136,7 @@ impl Symbolic {
         }
         super::FactorShape {
             ordering: self.ordering,
+            induced: self.induced,
             n: self.n,
             tail: self.tail,
             supernodes: lead.len(),
@@ -116,46 +163,37 @@ impl Symbolic {
         entries: &[(usize, usize, usize)],
         cliques: &[Vec<usize>],
         groups: &[u32],
+        superset: Option<super::Superset>,
     ) -> Result<Self, faer::sparse::FaerError> {
-        let lead = n - tail;
-        // 1. Fill-reducing order of the leading block (the tail keeps its
+        // 1. Fill-reducing orders of the leading block (the tail keeps its
         //    place at the end): AMD on the pattern of A + Aᵀ, and for a
-        //    larger block a nested dissection too; the cheaper factor wins.
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); lead];
-        for &(r, c, _) in entries {
-            if r < lead {
-                cols[c].push(r);
+        //    larger block a nested dissection too; with a superset pattern,
+        //    its orders as well (restricted to this pattern, an order fills
+        //    no more than it did there: a fill path here is one there).
+        //    The cheapest factor of this pattern wins; the superset's
+        //    orders, tried first, win ties.
+        let mut best: Option<Self> = None;
+        let mut consider = |cand: Self| {
+            if best
+                .as_ref()
+                .is_none_or(|b| cand.shape().cost() < b.shape().cost())
+            {
+                best = Some(cand);
+            }
+        };
+        if let Some(sup) = superset {
+            let all: Vec<(usize, usize, usize)> =
+                entries.iter().chain(sup.extra).copied().collect();
+            for (order, kind) in orders(n - tail, &all, sup.cliques)? {
+                let mut cand = Self::with_order(n, tail, entries, &order, kind, groups)?;
+                cand.induced = true;
+                consider(cand);
             }
         }
-        let mut col_ptr = vec![0usize];
-        let mut row_idx = Vec::new();
-        for c in &mut cols {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
+        for (order, kind) in orders(n - tail, entries, cliques)? {
+            consider(Self::with_order(n, tail, entries, &order, kind, groups)?);
         }
-        let amd = dissection::amd_order(lead, &col_ptr, &row_idx)?;
-        let by_amd = Self::with_order(n, tail, entries, &amd, Ordering::Amd, groups)?;
-        if lead < MIN_DISSECTION || cliques.is_empty() {
-            return Ok(by_amd);
-        }
-        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); lead];
-        for (c, rows) in cols.iter().enumerate() {
-            for &r in rows {
-                if r != c {
-                    adj[c].push(r);
-                    adj[r].push(c);
-                }
-            }
-        }
-        let nd = dissection::dissection_order(&adj, cliques, dissection::LEAF_ROWS)?;
-        let by_nd = Self::with_order(n, tail, entries, &nd, Ordering::Dissection, groups)?;
-        Ok(if by_nd.shape().cost() < by_amd.shape().cost() {
-            by_nd
-        } else {
-            by_amd
-        })
+        Ok(best.expect("AMD is always a candidate"))
     }
 
     /// The shapes of the factor under AMD and under the nested dissection
@@ -405,6 +443,7 @@ impl Symbolic {
             n,
             tail,
             ordering,
+            induced: false,
             lead_supernodes,
             iperm: iperm.iter().map(|&v| v as u32).collect(),
             load,

@@ -27,8 +27,8 @@ fn entries(a: &DMatrix<f64>) -> (Vec<(usize, usize, usize)>, Vec<f64>) {
 fn both(a: &DMatrix<f64>, tail: usize) -> (Cholesky, Cholesky, Vec<f64>) {
     let (e, v) = entries(a);
     let n = a.nrows();
-    let sparse = Cholesky::analyze_small_dense(n, tail, &e, &[], &[], 1, 0).unwrap();
-    let dense = Cholesky::analyze_small_dense(n, tail, &e, &[], &[], 1, usize::MAX).unwrap();
+    let sparse = Cholesky::analyze_small_dense(n, tail, &e, &[], &[], 1, 0, None).unwrap();
+    let dense = Cholesky::analyze_small_dense(n, tail, &e, &[], &[], 1, usize::MAX, None).unwrap();
     assert!(dense.is_dense() && !sparse.is_dense());
     (sparse, dense, v)
 }

@@ -43,6 +43,9 @@ pub(crate) mod universal;
 pub(crate) mod weld;
 pub mod witness;
 
+#[cfg(test)]
+mod tests_scale;
+
 pub use meta::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 
 use block::{Ctx, Groups, Sink, Slot};
@@ -100,6 +103,40 @@ impl Geometry {
     /// bounds, which read raw coordinates).
     pub fn has_ends(&self) -> bool {
         !matches!(self, Self::QuatNorm(_) | Self::Bound(_))
+    }
+
+    /// Whether every row is invariant to scaling a body's Euler parameters
+    /// e, i.e. its derivative on e is orthogonal to e. True for every kind
+    /// whose body columns are written from a world-frame gradient
+    /// ([`block::Sink::row`]: the e columns are Ω(e)ᵀ g and Ω(e) e = 0,
+    /// `crate::rotation`); such a row's entry in A = C_q M̃⁻¹ C_qᵀ with a
+    /// body's quaternion-norm row 2eᵀ is then zero in exact arithmetic,
+    /// because M̃_e⁻¹ e = (|e|²/4c′) e (`force::inertia`), and the force
+    /// factor leaves that coupling out of its pattern (`force::gram`).
+    /// False for the norm row itself, which reads e raw. Exhaustive on
+    /// purpose: a new kind that writes a body's e columns through
+    /// [`block::Sink::set`] must answer false.
+    pub fn scale_free_in_e(&self) -> bool {
+        match self {
+            Self::QuatNorm(_) => false,
+            // Design-variable and surface-parameter columns only
+            // (`Sink::set` on `Slot::Length`); body columns through `row`.
+            Self::Bound(_) | Self::Distance(_) | Self::OnSurface(_) => true,
+            Self::Spherical(_)
+            | Self::Perpendicular(_)
+            | Self::Universal(_)
+            | Self::Revolute(_)
+            | Self::Prismatic(_)
+            | Self::Weld(_)
+            | Self::PointPlane(_)
+            | Self::Finger(_)
+            | Self::Limit(_)
+            | Self::Contact(_)
+            | Self::Surface(_)
+            | Self::Gear(_)
+            | Self::RackPinion(_)
+            | Self::Rolling(_) => true,
+        }
     }
 
     /// The column groups every row of this constraint touches.

@@ -20,6 +20,7 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
+mod norms;
 /// The release branch's second and third solves from the first.
 mod spare;
 
@@ -55,6 +56,10 @@ pub(crate) struct Feedback {
     pub motion: Motion,
     gram: Gram,
     solve: MultiplierSolve,
+    /// The coupled pattern for the assemblies where the decoupled one is
+    /// not exact (`norms`); `None` without decoupled norm rows or with a
+    /// force solver other than the Cholesky.
+    coupled: Option<norms::CoupledPattern>,
     fingers: Vec<FingerRows>,
     b: Vec<f64>,
     y: Vec<f64>,
@@ -170,7 +175,8 @@ impl Feedback {
         let jac = ev.jacobian();
         let masses = BodyMass::of_model(model);
         let n_bodies = masses.len();
-        let gram = Gram::new(model, jac, &masses, excluded);
+        let decouple = settings.norm_rows_out && settings.force_solver == ForceSolver::Cholesky;
+        let gram = Gram::with_norms(model, jac, &masses, excluded, decouple);
         let (cg, matvec) = match settings.force_solver {
             ForceSolver::Cholesky => (None, None),
             ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
@@ -186,7 +192,26 @@ impl Feedback {
             let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
             solve.set_tree(tree, max_iterations);
         }
-        let spare = spare::Spare::for_model(model, settings, &gram, &solve);
+        let coupled = if decouple {
+            norms::CoupledPattern::new(
+                model,
+                jac,
+                &masses,
+                excluded,
+                &gram,
+                &solve,
+                crate::cholesky::DENSE_MAX,
+            )?
+        } else {
+            None
+        };
+        // The spare keeps a second factor of this pattern; with the norm
+        // rows out an assembly may swap in the coupled pattern (`norms`),
+        // which it does not follow: no spare then.
+        let spare = match coupled {
+            Some(_) => None,
+            None => spare::Spare::for_model(model, settings, &gram, &solve),
+        };
         let torques = super::torque::JointTorques::new(model, gram.n_j);
         let m_f = gram.m_f;
         let friction = super::friction::pairs_of(model);
@@ -235,6 +260,7 @@ impl Feedback {
             masses,
             gram,
             solve,
+            coupled,
             prev_error: vec![Vector3::zeros(); fingers.len()],
             releases: 0,
             stick: vec![false; model.n_rows()],
@@ -634,6 +660,7 @@ impl Feedback {
     fn assemble_regularized(&mut self, ev: &Evaluation, settings: &SolverSettings) {
         let jac = ev.jacobian();
         // After `advance`, the motion history's newest q is this tick's q.
+        self.pick_pattern(jac);
         let q = &self.motion.q_prev;
         self.gram
             .assemble(q, jac, &self.scale, &self.masses, &self.b, &mut self.y);

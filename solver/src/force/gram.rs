@@ -20,6 +20,7 @@ use faer::sparse::SymbolicSparseColMat;
 use nalgebra::{Matrix4, Vector3, Vector4};
 
 use super::inertia::BodyMass;
+use crate::constraint::Geometry;
 use crate::rotation::BodyFrame;
 use crate::{Jacobian, Model};
 
@@ -60,6 +61,19 @@ struct BodyRows {
     mass: usize,
     entries: std::ops::Range<usize>,
     products: std::ops::Range<usize>,
+    /// The body's quaternion-norm row when it is out of the clique (every
+    /// other row on the body is `Geometry::scale_free_in_e`): A's only
+    /// entry in its row and column is its diagonal.
+    norm: Option<NormRow>,
+}
+
+/// A quaternion-norm row decoupled from its body's clique: its Jacobian's
+/// first value (4 values, on e) and its diagonal's value index.
+#[derive(Debug, Clone, Copy)]
+struct NormRow {
+    row: usize,
+    pos: usize,
+    dest: u32,
 }
 
 /// Pattern, destinations and values of A (see the module docs).
@@ -81,6 +95,10 @@ pub(crate) struct Gram {
     /// Where each product c_a · u_b of two local entries of a body goes, per
     /// body in the order (a, b) for a = 0, 1, … and b = 0..=a.
     products: Vec<u32>,
+    /// (norm row, other row) pairs (J indices, then n_J + F index) of the
+    /// coupled pattern that this one leaves out: entries zero in exact
+    /// arithmetic (`Geometry::scale_free_in_e`).
+    dropped: Vec<(usize, usize)>,
     /// `[A_JJ lower (nnz) | A_FJ (m_f × n_J) | A_FF (m_f × m_f)]`.
     pub values: Vec<f64>,
     /// c and u of one body's entries (14 per entry).
@@ -123,7 +141,22 @@ impl Gram {
 
     /// The pattern of `model`'s A from its Jacobian pattern, without the rows
     /// `excluded` marks (empty: none). Allocates.
+    #[cfg(test)]
     pub fn new(model: &Model, jac: &Jacobian, masses: &[BodyMass], excluded: &[bool]) -> Self {
+        Self::with_norms(model, jac, masses, excluded, true)
+    }
+
+    /// [`new`](Self::new), the quaternion-norm rows taken out of their
+    /// bodies' cliques where their coupling is zero in exact arithmetic
+    /// (`decouple_norms`) or left in (false: the coupled pattern, for the
+    /// comparison tests). Allocates.
+    pub fn with_norms(
+        model: &Model,
+        jac: &Jacobian,
+        masses: &[BodyMass],
+        excluded: &[bool],
+        decouple_norms: bool,
+    ) -> Self {
         let (mut slot, mut finger_rows, mut j_rows) = (Vec::new(), Vec::new(), Vec::new());
         for (i, row) in model.rows().iter().enumerate() {
             if excluded.get(i).copied().unwrap_or(false) {
@@ -144,6 +177,15 @@ impl Gram {
         let mut bodies = Vec::new();
         let mut pairs = Vec::new(); // (body, a, b, kind) before destinations are known
         let mut lower = Vec::new();
+        let geometry = |row: usize| &model.geometry[model.rows()[row].constraint.index()];
+        // Rows of the coupled pattern left out (J then F indices): each a
+        // decoupled norm row with a row on its body.
+        let mut dropped = Vec::new();
+        let index = |row: usize| match slot[row] {
+            Slot::J(j) => j,
+            Slot::F(f) => n_j + f,
+            Slot::Out => unreachable!("excluded rows have no entries"),
+        };
         for (mass, m) in masses.iter().enumerate() {
             let (o, first, first_pair) = (m.offset, entries.len(), pairs.len());
             for k in col_ptr[o + 3]..col_ptr[o + 4] {
@@ -154,6 +196,28 @@ impl Gram {
                 let has_r = p3 >= row_ptr[row] + 3 && col_idx[p3 - 3] == o;
                 let (pos, width) = if has_r { (p3 - 3, 7) } else { (p3, 4) };
                 entries.push(Entry { row, pos, width });
+            }
+            let mut norm = None;
+            let body = &entries[first..];
+            let is_norm = |e: &Entry| matches!(geometry(e.row), Geometry::QuatNorm(_));
+            if decouple_norms
+                && body.iter().filter(|e| is_norm(e)).count() == 1
+                && body
+                    .iter()
+                    .all(|e| is_norm(e) || geometry(e.row).scale_free_in_e())
+            {
+                let at = first + body.iter().position(is_norm).expect("one norm row");
+                let e = entries.remove(at);
+                if let Slot::J(j) = slot[e.row] {
+                    dropped.extend(entries[first..].iter().map(|o| (j, index(o.row))));
+                    norm = Some(NormRow {
+                        row: e.row,
+                        pos: e.pos,
+                        dest: 0,
+                    });
+                } else {
+                    entries.insert(at, e);
+                }
             }
             let n = entries.len() - first;
             for a in 0..n {
@@ -169,6 +233,7 @@ impl Gram {
                 mass,
                 entries: first..entries.len(),
                 products: first_pair..pairs.len(),
+                norm,
             });
         }
         // Rows sharing an auxiliary block couple through its metric.
@@ -202,7 +267,14 @@ impl Gram {
         let ri: Vec<usize> = lower.iter().map(|&(r, _)| r).collect();
         let nnz = ri.len();
         let find = |r: usize, c: usize| cp[c] + ri[cp[c]..cp[c + 1]].binary_search(&r).unwrap();
-        let diag = (0..n_j).map(|j| find(j, j)).collect();
+        let diag: Vec<usize> = (0..n_j).map(|j| find(j, j)).collect();
+        for b in &mut bodies {
+            if let Some(n) = &mut b.norm
+                && let Slot::J(j) = slot[n.row]
+            {
+                n.dest = diag[j] as u32;
+            }
+        }
         let products = pairs
             .iter()
             .map(|&(_, _, ra, rb)| {
@@ -262,6 +334,7 @@ impl Gram {
             bodies,
             entries,
             products,
+            dropped,
             values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
             cu: vec![0.0; 14 * max_entries],
             live: vec![false; max_entries],
@@ -295,6 +368,45 @@ impl Gram {
                     .collect()
             })
             .collect()
+    }
+
+    /// [`cliques`](Self::cliques) with each decoupled quaternion-norm row
+    /// back in its body's clique (the coupled pattern's). Allocates.
+    pub fn coupled_cliques(&self) -> Vec<Vec<usize>> {
+        let mut out = self.cliques();
+        for (c, b) in out.iter_mut().zip(&self.bodies) {
+            if let Some(n) = b.norm
+                && let Slot::J(j) = self.slot[n.row]
+            {
+                c.push(j);
+            }
+        }
+        out
+    }
+
+    /// The lower-triangle entries (row, column, no value: `usize::MAX`) of
+    /// the coupled pattern that this one leaves out, in
+    /// [`factor_entries`](Self::factor_entries)' indices: each decoupled
+    /// norm row with every other row on its body. Allocates.
+    pub fn dropped_entries(&self) -> Vec<(usize, usize, usize)> {
+        (self.dropped.iter())
+            .map(|&(a, b)| (a.max(b), a.min(b), usize::MAX))
+            .collect()
+    }
+
+    /// Per decoupled norm row: its body's r column and the value index of
+    /// its first Jacobian value (`masses`: the bodies' mass data this
+    /// Gram was built with). Allocates.
+    pub fn norm_checks(&self, masses: &[BodyMass]) -> Vec<(usize, usize)> {
+        (self.bodies.iter())
+            .filter_map(|b| b.norm.map(|n| (masses[b.mass].offset, n.pos)))
+            .collect()
+    }
+
+    /// Rows out of their body's clique (the decoupled quaternion norms).
+    #[cfg(test)]
+    pub fn decoupled_norms(&self) -> usize {
+        self.bodies.iter().filter(|b| b.norm.is_some()).count()
     }
 
     /// The whole (n_J + m_f)-square matrix's lower triangle as (row, column,
@@ -381,6 +493,21 @@ impl Gram {
             }
             let be = Vector4::new(b[o + 3], b[o + 4], b[o + 5], b[o + 6]);
             y[o + 3..o + 7].copy_from_slice((minv * be).as_slice());
+            if let Some(n) = body.norm {
+                // Its only entry: the diagonal (c · M̃_e⁻¹ c, summed as the
+                // clique's products are).
+                let s = scale[n.row];
+                if s != 0.0 {
+                    let v = &vals[n.pos..n.pos + 4];
+                    let c = Vector4::new(v[0] * s, v[1] * s, v[2] * s, v[3] * s);
+                    let u = minv * c;
+                    let mut acc = 0.0;
+                    for i in 0..4 {
+                        acc += c[i] * u[i];
+                    }
+                    self.values[n.dest as usize] += acc;
+                }
+            }
             let entries = &self.entries[body.entries.clone()];
             for (k, ent) in entries.iter().enumerate() {
                 let s = scale[ent.row];

@@ -38,7 +38,7 @@ use super::pcg::{Bordered, Pcg};
 use super::precond::step::{STEP_TOLERANCE, StepCg};
 use super::precond::tree::TreePrecond;
 use super::small::{cholesky_solve, min_norm_solve};
-use crate::cholesky::Cholesky;
+use crate::cholesky::{Cholesky, Superset};
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
@@ -138,15 +138,7 @@ impl MultiplierSolve {
         } else {
             1
         };
-        let llt = Cholesky::analyze_small_dense(
-            n + m,
-            m,
-            &gram.factor_entries(),
-            &gram.cliques(),
-            groups,
-            max_rhs,
-            dense_max,
-        )?;
+        let llt = Self::analyze(gram, groups, max_rhs, dense_max)?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));
         let pcg = matvec_iterations.map(|it| Pcg::new(n, 1 + m, it));
         let bordered = matvec_iterations.map(|it| Bordered::new(n + m, it));
@@ -174,6 +166,56 @@ impl MultiplierSolve {
             seeded: false,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         })
+    }
+
+    /// The symbolic factor of `gram`'s pattern (A_JJ and the finger rows
+    /// as the tail). With quaternion-norm rows out of their cliques, the
+    /// coupled pattern's orders are candidates too, so the decoupled factor
+    /// never costs more than the coupled one's orders give. Allocates.
+    fn analyze(
+        gram: &Gram,
+        groups: &[u32],
+        max_rhs: usize,
+        dense_max: usize,
+    ) -> Result<Cholesky, faer::sparse::FaerError> {
+        let (n, m) = (gram.n_j, gram.m_f);
+        let (extra, coupled) = (gram.dropped_entries(), gram.coupled_cliques());
+        let superset = (!extra.is_empty()).then_some(Superset {
+            extra: &extra,
+            cliques: &coupled,
+        });
+        Cholesky::analyze_small_dense(
+            n + m,
+            m,
+            &gram.factor_entries(),
+            &gram.cliques(),
+            groups,
+            max_rhs,
+            dense_max,
+            superset,
+        )
+    }
+
+    /// A symbolic factor for `other`, a pattern of the same rows (the
+    /// coupled one, `force::feedback::norms`), to swap in with
+    /// [`swap_factor`](Self::swap_factor). Allocates.
+    pub fn factor_for(
+        &self,
+        other: &Gram,
+        groups: &[u32],
+        dense_max: usize,
+    ) -> Result<Cholesky, faer::sparse::FaerError> {
+        Self::analyze(other, groups, 1, dense_max)
+    }
+
+    /// Swaps this solve's factor with `other` (the factor of the pattern
+    /// swapped in with it).
+    ///
+    /// # Real-time
+    /// No allocation.
+    pub fn swap_factor(&mut self, other: &mut Cholesky) {
+        std::mem::swap(&mut self.llt, other);
+        self.seeded = false;
     }
 
     /// Switches this solve (made with `matvec_iterations`) to the tree

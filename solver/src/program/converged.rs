@@ -353,15 +353,26 @@ mod tests {
     /// and its replay is not.
     #[test]
     fn a_converged_replay_matches_a_converged_tick_and_not_an_under_iterated_one() {
+        // Also with the quaternion-norm rows out of the force factor (their
+        // replay takes the coupled pattern: `force::feedback::norms`).
+        for norm_rows_out in [false, true] {
+            replay(SolverSettings {
+                norm_rows_out,
+                ..SolverSettings::default()
+            });
+        }
+    }
+
+    fn replay(base: SolverSettings) {
         let model = Arc::new(four_bar());
         let dt = Duration::from_millis(1);
-        let mut reference = Program::new(model.clone(), SolverSettings::default()).unwrap();
+        let mut reference = Program::new(model.clone(), base).unwrap();
         let mut targets = model.initial_targets();
         for (settings, close) in [
             (
                 SolverSettings {
                     iterations: 16,
-                    ..SolverSettings::default()
+                    ..base
                 },
                 true,
             ),
@@ -369,7 +380,7 @@ mod tests {
                 SolverSettings {
                     update: UpdateRule::Gradient,
                     iterations: 1,
-                    ..SolverSettings::default()
+                    ..base
                 },
                 false,
             ),

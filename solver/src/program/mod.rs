@@ -73,6 +73,8 @@ mod semantic;
 mod stages;
 mod state;
 #[cfg(test)]
+mod tests_norms;
+#[cfg(test)]
 mod tests_waste;
 mod tick;
 

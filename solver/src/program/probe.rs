@@ -1,5 +1,6 @@
 //! `HAPTLOOP_PROBE=a.toml,b.toml cargo test --release -p haptloop-solver
-//! --lib program::probe -- --ignored --nocapture`: the shape of each scene's
+//! --lib program::probe -- --ignored --nocapture` (with
+//! `HAPTLOOP_PROBE_NORM_ROWS_OUT=1`: `SolverSettings::norm_rows_out` on): the shape of each scene's
 //! Eq. 7 factor and the time of its parts (assembly + factorisation + solve,
 //! the factorisation alone, one projected step), interleaved. Times are the
 //! thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), which a shared machine's
@@ -44,7 +45,12 @@ fn scenes() -> Vec<(String, crate::Model, SolverSettings)> {
     for path in list.split(',').filter(|p| !p.is_empty()) {
         let loaded = crate::scene::load(std::path::Path::new(path)).expect("scene loads");
         let compiled = loaded.compile().expect("scene compiles");
-        let mut settings = SolverSettings::default();
+        let mut settings = SolverSettings {
+            // `HAPTLOOP_PROBE_NORM_ROWS_OUT=1`: the quaternion-norm rows
+            // out of the force factor (`SolverSettings::norm_rows_out`).
+            norm_rows_out: std::env::var("HAPTLOOP_PROBE_NORM_ROWS_OUT").is_ok_and(|v| v == "1"),
+            ..SolverSettings::default()
+        };
         let s = &compiled.settings;
         if let Some(v) = s.step {
             settings.step = v;
@@ -82,9 +88,15 @@ fn probe() {
             red.local,
             build.0 * 1e3
         );
+        let (coupled, coupled_cliques, norms) = p.feedback.coupled_entries();
         println!(
-            "  L ({:?}): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
+            "  L ({:?}{}; {norms} norm rows decoupled): {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd",
             shape.ordering,
+            if shape.induced {
+                ", the coupled pattern's"
+            } else {
+                ""
+            },
             shape.supernodes,
             shape.widest,
             shape.values,
@@ -93,7 +105,14 @@ fn probe() {
         );
         let (n, tail, entries, cliques) = p.feedback.factor_entries();
         let (amd, nd) = crate::cholesky::Cholesky::both_shapes(n, tail, &entries, &cliques);
-        for (label, sh) in [("AMD", amd), ("dissection", nd)] {
+        let (camd, cnd) =
+            crate::cholesky::Cholesky::both_shapes(n, tail, &coupled, &coupled_cliques);
+        for (label, sh) in [
+            ("AMD", amd),
+            ("dissection", nd),
+            ("coupled pattern, AMD", camd),
+            ("coupled pattern, dissection", cnd),
+        ] {
             println!(
                 "  {label}: {} supernodes, widest {}, {} values; factor {} k madd, solve {} k madd, cost {} k",
                 sh.supernodes,

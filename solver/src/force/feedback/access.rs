@@ -200,6 +200,17 @@ impl Feedback {
         )
     }
 
+    /// The coupled pattern (the quaternion-norm rows back in their bodies'
+    /// cliques) as [`factor_entries`](Self::factor_entries) gives the
+    /// decoupled one, and how many norm rows are decoupled (comparisons).
+    #[cfg(test)]
+    #[allow(clippy::type_complexity)]
+    pub fn coupled_entries(&self) -> (Vec<(usize, usize, usize)>, Vec<Vec<usize>>, usize) {
+        let mut e = self.gram.factor_entries();
+        e.extend(self.gram.dropped_entries());
+        (e, self.gram.coupled_cliques(), self.gram.decoupled_norms())
+    }
+
     /// Switches the factor's AVX2 + FMA kernels off or on (comparisons).
     #[cfg(test)]
     pub fn set_simd(&mut self, on: bool) {
@@ -211,9 +222,13 @@ impl Feedback {
     /// solver).
     #[cfg(test)]
     pub fn set_dense(&mut self, model: &Model, dense_max: usize) {
+        self.decoupled_in_use();
         let groups = contact_groups(model, &self.gram);
         self.solve = MultiplierSolve::with_path(&self.gram, None, None, &groups, dense_max)
             .expect("the pattern analysed once already");
+        if let Some(c) = &mut self.coupled {
+            c.set_dense(model, &self.solve, dense_max);
+        }
     }
 
     /// Whether the multiplier solve takes the dense path.
