@@ -495,8 +495,9 @@ impl Feedback {
             // The projected update steps with this factor and must keep the
             // kinematic active set: whether a limit stops the motion the user
             // asks for is its business, not the instantaneous inertial load's
-            // (a stop that just halted a rebound "pulls" for a tick). Third
-            // and last factorisation of the tick.
+            // (a stop that just halted a rebound "pulls" for a tick). The
+            // first solve comes back from the spare when the active set is
+            // its own again; otherwise a third factorisation.
             self.activate(s, ev.values(), lambda);
             if !self.restore_first() {
                 self.solve_multipliers(ev, settings)?;
