@@ -18,6 +18,7 @@
 //!   released row left in the solve changes the force by 0.8 N, the
 //!   limits' pull).
 
+use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::mechanisms::stewart;
 use haptloop_solver::{FingerTarget, SolverSettings, TickOutcome};
 
@@ -72,4 +73,14 @@ fn the_low_rank_release_agrees_with_solving_afresh_within_round_off() {
     );
     assert!(fast.force_first_solves_kept() >= fast.force_low_rank_releases());
     assert_eq!(fresh.force_low_rank_releases(), 0);
+    // Held against the stops, the low-rank releases allocate nothing.
+    let before = fast.force_low_rank_releases();
+    let hold = lift(&start, ticks);
+    let (ok, stats) = count(|| (0..200).all(|_| fast.tick(&hold, DT).status == TickOutcome::Ok));
+    assert!(ok && is_installed());
+    assert_eq!(stats.total(), 0, "the held ticks allocated: {stats:?}");
+    assert!(
+        fast.force_low_rank_releases() > before + 50,
+        "the low-rank path did not run while counted"
+    );
 }
