@@ -44,6 +44,14 @@ pub(crate) const MAX_RANK: usize = 8;
 /// measured (cond(W) ≤ 1e2 on Stewart's stroke limits).
 pub(crate) const MAX_CONDITION: f64 = 1e6;
 
+/// The largest (A_JJ⁻¹)_ii (A_JJ)_ii of a released row i the correction
+/// accepts: 1 for a row orthogonal to the others, 1 / (1 − R²) for a row
+/// whose part R² lies in the span of the others' (the variance inflation
+/// factor). The correction subtracts U W⁻¹ Uᵀ of about that size from
+/// A_JJ⁻¹ and loses its digits; a refactorisation of the kept rows does
+/// not. 1e2 costs at most two digits over the refactorisation.
+pub(crate) const MAX_INFLATION: f64 = 1e2;
+
 /// Preallocated buffers of the correction and the first solve's
 /// multipliers it keeps aside.
 #[derive(Debug, Clone)]
@@ -133,6 +141,16 @@ impl MultiplierSolve {
             u[i * n + j] = 1.0;
         }
         self.llt.solve(u, k);
+        // A released row nearly dependent on kept ones (a fourth contact
+        // corner) has (A⁻¹)_ii A_ii ≫ 1: the correction would cancel that
+        // much of A⁻¹'s size, and lose as many digits, where the masked
+        // factor never sees the dependence.
+        for (i, &j) in lr.rows.iter().enumerate() {
+            let inflation = u[i * n + j] * gram.values[gram.diag[j]];
+            if !(inflation <= MAX_INFLATION) {
+                return Ok(false);
+            }
+        }
         if !factor_w(u, n, &lr.rows, &mut lr.w[..k * k]) {
             return Ok(false);
         }
