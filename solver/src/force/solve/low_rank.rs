@@ -147,7 +147,7 @@ impl MultiplierSolve {
         // factor never sees the dependence.
         for (i, &j) in lr.rows.iter().enumerate() {
             let inflation = u[i * n + j] * gram.values[gram.diag[j]];
-            if !(inflation <= MAX_INFLATION) {
+            if inflation.is_nan() || inflation > MAX_INFLATION {
                 return Ok(false);
             }
         }
