@@ -40,8 +40,9 @@ pub(crate) const MAX_RANK: usize = 8;
 /// condition means a released row nearly depends on kept ones, and the
 /// correction's round-off grows with it (relative error about
 /// cond(W) · cond(A_JJ) · ε against cond(A_NN) · ε for a refactorisation).
-/// 1e6 keeps that within 1e-10 relative on the matrices of the mechanisms
-/// measured (cond(W) ≤ 1e2 on Stewart's stroke limits).
+/// A backstop for several released rows coupled to each other; one row
+/// nearly dependent on the kept ones (W is 1 × 1 then, condition 1) is
+/// [`MAX_INFLATION`]'s to catch.
 pub(crate) const MAX_CONDITION: f64 = 1e6;
 
 /// The largest (A_JJ⁻¹)_ii (A_JJ)_ii of a released row i the correction
