@@ -50,7 +50,9 @@ pub(crate) const MAX_CONDITION: f64 = 1e6;
 /// whose part R² lies in the span of the others' (the variance inflation
 /// factor). The correction subtracts U W⁻¹ Uᵀ of about that size from
 /// A_JJ⁻¹ and loses its digits; a refactorisation of the kept rows does
-/// not. 1e2 costs at most two digits over the refactorisation.
+/// not. 1e2 costs at most two digits over the refactorisation (measured:
+/// Stewart's stroke limits 12.2, `cluttered`'s fourth contact corners up to
+/// 2.5e5).
 pub(crate) const MAX_INFLATION: f64 = 1e2;
 
 /// Preallocated buffers of the correction and the first solve's
