@@ -557,7 +557,7 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
 
     let cases = [("stewart", None, 6.0), ("four-bar", Some(1e20), 2.0)];
     let mut swapped = 0;
-    let (mut releases, mut kept) = (0, 0);
+    let (mut releases, mut kept, mut low_rank) = (0, 0, 0);
     for (name, gain, seconds) in cases {
         let dir = tempfile::tempdir().unwrap();
         let scene = resolve(name).unwrap();
@@ -614,6 +614,7 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
         swapped += fast.stats().programs_swapped;
         releases += fast.program().force_releases();
         kept += fast.program().force_first_solves_kept();
+        low_rank += fast.program().force_low_rank_releases();
         if gain.is_some() {
             assert_eq!(
                 fast.stats().solver_failures,
@@ -631,6 +632,10 @@ fn the_fast_loop_tick_allocates_nothing_on_every_path() {
     assert!(
         kept > 0,
         "the release branch never took its first solve back"
+    );
+    assert!(
+        low_rank > 0,
+        "no release was solved by the low-rank correction"
     );
 }
 

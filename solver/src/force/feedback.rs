@@ -20,6 +20,8 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
+/// The release branch's second solve by a low-rank correction.
+mod low_rank;
 mod norms;
 /// The release branch's second and third solves from the first.
 mod spare;
@@ -250,7 +252,7 @@ impl Feedback {
             })
             .collect::<Vec<_>>();
         let tau = settings.velocity_filter.as_secs_f64();
-        Ok(Self {
+        let mut feedback = Self {
             motion: Motion::new(
                 model.q0(),
                 masses.len(),
@@ -300,7 +302,9 @@ impl Feedback {
             scale: vec![0.0; model.n_rows()],
             spare,
             first_kept: 0,
-        })
+        };
+        feedback.enable_low_rank(settings);
+        Ok(feedback)
     }
 
     /// Equality rows dependent on earlier rows of the same body pair at q0

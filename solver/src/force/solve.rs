@@ -40,6 +40,10 @@ use super::precond::tree::TreePrecond;
 use super::small::{cholesky_solve, min_norm_solve};
 use crate::cholesky::{Cholesky, Superset};
 
+/// The release branch's second solve from the first factor.
+mod low_rank;
+pub(crate) use low_rank::LowRank;
+
 /// The numeric factorisation failed (a non-finite or non-positive pivot that
 /// the dynamic regularisation could not repair).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -132,11 +136,12 @@ impl MultiplierSolve {
         dense_max: usize,
     ) -> Result<Self, faer::sparse::FaerError> {
         let (n, m) = (gram.n_j, gram.m_f);
-        // The matvec-only tick preconditions all 1 + m_f columns at once.
+        // The matvec-only tick preconditions all 1 + m_f columns at once;
+        // the low-rank release solves its k columns at once (`low_rank`).
         let max_rhs = if matvec_iterations.is_some() {
             1 + m
         } else {
-            1
+            low_rank::MAX_RANK
         };
         let llt = Self::analyze(gram, groups, max_rhs, dense_max)?;
         let cg = cg_iterations.map(|it| Cg::new(n, 1 + m, it));

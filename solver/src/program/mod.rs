@@ -466,6 +466,21 @@ impl Program {
         self.feedback.first_solves_kept()
     }
 
+    /// Releases whose second solve came from the first factor by a
+    /// low-rank correction (`force::solve`'s `low_rank`) instead of a
+    /// second factorisation.
+    pub fn force_low_rank_releases(&self) -> u64 {
+        self.feedback.low_rank_releases()
+    }
+
+    /// Solves every release by the masked refactorisation (the spare
+    /// alone): the bit-for-bit reference of the spare's test, and the
+    /// comparison of the low-rank correction's. Deallocates; not for the
+    /// fast loop.
+    pub fn drop_release_low_rank(&mut self) {
+        self.feedback.drop_low_rank();
+    }
+
     /// Solves every step of the release branch afresh (assembly and
     /// factorisation), as before the spare: the reference the exactness
     /// test compares with. Deallocates; not for the fast loop.

@@ -15,6 +15,7 @@ mod matvec;
 mod planar;
 mod program;
 mod redundant;
+mod release_low_rank;
 mod release_spare;
 mod rules;
 mod torque;

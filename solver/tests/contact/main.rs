@@ -19,6 +19,7 @@ mod moved_evaluation;
 mod moved_steps;
 mod pinch;
 mod recycle;
+mod release_low_rank;
 mod release_spare;
 mod rest;
 mod slots;

@@ -34,11 +34,16 @@ pub(super) struct Spare {
     decoupled: Vec<bool>,
     cy: Vec<f64>,
     /// The row scales of the last full assembly.
-    scale: Vec<f64>,
+    pub(super) scale: Vec<f64>,
     /// A_JJ's diagonal as assembled, before the regularisation.
     raw_diag: Vec<f64>,
     /// The spare holds the first solve of this tick's release branch.
     holds_first: bool,
+    /// The low-rank release's buffers (`low_rank`), where it may be taken.
+    pub(super) low_rank: Option<crate::force::solve::LowRank>,
+    /// The last release was solved by the low-rank correction: the first
+    /// solve's factor is still the solve's, its multipliers in `low_rank`.
+    pub(super) low_rank_holds: bool,
 }
 
 impl Spare {
@@ -66,6 +71,8 @@ impl Spare {
             scale: vec![0.0; model.n_rows()],
             raw_diag: vec![0.0; gram.n_j],
             holds_first: false,
+            low_rank: None,
+            low_rank_holds: false,
         }))
     }
 }
@@ -80,6 +87,7 @@ impl Feedback {
                 *r = self.gram.values[d];
             }
             sp.holds_first = false;
+            sp.low_rank_holds = false;
         }
     }
 
@@ -102,6 +110,11 @@ impl Feedback {
         let Some(mut sp) = self.spare.take() else {
             return self.solve_multipliers(ev, settings);
         };
+        if self.solve_released_low_rank(&mut sp) {
+            self.spare = Some(sp);
+            self.generation = self.generation.wrapping_add(1);
+            return Ok(());
+        }
         sp.values.copy_from_slice(&self.gram.values);
         sp.decoupled.copy_from_slice(&self.gram.decoupled);
         sp.cy.copy_from_slice(&self.cy);
@@ -153,6 +166,15 @@ impl Feedback {
         let Some(sp) = &mut self.spare else {
             return false;
         };
+        if sp.low_rank_holds && sp.scale == self.scale {
+            if let Some(lr) = &sp.low_rank {
+                self.solve.restore_low_rank(lr);
+            }
+            sp.low_rank_holds = false;
+            self.generation = self.generation.wrapping_add(1);
+            self.first_kept += 1;
+            return true;
+        }
         if !sp.holds_first || sp.scale != self.scale {
             return false;
         }
