@@ -190,7 +190,10 @@ impl Feedback {
                 .map(|&r| model.rows()[r].constraint.index())
                 .collect();
             let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
-            solve.set_tree(super::precond::Precond::Tree(tree), max_iterations);
+            solve.set_tree(
+                super::precond::Precond::Tree(Box::new(tree)),
+                max_iterations,
+            );
         }
         if let ForceSolver::Multilevel { max_iterations } = settings.force_solver {
             solve.set_tree(

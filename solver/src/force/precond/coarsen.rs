@@ -52,12 +52,12 @@ pub(crate) fn aggregate(a: &BlockMat) -> (Vec<usize>, usize) {
         }
     }
     let rooted = agg.clone();
-    for n in 0..nodes {
-        if agg[n] == FREE {
+    for (n, g) in agg.iter_mut().enumerate() {
+        if *g == FREE {
             if let Some(m) = nbrs(n).find(|&m| rooted[m] != FREE) {
-                agg[n] = rooted[m];
+                *g = rooted[m];
             } else {
-                agg[n] = count;
+                *g = count;
                 count += 1;
             }
         }

@@ -28,7 +28,7 @@ use super::solve::FactorError;
 /// factor: the tree tick's or the multilevel tick's.
 #[derive(Debug, Clone)]
 pub(crate) enum Precond {
-    Tree(tree::TreePrecond),
+    Tree(Box<tree::TreePrecond>),
     Multilevel(Box<multilevel::Multilevel>),
 }
 
