@@ -70,7 +70,8 @@ fn follow(model: &Arc<Model>, ticks: usize, name: &str) -> (f64, f64, f64, u32, 
 /// Bennett's 4R, a 2 × 4 lattice, the sphere toy) the multilevel tick
 /// follows the Cholesky tick: the same finger force to the solves'
 /// tolerance and violations under the scenes' 1e-6 m, over 60 ticks of
-/// motion (12 in unoptimised builds), every solve converged.
+/// motion (12 in unoptimised builds, without the sphere toy), every solve
+/// converged.
 #[test]
 fn the_multilevel_tick_follows_the_cholesky_tick() {
     for (name, model) in [
@@ -79,6 +80,11 @@ fn the_multilevel_tick_follows_the_cholesky_tick() {
         ("lattice 2x4", lattice_sized(2, 4).build().unwrap()),
         ("sphere toy", sphere_toy()),
     ] {
+        if cfg!(debug_assertions) && name == "sphere toy" {
+            // Unoptimised builds: the small meshes only (the sphere toy's
+            // CG takes ~50 iterations a force solve, seconds there).
+            continue;
+        }
         let model = Arc::new(model);
         let ticks = if cfg!(debug_assertions) { 12 } else { 60 };
         let (worst, scale, viol, its, ml) = follow(&model, ticks, name);

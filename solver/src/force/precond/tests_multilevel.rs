@@ -37,17 +37,21 @@ fn the_galerkin_operators_equal_the_dense_products() {
             let (coarse, nc) = ml.dense_level(l + 1);
             let t = ml.dense_t(l);
             let big = coarse.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            // T's nonzero rows per column, then A T, then Tᵀ (A T).
+            let nz: Vec<Vec<usize>> = (0..nc)
+                .map(|c| (0..nf).filter(|&i| t[i * nc + c] != 0.0).collect())
+                .collect();
+            let mut at = vec![0.0; nf * nc];
+            for c in 0..nc {
+                for &j in &nz[c] {
+                    for i in 0..nf {
+                        at[i * nc + c] += fine[i * nf + j] * t[j * nc + c];
+                    }
+                }
+            }
             for r in 0..nc {
                 for c in 0..nc {
-                    let mut v = 0.0;
-                    for i in 0..nf {
-                        let ti = t[i * nc + r];
-                        if ti != 0.0 {
-                            for j in 0..nf {
-                                v += ti * fine[i * nf + j] * t[j * nc + c];
-                            }
-                        }
-                    }
+                    let v: f64 = nz[r].iter().map(|&i| t[i * nc + r] * at[i * nc + c]).sum();
                     let got = coarse[r * nc + c];
                     assert!(
                         (got - v).abs() <= 1e-11 * big,
