@@ -112,7 +112,9 @@ pub mod semantic;
 pub use al::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};
-pub use force::{FingerWrench, Redundancy, ReferenceError, TreeStats, reference_finger_wrenches};
+pub use force::{
+    FingerWrench, MultilevelStats, Redundancy, ReferenceError, TreeStats, reference_finger_wrenches,
+};
 pub use ids::{BodyId, ConstraintId, DesignVarId, FingerId};
 pub use jacobian::{Jacobian, ShapeError};
 pub use model::{AuxBlock, AuxOwner, ContactSurface, Rest};

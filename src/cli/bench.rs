@@ -96,8 +96,8 @@ struct BenchJson {
     ticks: u64,
     rate_hz: u32,
     iterations: u32,
-    /// The Eq. 7 solver: `cholesky`, `matvec`, `matvec:N`, `tree`, `tree:N`
-    /// or `cg:N`.
+    /// The Eq. 7 solver: `cholesky`, `matvec`, `matvec:N`, `tree`, `tree:N`,
+    /// `multilevel`, `multilevel:N` or `cg:N`.
     force_solver: String,
     /// The update rule, `projected` or `gradient`.
     update: &'static str,

@@ -47,7 +47,9 @@ pub struct RunArgs {
     /// `tree` (experimental: no full factor, conjugate gradients
     /// preconditioned by a spanning tree of the mechanism; not for contact;
     /// measured slower than `cholesky` on meshes, BENCHMARKS.md), `tree:N`
-    /// to cap its iterations a solve at N (default 500), `cg:N`
+    /// to cap its iterations a solve at N (default 500), `multilevel` and
+    /// `multilevel:N` (experimental: conjugate gradients preconditioned by
+    /// an aggregation V-cycle; not for contact), `cg:N`
     /// (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,

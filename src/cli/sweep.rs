@@ -35,7 +35,9 @@ pub struct SweepArgs {
     /// Eq. 7 solvers: `cholesky`, `matvec` (the matvec-only tick, each
     /// conjugate-gradient solve to its tolerance within a cap of 64
     /// iterations), `matvec:N`, `tree` (conjugate gradients preconditioned
-    /// by a spanning tree, no full factor; cap 500), `tree:N`, `cg:N`
+    /// by a spanning tree, no full factor; cap 500), `tree:N`, `multilevel`
+    /// (preconditioned by an aggregation V-cycle; cap 500), `multilevel:N`,
+    /// `cg:N`
     /// (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_delimiter = ',', default_value = "cholesky", value_parser = values::force_solver)]
     pub force_solver: Vec<haptloop_solver::ForceSolver>,

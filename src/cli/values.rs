@@ -103,7 +103,8 @@ pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
 /// iterations per right-hand side, 1–1000; gradient update only), `tree`
 /// or `tree:N` (conjugate gradients preconditioned by a spanning tree of
 /// the mechanism, no full factor; a cap of N iterations a solve, default
-/// 500).
+/// 500), `multilevel` or `multilevel:N` (conjugate gradients preconditioned
+/// by an aggregation V-cycle, no full factor; a cap of N, default 500).
 pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
     use haptloop_solver::ForceSolver;
     let s = s.trim();
@@ -123,6 +124,13 @@ pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
                 "`{n}` is not an iteration cap of 1–1000 (as in `tree:200`)"
             )),
         },
+        None if s == "multilevel" => Ok(ForceSolver::MULTILEVEL),
+        Some(("multilevel", n)) => match n.trim().parse::<u32>() {
+            Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::Multilevel { max_iterations }),
+            _ => Err(format!(
+                "`{n}` is not an iteration cap of 1–1000 (as in `multilevel:50`)"
+            )),
+        },
         Some(("cg", n)) => match n.trim().parse::<u32>() {
             Ok(max_iterations @ 1..=1000) => Ok(ForceSolver::ConjugateGradient { max_iterations }),
             _ => Err(format!(
@@ -130,7 +138,7 @@ pub fn force_solver(s: &str) -> Result<haptloop_solver::ForceSolver, String> {
             )),
         },
         _ => Err(format!(
-            "unknown force solver `{s}` (expected `cholesky`, `matvec`, `matvec:N`, `tree`, `tree:N` or `cg:N`)"
+            "unknown force solver `{s}` (expected `cholesky`, `matvec`, `matvec:N`, `tree`, `tree:N`, `multilevel`, `multilevel:N` or `cg:N`)"
         )),
     }
 }
@@ -173,13 +181,25 @@ mod tests {
     /// a cap outside 1–1000 is refused naming the value.
     #[test]
     fn the_tree_force_solver_parses_and_prints_back() {
-        for s in ["tree", "tree:1", "tree:1000", "matvec", "cg:64"] {
+        for s in [
+            "tree",
+            "tree:1",
+            "tree:1000",
+            "matvec",
+            "cg:64",
+            "multilevel",
+            "multilevel:16",
+        ] {
             assert_eq!(force_solver(s).map(|f| f.label()), Ok(s.to_string()));
         }
         assert_eq!(force_solver("tree"), Ok(haptloop_solver::ForceSolver::TREE));
         for bad in ["tree:0", "tree:1001", "tree:x"] {
             let e = force_solver(bad).unwrap_err();
             assert!(e.contains(&bad[5..]), "{e}");
+        }
+        for bad in ["multilevel:0", "multilevel:1001", "multilevel:x"] {
+            let e = force_solver(bad).unwrap_err();
+            assert!(e.contains(&bad[11..]), "{e}");
         }
     }
 }

@@ -71,6 +71,22 @@ pub enum ForceSolver {
         /// and its result used as it is.
         max_iterations: u32,
     },
+    /// The multilevel tick (`haptloop run --force-solver multilevel`): the
+    /// tree tick's conjugate gradients (force solve and projected steps)
+    /// with an aggregation V-cycle as preconditioner instead of the
+    /// spanning tree: block Gauss–Seidel per constraint, coarse levels from
+    /// clusters of neighbouring joints whose coarse unknowns are each
+    /// cluster's lowest-energy force patterns, Galerkin coarse operators
+    /// from the tick's A, a dense coarsest factor
+    /// (`force::precond::multilevel`). Not for contact rows or design
+    /// variables.
+    Multilevel {
+        /// Cap on the conjugate-gradient iterations per solve; a solve
+        /// stopped by it is counted
+        /// ([`Program::matvec_unconverged`](crate::Program::matvec_unconverged))
+        /// and its result used as it is.
+        max_iterations: u32,
+    },
 }
 
 impl ForceSolver {
@@ -84,6 +100,8 @@ impl ForceSolver {
             ForceSolver::ConjugateGradient { max_iterations } => format!("cg:{max_iterations}"),
             f if f == ForceSolver::TREE => "tree".into(),
             ForceSolver::Tree { max_iterations } => format!("tree:{max_iterations}"),
+            f if f == ForceSolver::MULTILEVEL => "multilevel".into(),
+            ForceSolver::Multilevel { max_iterations } => format!("multilevel:{max_iterations}"),
         }
     }
 
@@ -99,6 +117,12 @@ impl ForceSolver {
     /// safety bound (each solve stops at its tolerance; BENCHMARKS.md,
     /// issue 23, the spanning-tree preconditioner).
     pub const TREE: ForceSolver = ForceSolver::Tree {
+        max_iterations: 500,
+    };
+
+    /// The multilevel tick with its default cap: 500 iterations a solve, a
+    /// safety bound (each solve stops at its tolerance).
+    pub const MULTILEVEL: ForceSolver = ForceSolver::Multilevel {
         max_iterations: 500,
     };
 }
@@ -390,8 +414,9 @@ impl SolverSettings {
                 );
             }
         }
-        if let ForceSolver::Matvec { max_iterations } | ForceSolver::Tree { max_iterations } =
-            self.force_solver
+        if let ForceSolver::Matvec { max_iterations }
+        | ForceSolver::Tree { max_iterations }
+        | ForceSolver::Multilevel { max_iterations } = self.force_solver
             && (max_iterations == 0 || max_iterations > 1000)
         {
             return bad(

@@ -182,9 +182,9 @@ impl Feedback {
         let (cg, matvec) = match settings.force_solver {
             ForceSolver::Cholesky => (None, None),
             ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
-            ForceSolver::Matvec { max_iterations } | ForceSolver::Tree { max_iterations } => {
-                (None, Some(max_iterations))
-            }
+            ForceSolver::Matvec { max_iterations }
+            | ForceSolver::Tree { max_iterations }
+            | ForceSolver::Multilevel { max_iterations } => (None, Some(max_iterations)),
         };
         let mut solve = MultiplierSolve::new(&gram, cg, matvec, &contact_groups(model, &gram))?;
         if let ForceSolver::Tree { max_iterations } = settings.force_solver {
@@ -192,7 +192,16 @@ impl Feedback {
                 .map(|&r| model.rows()[r].constraint.index())
                 .collect();
             let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
-            solve.set_tree(tree, max_iterations);
+            solve.set_tree(
+                super::precond::Precond::Tree(Box::new(tree)),
+                max_iterations,
+            );
+        }
+        if let ForceSolver::Multilevel { max_iterations } = settings.force_solver {
+            solve.set_tree(
+                super::precond::multilevel::for_model(model, &gram),
+                max_iterations,
+            );
         }
         let coupled = if decouple {
             norms::CoupledPattern::new(

@@ -71,6 +71,7 @@ mod wrench;
 mod tests_dense;
 
 pub use output::FingerOutput;
+pub use precond::multilevel::MultilevelStats;
 pub use precond::tree::TreeStats;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{

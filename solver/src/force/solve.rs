@@ -35,8 +35,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::cg::Cg;
 use super::gram::{Gram, Slot};
 use super::pcg::{Bordered, Pcg};
+use super::precond::Precond;
 use super::precond::step::{STEP_TOLERANCE, StepCg};
-use super::precond::tree::TreePrecond;
 use super::small::{cholesky_solve, min_norm_solve};
 use crate::cholesky::{Cholesky, Superset};
 
@@ -78,7 +78,7 @@ pub(crate) struct MultiplierSolve {
     bordered: Option<Bordered>,
     /// `Some`: the tree tick (`ForceSolver::Tree`): `pcg` preconditioned
     /// by the spanning-tree preconditioner, and its projected steps' solve.
-    tree: Option<(TreePrecond, StepCg)>,
+    tree: Option<(Precond, StepCg)>,
     /// The tree tick has solved once (`rhs` holds A_JJ⁻¹ A_JF, `schur_keep`
     /// S of the A the projected steps use).
     tree_solved: bool,
@@ -226,7 +226,7 @@ impl MultiplierSolve {
     /// Switches this solve (made with `matvec_iterations`) to the tree
     /// tick: `tree` preconditions the force solve's conjugate gradients,
     /// and the projected steps solve with it (at most `max_iterations`).
-    pub fn set_tree(&mut self, tree: TreePrecond, max_iterations: u32) {
+    pub fn set_tree(&mut self, tree: Precond, max_iterations: u32) {
         let n = self.lambda_j.len();
         self.tree = Some((tree, StepCg::new(n, max_iterations)));
     }
@@ -234,7 +234,19 @@ impl MultiplierSolve {
     /// The tree tick's preconditioner's shape and step iterations (`None`
     /// for the other solvers).
     pub fn tree_stats(&self, gram: &Gram) -> Option<super::precond::tree::TreeStats> {
-        (self.tree.as_ref()).map(|(t, s)| t.stats(gram.nnz(), s.total_iterations))
+        match self.tree.as_ref()? {
+            (Precond::Tree(t), s) => Some(t.stats(gram.nnz(), s.total_iterations)),
+            _ => None,
+        }
+    }
+
+    /// The multilevel tick's preconditioner's shape and step iterations
+    /// (`None` for the other solvers).
+    pub fn multilevel_stats(&self) -> Option<super::precond::multilevel::MultilevelStats> {
+        match self.tree.as_ref()? {
+            (Precond::Multilevel(m), s) => Some(m.stats(s.total_iterations)),
+            _ => None,
+        }
     }
 
     /// The id a refreshed factor must carry to be adopted.

@@ -208,17 +208,19 @@ impl Program {
         // contact pair's witness rows are one constraint of many rows.
         if matches!(
             settings.force_solver,
-            crate::ForceSolver::Matvec { .. } | crate::ForceSolver::Tree { .. }
+            crate::ForceSolver::Matvec { .. }
+                | crate::ForceSolver::Tree { .. }
+                | crate::ForceSolver::Multilevel { .. }
         ) {
             if model.contact().slots > 0 {
                 return Err(ProgramError::Unsupported(
-                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover contact \
+                    "the conjugate-gradient tick (`--force-solver matvec`, `tree` or `multilevel`) does not cover contact \
                      rows: this scene needs the Cholesky force solver",
                 ));
             }
             if !model.layout().design_vars().is_empty() {
                 return Err(ProgramError::Unsupported(
-                    "the conjugate-gradient tick (`--force-solver matvec` or `tree`) does not cover design \
+                    "the conjugate-gradient tick (`--force-solver matvec`, `tree` or `multilevel`) does not cover design \
                      variables: this scene needs the Cholesky force solver",
                 ));
             }
@@ -509,6 +511,12 @@ impl Program {
     /// its projected steps' iterations so far (`None` otherwise).
     pub fn tree_stats(&self) -> Option<crate::TreeStats> {
         self.feedback.tree_stats()
+    }
+
+    /// The multilevel tick (`ForceSolver::Multilevel`): its levels' sizes
+    /// and its projected steps' iterations so far (`None` otherwise).
+    pub fn multilevel_stats(&self) -> Option<crate::MultilevelStats> {
+        self.feedback.multilevel_stats()
     }
 
     /// The matvec-only tick (`ForceSolver::Matvec`): conjugate-gradient

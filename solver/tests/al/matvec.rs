@@ -361,6 +361,8 @@ fn probe_matvec_scaling() {
                 .collect(),
         ),
     ];
+    // The tree tick (0.3–0.8 s a tick at the largest sizes) only when asked.
+    let with_tree = std::env::var_os("HAPTLOOP_PROBE_TREE").is_some();
     for (family, sizes) in families {
         let mut pts = Vec::new();
         for (bodies, model) in sizes {
@@ -370,18 +372,13 @@ fn probe_matvec_scaling() {
                 force_solver: ForceSolver::MATVEC,
                 ..SolverSettings::default()
             };
-            let e = SolverSettings {
-                force_solver: ForceSolver::Cholesky,
-                ..s
-            };
-            let tr = SolverSettings {
-                force_solver: ForceSolver::TREE,
-                ..s
-            };
+            let with = |force_solver| SolverSettings { force_solver, ..s };
             let mut fast = Program::new(model.clone(), s).unwrap();
-            let mut exact = Program::new(model.clone(), e).unwrap();
-            let mut tree = Program::new(model.clone(), tr).unwrap();
+            let mut exact = Program::new(model.clone(), with(ForceSolver::Cholesky)).unwrap();
+            let mut tree = Program::new(model.clone(), with(ForceSolver::TREE)).unwrap();
+            let mut ml = Program::new(model.clone(), with(ForceSolver::MULTILEVEL)).unwrap();
             let (mut t_tr, mut cg_tr) = (Vec::new(), 0u64);
+            let (mut t_ml, mut cg_ml) = (Vec::new(), 0u64);
             let mut refresher = fast.factor_refresher().unwrap();
             let mut f = refresher.buffer();
             let ticks = 40;
@@ -403,28 +400,50 @@ fn probe_matvec_scaling() {
                     assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok);
                     t_ch.push(s0.elapsed().as_secs_f64());
                     let s0 = Instant::now();
-                    assert_eq!(tree.tick(&t, DT).status, TickOutcome::Ok);
-                    t_tr.push(s0.elapsed().as_secs_f64());
-                    cg_tr += u64::from(tree.force_cg_iterations());
+                    assert_eq!(ml.tick(&t, DT).status, TickOutcome::Ok);
+                    t_ml.push(s0.elapsed().as_secs_f64());
+                    cg_ml += u64::from(ml.force_cg_iterations());
+                    if with_tree {
+                        let s0 = Instant::now();
+                        assert_eq!(tree.tick(&t, DT).status, TickOutcome::Ok);
+                        t_tr.push(s0.elapsed().as_secs_f64());
+                        cg_tr += u64::from(tree.force_cg_iterations());
+                    }
                     k_all += 1;
                 }
             }
             let med = |v: &mut Vec<f64>| {
+                if v.is_empty() {
+                    return f64::NAN;
+                }
                 v.sort_by(|a, b| a.partial_cmp(b).unwrap());
                 v[v.len() / 2] * 1e6
             };
             let (mv, ch, tt) = (med(&mut t_mv), med(&mut t_ch), med(&mut t_tr));
-            let st = tree.tree_stats().unwrap();
+            let mlt = med(&mut t_ml);
+            if with_tree {
+                let st = tree.tree_stats().unwrap();
+                println!(
+                    "{family} {bodies} bodies: tree {tt:.1} µs ({:.2}× cholesky), force CG {:.1} it./tick, step CG {:.1} it./tick, unconverged {}, A nnz {}, P nnz {}, P factor {} values, loop rows {}",
+                    tt / ch,
+                    cg_tr as f64 / k_all as f64,
+                    st.step_iterations as f64 / k_all as f64,
+                    tree.matvec_unconverged(),
+                    st.a_nnz,
+                    st.p_nnz,
+                    st.factor_values,
+                    st.loop_rows
+                );
+            }
+            let st = ml.multilevel_stats().unwrap();
             println!(
-                "{family} {bodies} bodies: tree {tt:.1} µs ({:.2}× cholesky), force CG {:.1} it./tick, step CG {:.1} it./tick, unconverged {}, A nnz {}, P nnz {}, P factor {} values, loop rows {}",
-                tt / ch,
-                cg_tr as f64 / k_all as f64,
+                "{family} {bodies} bodies: multilevel {mlt:.1} µs ({:.2}× cholesky), force CG {:.1} it./tick, step CG {:.1} it./tick, unconverged {}, level rows {:?}, level values {}",
+                mlt / ch,
+                cg_ml as f64 / k_all as f64,
                 st.step_iterations as f64 / k_all as f64,
-                tree.matvec_unconverged(),
-                st.a_nnz,
-                st.p_nnz,
-                st.factor_values,
-                st.loop_rows
+                ml.matvec_unconverged(),
+                st.rows,
+                st.values
             );
             println!(
                 "{family} {bodies} bodies ({} rows, factor {} values): cholesky {ch:.1} µs, matvec {mv:.1} µs ({:.2}×), force CG {:.1} it./tick, solves at the cap {:.2}/tick",
@@ -434,10 +453,10 @@ fn probe_matvec_scaling() {
                 cg as f64 / k_all as f64,
                 fast.matvec_unconverged() as f64 / k_all as f64
             );
-            pts.push((bodies as f64, ch, mv, tt));
+            pts.push((bodies as f64, ch, mv, tt, mlt));
         }
-        // (bodies, cholesky µs, matvec µs, tree µs)
-        type Point = (f64, f64, f64, f64);
+        // (bodies, cholesky µs, matvec µs, tree µs, multilevel µs)
+        type Point = (f64, f64, f64, f64, f64);
         let fit = |y: &dyn Fn(&Point) -> f64| {
             let n = pts.len() as f64;
             let (mx, my) = (
@@ -449,10 +468,11 @@ fn probe_matvec_scaling() {
             sxy / sxx
         };
         println!(
-            "{family}: exponent cholesky {:.2}, matvec {:.2}, tree {:.2}",
+            "{family}: exponent cholesky {:.2}, matvec {:.2}, tree {:.2}, multilevel {:.2}",
             fit(&|p| p.1),
             fit(&|p| p.2),
-            fit(&|p| p.3)
+            fit(&|p| p.3),
+            fit(&|p| p.4)
         );
     }
 }

@@ -114,6 +114,11 @@ impl Feedback {
         self.solve.factor_for_steps(&self.gram)
     }
 
+    /// See `MultiplierSolve::multilevel_stats`.
+    pub fn multilevel_stats(&self) -> Option<crate::force::precond::multilevel::MultilevelStats> {
+        self.solve.multilevel_stats()
+    }
+
     /// See `MultiplierSolve::tree_stats`.
     pub fn tree_stats(&self) -> Option<crate::force::precond::tree::TreeStats> {
         self.solve.tree_stats(&self.gram)

@@ -9,12 +9,17 @@ use crate::mechanisms::{chain_sized, lattice_sized, sphere_toy_shape, sphere_toy
 
 /// `model`'s Gram matrix assembled at q0 (unit scaling) and each J row's
 /// constraint.
-fn assembled(model: &Model) -> (Gram, Vec<usize>) {
+pub(super) fn assembled(model: &Model) -> (Gram, Vec<usize>) {
+    assembled_with(model, true)
+}
+
+/// [`assembled`] with the quaternion-norm rows decoupled or not.
+pub(super) fn assembled_with(model: &Model, decouple_norms: bool) -> (Gram, Vec<usize>) {
     let mut ev = model.evaluation();
     ev.evaluate(model, model.q0(), &model.initial_targets())
         .unwrap();
     let masses = BodyMass::of_model(model);
-    let mut gram = Gram::new(model, ev.jacobian(), &masses, &[]);
+    let mut gram = Gram::with_norms(model, ev.jacobian(), &masses, &[], decouple_norms);
     let scale = vec![1.0; model.n_rows()];
     let b = vec![0.1; model.n_coords()];
     let mut y = vec![0.0; model.n_coords()];
@@ -26,7 +31,7 @@ fn assembled(model: &Model) -> (Gram, Vec<usize>) {
 }
 
 /// A_JJ as a full dense n × n matrix (row-major).
-fn dense(gram: &Gram) -> Vec<f64> {
+pub(super) fn dense(gram: &Gram) -> Vec<f64> {
     let n = gram.n_j;
     let (cp, ri) = (gram.pattern.col_ptr(), gram.pattern.row_idx());
     let mut a = vec![0.0; n * n];
