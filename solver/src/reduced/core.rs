@@ -377,6 +377,24 @@ impl JointSpace {
         );
         let mf = self.lambda_f.len();
         let sc = &self.finger_scale;
+        if mf == 3 {
+            // A point grasp: fixed size, no allocation.
+            let sigma = Matrix3::from_fn(|i, j| self.w[(nl + i, nl + j)] * sc[i] * sc[j]);
+            let rhs = nalgebra::Vector3::from_fn(|i, _| gf[(i, 0)] * sc[i]);
+            let eig = sigma.symmetric_eigen();
+            let top = eig.eigenvalues.max().max(0.0);
+            let mut x = nalgebra::Vector3::zeros();
+            for (k, &ev) in eig.eigenvalues.iter().enumerate() {
+                if ev > PINV_RATIO * top {
+                    let v = eig.eigenvectors.column(k);
+                    x += v * (v.dot(&rhs) / ev);
+                }
+            }
+            for i in 0..3 {
+                self.lambda_f[i] = x[i] * sc[i];
+            }
+            return &self.lambda_f;
+        }
         let sigma = DMatrix::from_fn(mf, mf, |i, j| self.w[(nl + i, nl + j)] * sc[i] * sc[j]);
         let rhs = DVector::from_fn(mf, |i, _| gf[(i, 0)] * sc[i]);
         let eig = sigma.symmetric_eigen();

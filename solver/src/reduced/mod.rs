@@ -11,8 +11,6 @@
 //! - `core`: H = Sᵀ M̃ S (composite rigid-body algorithm), J_r = C_{r,q} S
 //!   and the finger Schur complement after the loop rows, with the loop
 //!   rows' redundancy masked once.
-//! - `update`: one Gauss–Newton step on the loop rows in joint
-//!   coordinates (the cost a reduced update would pay).
 //! - `probe` (tests, ignored): times the augmented force stage against this
 //!   one at the same q.
 //!
@@ -24,6 +22,8 @@ mod core;
 mod kinematics;
 mod tree;
 
+#[cfg(test)]
+mod probe;
 #[cfg(test)]
 mod tests;
 

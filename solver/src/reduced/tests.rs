@@ -55,8 +55,8 @@ pub(crate) fn state(name: &str, ticks: usize) -> (Arc<Model>, Vec<f64>) {
 }
 
 /// Each finger holding its attachment point at q.
-pub(crate) fn evaluation(model: &Model, q: &[f64]) -> Evaluation {
-    let targets: Vec<FingerTarget> = model
+pub(crate) fn targets(model: &Model, q: &[f64]) -> Vec<FingerTarget> {
+    model
         .fingers()
         .iter()
         .enumerate()
@@ -64,9 +64,13 @@ pub(crate) fn evaluation(model: &Model, q: &[f64]) -> Evaluation {
             position_m: model.finger_point(q, crate::FingerId(k as u32)).unwrap(),
             orientation: UnitQuaternion::from_matrix(&model.body_rotation(q, f.body).unwrap()),
         })
-        .collect();
+        .collect()
+}
+
+/// The evaluation at q with [`targets`].
+pub(crate) fn evaluation(model: &Model, q: &[f64]) -> Evaluation {
     let mut ev = model.evaluation();
-    ev.evaluate(model, q, &targets).unwrap();
+    ev.evaluate(model, q, &targets(model, q)).unwrap();
     ev
 }
 
