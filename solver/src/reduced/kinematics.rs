@@ -137,9 +137,9 @@ impl Kinematics {
     pub(crate) fn project(&self, tree: &JointTree, body: BodyId, g: &[f64; 7], out: &mut [f64]) {
         let (f, n) = self.wrench(body.index(), g);
         for j in tree.path(body) {
-            for d in j.dof..j.dof + j.freedom.dofs() {
-                let t = &self.twists[d];
-                out[d] += n.dot(&t.w) + f.dot(&t.v);
+            let dofs = j.dof..j.dof + j.freedom.dofs();
+            for (o, t) in out[dofs.clone()].iter_mut().zip(&self.twists[dofs]) {
+                *o += n.dot(&t.w) + f.dot(&t.v);
             }
         }
     }

@@ -232,6 +232,16 @@ impl JointTree {
         &self.finger_rows
     }
 
+    /// Rows of the tree joints (they vanish along S).
+    pub fn tree_rows(&self) -> &[usize] {
+        &self.tree_rows
+    }
+
+    /// The quaternion-norm rows.
+    pub fn norm_rows(&self) -> &[usize] {
+        &self.norm_rows
+    }
+
     /// Tree joints.
     pub fn tree_joints(&self) -> usize {
         self.joints.len()
