@@ -69,7 +69,7 @@ pub struct JointSpace {
     /// W, then [L_L, Z; ·, Σ_F].
     pub(crate) w: Mat<f64>,
     tau: Mat<f64>,
-    rhs: Mat<f64>,
+    pub(super) rhs: Mat<f64>,
     mem: MemBuffer,
     /// The finger multipliers of the last [`Self::finger_solve`].
     pub lambda_f: Vec<f64>,
@@ -140,44 +140,6 @@ impl JointSpace {
         Ok(s)
     }
 
-    /// Drops the dependent loop rows (module docs) and sizes the buffers.
-    fn mask(&mut self, model: &Model, q: &[f64], ev: &Evaluation) -> Result<(), ReducedError> {
-        self.assemble(model, q, ev)?;
-        self.factor_h()?;
-        let w = self.gram();
-        let nl = self.n_loop;
-        let mut kept: Vec<usize> = Vec::new();
-        let top = (0..nl).map(|a| w[(a, a)]).fold(0.0, f64::max);
-        // Left-looking Cholesky of W_LL in row order with dropping.
-        let mut l = DMatrix::<f64>::zeros(nl, nl);
-        for a in 0..nl {
-            let mut col = DVector::from_fn(nl, |i, _| w[(i, a)]);
-            for &k in &kept {
-                let f = l[(a, k)];
-                for i in a..nl {
-                    col[i] -= l[(i, k)] * f;
-                }
-            }
-            if col[a] > PIVOT_RATIO * w[(a, a)].max(ZERO_ROW * top) {
-                let d = col[a].sqrt();
-                for i in a..nl {
-                    l[(i, a)] = col[i] / d;
-                }
-                kept.push(a);
-            }
-        }
-        let mut rows: Vec<usize> = kept.iter().map(|&k| self.rows[k]).collect();
-        self.n_loop = rows.len();
-        rows.extend(&self.tree.finger_rows);
-        self.rows = rows;
-        let (n, m) = (self.tree.dofs, self.rows.len());
-        self.gt = Mat::zeros(n, m);
-        self.w = Mat::zeros(m, m);
-        self.rhs = Mat::zeros(m, 1);
-        self.lambda_f = vec![0.0; self.tree.finger_rows.len()];
-        Ok(())
-    }
-
     /// Masked loop rows.
     pub fn masked(&self) -> usize {
         self.tree.loop_rows.len() - self.n_loop
@@ -231,7 +193,7 @@ impl JointSpace {
 
     /// H = Sᵀ M S by composite inertias (the c′ of M̃ acts only along e,
     /// which S never moves).
-    fn inertia(&mut self) {
+    pub(super) fn inertia(&mut self) {
         // Entries between branches stay 0; the factor overwrote the last H.
         self.h.fill(0.0);
         for (k, j) in self.tree.joints.iter().enumerate() {
@@ -275,7 +237,7 @@ impl JointSpace {
         }
     }
 
-    fn factor_h(&mut self) -> Result<(), ReducedError> {
+    pub(super) fn factor_h(&mut self) -> Result<(), ReducedError> {
         cholesky_in_place(
             self.h.as_mut(),
             LltRegularization::default(),
@@ -288,7 +250,7 @@ impl JointSpace {
     }
 
     /// Y = L⁻¹ J_rᵀ in place and W = Yᵀ Y (dense copy, for `mask` and tests).
-    fn gram(&mut self) -> DMatrix<f64> {
+    pub(super) fn gram(&mut self) -> DMatrix<f64> {
         solve_lower_triangular_in_place(self.h.as_ref(), self.gt.as_mut(), Par::Seq);
         matmul(
             self.w.as_mut(),
@@ -410,37 +372,5 @@ impl JointSpace {
             self.lambda_f[i] = x[i] * sc[i];
         }
         &self.lambda_f
-    }
-}
-
-#[cfg(test)]
-impl JointSpace {
-    /// J_r S H⁻¹ Sᵀ J_rᵀ over every loop and finger row (no mask), at `q`.
-    pub(crate) fn unmasked_gram(
-        &mut self,
-        model: &Model,
-        q: &[f64],
-        ev: &Evaluation,
-    ) -> Result<(Vec<usize>, DMatrix<f64>), ReducedError> {
-        let saved = (self.rows.clone(), self.n_loop);
-        let mut rows = self.tree.loop_rows.clone();
-        rows.extend(&self.tree.finger_rows);
-        let (n, m) = (self.tree.dofs, rows.len());
-        self.rows = rows.clone();
-        (self.gt, self.w) = (Mat::zeros(n, m), Mat::zeros(m, m));
-        self.assemble(model, q, ev)?;
-        self.factor_h()?;
-        let w = self.gram();
-        (self.rows, self.n_loop) = saved;
-        let k = self.rows.len();
-        (self.gt, self.w) = (Mat::zeros(n, k), Mat::zeros(k, k));
-        Ok((rows, w))
-    }
-
-    /// H (assembled, not factored) at `q`, dense.
-    pub(crate) fn joint_inertia(&mut self, model: &Model, q: &[f64]) -> DMatrix<f64> {
-        self.kin.update(model, &self.tree, q).expect("frames");
-        self.inertia();
-        DMatrix::from_fn(self.tree.dofs, self.tree.dofs, |i, j| self.h[(i, j)])
     }
 }

@@ -10,7 +10,8 @@
 //!   (C_tree,q S = 0, eᵀė = 0), and forward kinematics along the joints.
 //! - `core`: H = Sᵀ M̃ S (composite rigid-body algorithm), J_r = C_{r,q} S
 //!   and the finger Schur complement after the loop rows, with the loop
-//!   rows' redundancy masked once.
+//!   rows' redundancy masked once (`mask`: an ordered Cholesky of the
+//!   loop block with dropping).
 //! - `probe` (tests, ignored): times the augmented force stage against this
 //!   one at the same q.
 //!
@@ -20,6 +21,7 @@
 
 mod core;
 mod kinematics;
+mod mask;
 mod tree;
 
 #[cfg(test)]

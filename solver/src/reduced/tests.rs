@@ -272,3 +272,34 @@ fn finger_force_matches_the_null_space_reference() {
         );
     }
 }
+
+impl JointSpace {
+    /// J_r S H⁻¹ Sᵀ J_rᵀ over every loop and finger row (no mask), at `q`.
+    pub(crate) fn unmasked_gram(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        ev: &Evaluation,
+    ) -> Result<(Vec<usize>, DMatrix<f64>), super::ReducedError> {
+        let saved = (self.rows.clone(), self.n_loop);
+        let mut rows = self.tree.loop_rows.clone();
+        rows.extend(&self.tree.finger_rows);
+        let (n, m) = (self.tree.dofs, rows.len());
+        self.rows = rows.clone();
+        (self.gt, self.w) = (faer::Mat::zeros(n, m), faer::Mat::zeros(m, m));
+        self.assemble(model, q, ev)?;
+        self.factor_h()?;
+        let w = self.gram();
+        (self.rows, self.n_loop) = saved;
+        let k = self.rows.len();
+        (self.gt, self.w) = (faer::Mat::zeros(n, k), faer::Mat::zeros(k, k));
+        Ok((rows, w))
+    }
+
+    /// H (assembled, not factored) at `q`, dense.
+    pub(crate) fn joint_inertia(&mut self, model: &Model, q: &[f64]) -> DMatrix<f64> {
+        self.kin.update(model, &self.tree, q).expect("frames");
+        self.inertia();
+        DMatrix::from_fn(self.tree.dofs, self.tree.dofs, |i, j| self.h[(i, j)])
+    }
+}
