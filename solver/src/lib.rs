@@ -105,6 +105,7 @@ pub mod parametric;
 pub mod place;
 pub mod placement;
 pub mod program;
+pub mod reduced;
 pub mod rotation;
 pub mod scene;
 pub mod semantic;

@@ -1,0 +1,247 @@
+//! The map S(q) from joint rates θ̇ to augmented velocities q̇, and forward
+//! kinematics along the joint coordinates.
+//!
+//! Each joint coordinate d is a world-frame twist t_d = (w_d, v_d): angular
+//! velocity w_d and the velocity v_d of the body point at the world origin
+//! (a rotation about axis a through p: w = a, v = p × a; a translation along
+//! a: w = 0, v = a). A body B moves with every coordinate on its path to
+//! the ground:
+//!
+//! ```text
+//! ω_B = Σ w_d θ̇_d,   ṙ_B = Σ (v_d + w_d × r_B) θ̇_d,   ė_B = (|e|²/4) Ω(e)ᵀ ω_B
+//! ```
+//!
+//! The last is `crate::rotation`'s convention read backwards: Ω ė = ω
+//! because Ω Ωᵀ = (4/|e|²) I, and eᵀė = 0 because Ω e = 0, so S's columns
+//! are tangent to the quaternion-norm rows and M̃ = M on them.
+//!
+//! A revolute turns about its child end's axis through the child end's
+//! anchor, so the tree joint's own rows have zero derivative along S exactly
+//! when its anchors coincide (C_tree,q S = 0 on the tree manifold, and of
+//! the order of the violation off it).
+//!
+//! Generalized forces and Jacobian rows go the other way: a row's values g
+//! on body B's columns are a world force f = g_r and torque
+//! n = (|e|²/4) Ω g_e + r_B × f about the world origin, and row · S_d =
+//! n·w_d + f·v_d.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::ReducedError;
+use super::tree::{Freedom, JointTree, TreeJoint};
+use crate::rotation::BodyFrame;
+use crate::{BodyId, Model};
+
+/// A world twist: angular velocity and velocity of the point at the origin.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Twist {
+    pub w: Vector3<f64>,
+    pub v: Vector3<f64>,
+}
+
+/// Frames of every body and the twist of every joint coordinate at one q.
+#[derive(Debug, Clone)]
+pub struct Kinematics {
+    /// Per body (model order); fixed bodies at their pose.
+    pub(crate) frames: Vec<BodyFrame>,
+    /// Per joint coordinate.
+    pub(crate) twists: Vec<Twist>,
+}
+
+fn frame_of(model: &Model, q: &[f64], b: Option<BodyId>) -> Result<BodyFrame, ReducedError> {
+    match b {
+        None => Ok(BodyFrame::IDENTITY),
+        Some(b) => model
+            .body_frame(q, b)
+            .ok_or(ReducedError::Degenerate(b.index())),
+    }
+}
+
+/// The unit world directions a joint's coordinates act along, and the
+/// point the rotations are about.
+fn joint_axes(j: &TreeJoint, ends: &[BodyFrame; 2]) -> (Vector3<f64>, [Vector3<f64>; 3]) {
+    let c = j.child_end;
+    let p = ends[c].point(&j.anchors[c]);
+    let axes = match j.freedom {
+        Freedom::Revolute { axes } => [ends[c].rot * axes[c], Vector3::zeros(), Vector3::zeros()],
+        Freedom::Universal { axes } => [
+            ends[0].rot * axes[0],
+            ends[1].rot * axes[1],
+            Vector3::zeros(),
+        ],
+        Freedom::Spherical => [Vector3::x(), Vector3::y(), Vector3::z()],
+        Freedom::Prismatic { axis } => [ends[0].rot * axis, Vector3::zeros(), Vector3::zeros()],
+    };
+    (p, axes)
+}
+
+impl Kinematics {
+    /// Buffers for `model`.
+    pub fn new(model: &Model, tree: &JointTree) -> Self {
+        Self {
+            frames: vec![BodyFrame::IDENTITY; model.bodies().len()],
+            twists: vec![Twist::default(); tree.dofs],
+        }
+    }
+
+    /// Frames and twists at `q`. No allocation.
+    ///
+    /// # Errors
+    /// A degenerate quaternion.
+    pub fn update(
+        &mut self,
+        model: &Model,
+        tree: &JointTree,
+        q: &[f64],
+    ) -> Result<(), ReducedError> {
+        for (k, f) in self.frames.iter_mut().enumerate() {
+            *f = frame_of(model, q, Some(BodyId(k as u32)))?;
+        }
+        for j in &tree.joints {
+            let ends = [self.end(j.ends[0]), self.end(j.ends[1])];
+            let (p, axes) = joint_axes(j, &ends);
+            for (k, a) in axes.iter().take(j.freedom.dofs()).enumerate() {
+                self.twists[j.dof + k] = match j.freedom {
+                    Freedom::Prismatic { .. } => Twist {
+                        w: Vector3::zeros(),
+                        v: *a,
+                    },
+                    _ => Twist {
+                        w: *a,
+                        v: p.cross(a),
+                    },
+                };
+            }
+        }
+        Ok(())
+    }
+
+    fn end(&self, b: Option<BodyId>) -> BodyFrame {
+        b.map_or(BodyFrame::IDENTITY, |b| self.frames[b.index()])
+    }
+
+    /// The world force and torque about the origin of a body's 7 generalized
+    /// values `g` (r then e): a Jacobian row's or a generalized force's.
+    #[inline]
+    pub(crate) fn wrench(&self, body: usize, g: &[f64; 7]) -> (Vector3<f64>, Vector3<f64>) {
+        let f = &self.frames[body];
+        let s_over_4 = 1.0 / f.omega.row(0).norm_squared();
+        let lin = Vector3::new(g[0], g[1], g[2]);
+        let ang = f.omega * nalgebra::Vector4::new(g[3], g[4], g[5], g[6]) * s_over_4;
+        (lin, ang + f.r.cross(&lin))
+    }
+
+    /// Adds `g`'s projection on body `body` to `out` (one entry per joint
+    /// coordinate): out += S_Bᵀ g. O(depth of the body).
+    #[inline]
+    pub(crate) fn project(&self, tree: &JointTree, body: BodyId, g: &[f64; 7], out: &mut [f64]) {
+        let (f, n) = self.wrench(body.index(), g);
+        for j in tree.path(body) {
+            let dofs = j.dof..j.dof + j.freedom.dofs();
+            for (o, t) in out[dofs.clone()].iter_mut().zip(&self.twists[dofs]) {
+                *o += n.dot(&t.w) + f.dot(&t.v);
+            }
+        }
+    }
+
+    /// S as a dense n_coords × dofs matrix (tests and the identity checks).
+    pub fn s_dense(&self, model: &Model, tree: &JointTree) -> nalgebra::DMatrix<f64> {
+        let mut s = nalgebra::DMatrix::zeros(model.n_coords(), tree.dofs);
+        for (b, o) in model.layout().moving_bodies() {
+            let f = &self.frames[b.index()];
+            let s4 = 1.0 / f.omega.row(0).norm_squared();
+            for j in tree.path(b) {
+                for d in j.dof..j.dof + j.freedom.dofs() {
+                    let t = &self.twists[d];
+                    let rd = t.v + t.w.cross(&f.r);
+                    let ed = f.omega.transpose() * t.w * s4;
+                    for k in 0..3 {
+                        s[(o + k, d)] = rd[k];
+                    }
+                    for k in 0..4 {
+                        s[(o + 3 + k, d)] = ed[k];
+                    }
+                }
+            }
+        }
+        s
+    }
+}
+
+/// A rigid displacement x ↦ Q x + t.
+#[derive(Debug, Clone, Copy)]
+struct Rigid {
+    q: UnitQuaternion<f64>,
+    t: Vector3<f64>,
+}
+
+impl Rigid {
+    const IDENTITY: Self = Self {
+        q: UnitQuaternion::new_unchecked(Quaternion::new(1.0, 0.0, 0.0, 0.0)),
+        t: Vector3::new(0.0, 0.0, 0.0),
+    };
+
+    fn then(&self, inner: &Rigid) -> Rigid {
+        Rigid {
+            q: self.q * inner.q,
+            t: self.q * inner.t + self.t,
+        }
+    }
+
+    fn rotation_about(p: &Vector3<f64>, q: UnitQuaternion<f64>) -> Rigid {
+        Rigid { q, t: p - q * p }
+    }
+}
+
+/// Forward kinematics relative to `q_base`: every tree joint moved by
+/// `dtheta` from its pose at `q_base` (the twists of `kin`, which must be
+/// at `q_base`), written to `out`. Revolute and prismatic coordinates are
+/// exact angles and lengths; a universal turns about its first axis after
+/// its second, a spherical by the rotation vector of its three coordinates.
+/// Allocation: `rigid` must hold one entry per tree joint.
+pub fn displace(
+    model: &Model,
+    tree: &JointTree,
+    kin: &Kinematics,
+    q_base: &[f64],
+    dtheta: &[f64],
+    out: &mut [f64],
+) {
+    out.copy_from_slice(q_base);
+    let mut rigid = vec![Rigid::IDENTITY; tree.joints.len()];
+    for (k, j) in tree.joints.iter().enumerate() {
+        let t = &kin.twists[j.dof..j.dof + j.freedom.dofs()];
+        let th = &dtheta[j.dof..j.dof + j.freedom.dofs()];
+        let local = match j.freedom {
+            Freedom::Prismatic { .. } => Rigid {
+                q: UnitQuaternion::identity(),
+                t: t[0].v * th[0],
+            },
+            Freedom::Spherical => {
+                let phi = Vector3::new(th[0], th[1], th[2]);
+                let p = kin.frames[j.child.index()].point(&j.anchors[j.child_end]);
+                Rigid::rotation_about(&p, UnitQuaternion::from_scaled_axis(phi))
+            }
+            _ => {
+                // A rotation about a through p has v = p × a, so p's
+                // component off a is a × v (a unit).
+                let mut q = UnitQuaternion::identity();
+                for (tw, &x) in t.iter().zip(th) {
+                    q *= UnitQuaternion::from_scaled_axis(tw.w * x);
+                }
+                let p = t[0].w.cross(&t[0].v);
+                Rigid::rotation_about(&p, q)
+            }
+        };
+        let parent = j.parent_joint.map_or(Rigid::IDENTITY, |p| rigid[p]);
+        rigid[k] = parent.then(&local);
+        let Some(o) = model.layout().body_offset(j.child) else {
+            continue;
+        };
+        let r = Vector3::new(out[o], out[o + 1], out[o + 2]);
+        let e = Quaternion::new(out[o + 3], out[o + 4], out[o + 5], out[o + 6]);
+        let (r2, e2) = (rigid[k].q * r + rigid[k].t, rigid[k].q.quaternion() * e);
+        out[o..o + 3].copy_from_slice(r2.as_slice());
+        out[o + 3..o + 7].copy_from_slice(&[e2.w, e2.i, e2.j, e2.k]);
+    }
+}

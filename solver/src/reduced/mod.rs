@@ -1,0 +1,48 @@
+//! **Experimental, measurement-only**: the Eq. 7 force core in joint (tree)
+//! coordinates, to measure what a smaller system would buy against the
+//! augmented one the fast loop solves (issue 23). Nothing here is wired
+//! into the fast loop; `Program` never calls it.
+//!
+//! - `tree`: a breadth-first spanning tree of the joint graph rooted at the
+//!   ground; tree joints give the joint coordinates, the other joints'
+//!   rows (loop closures) stay rows, as the fingers' do.
+//! - `kinematics`: S(q), the map from joint rates to augmented velocities
+//!   (C_tree,q S = 0, eᵀė = 0), and forward kinematics along the joints.
+//! - `core`: H = Sᵀ M̃ S (composite rigid-body algorithm), J_r = C_{r,q} S
+//!   and the finger Schur complement after the loop rows, with the loop
+//!   rows' redundancy masked once (`mask`: an ordered Cholesky of the
+//!   loop block with dropping).
+//! - `probe` (tests, ignored): times the augmented force stage against this
+//!   one at the same q.
+//!
+//! Joints handled: revolute, universal, spherical, prismatic. Models with
+//! design variables, auxiliary columns (flexible bodies, surfaces), free
+//! anchors or inequality rows are refused.
+
+mod core;
+mod kinematics;
+mod mask;
+mod tree;
+
+#[cfg(test)]
+mod probe;
+#[cfg(test)]
+mod tests;
+
+pub use core::{JointSpace, PINV_RATIO, PIVOT_RATIO, ZERO_ROW};
+pub use kinematics::{Kinematics, displace};
+pub use tree::JointTree;
+
+/// Why a model or a configuration has no joint-space form here.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ReducedError {
+    /// The model has something this module does not handle.
+    #[error("not handled in joint coordinates: {0}")]
+    Unsupported(String),
+    /// A body's quaternion is degenerate at q.
+    #[error("body {0} has a degenerate quaternion")]
+    Degenerate(usize),
+    /// A matrix that should be positive definite is not.
+    #[error("{0} is not positive definite")]
+    NotPositive(&'static str),
+}
