@@ -392,9 +392,8 @@ fn supernode_starts(
     }
     let mut starts = vec![0usize];
     for j in 1..lead {
-        let same = parent[j - 1] == j
-            && children[j] == 1
-            && colpat[j - 1].len() == colpat[j].len() + 1;
+        let same =
+            parent[j - 1] == j && children[j] == 1 && colpat[j - 1].len() == colpat[j].len() + 1;
         if !same {
             starts.push(j);
         }
