@@ -225,31 +225,9 @@ pub const EXIT_FAILED_TICKS: u8 = 3;
 
 /// Runs a session and prints (and writes) its report.
 pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
-    let scene = match resolve(&args.scene) {
+    let scene = match prepared_scene(args) {
         Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return Ok(ExitCode::from(1));
-        }
-    };
-    let scene = match with_design_flags(scene, &args.free, &args.objective)
-        .and_then(|s| with_design_switches(s, &args.design_on, &args.design_off))
-    {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return Ok(ExitCode::from(2));
-        }
-    };
-    let scene = match &args.device {
-        Some(model) => match scene.with_device_model(model) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("haptloop: {e}");
-                return Ok(ExitCode::from(2));
-            }
-        },
-        None => scene,
+        Err(code) => return Ok(code),
     };
     // The live view listens before anything is claimed or built: a port in
     // use is said at once.
@@ -262,7 +240,75 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         Some(s) => Some(s.hook(SceneInfo::of(&scene))?),
         None => None,
     };
-    let options = SessionOptions {
+    let options = session_options(args, live);
+    if args.semantic_mode.is_some() && scene.compiled.semantic.is_none() {
+        return Ok(super::usage_error(&format!(
+            "--semantic-mode: scene `{}` has no semantic areas (offer and binding areas)",
+            scene.compiled.name
+        )));
+    }
+    // Everything a flag can get wrong is said before the output directory
+    // is claimed.
+    let mut plan = Plan::new(&scene, &options)?;
+    plan.stalls = args.stall.clone();
+    plan.slow_stalls = args.slow_stall.clone();
+    if let Err(msg) = args.rt.check_spin(plan.rate_hz) {
+        return Ok(super::usage_error(&msg));
+    }
+    if let Err(msg) = check_record(args, &plan) {
+        return Ok(super::usage_error(&msg));
+    }
+    let run_dir = claim_run_dir(args, &scene)?;
+    plan.out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
+    announce(server.as_ref(), &scene, &plan);
+    let outcome = run_with_progress(args, &scene, plan, stop);
+    if let Some(s) = server {
+        report_live(&s.finish());
+    }
+    let outcome = outcome?;
+    let summary = Summary::of(&outcome);
+    let fingers: Vec<(String, String)> = outcome
+        .fingers
+        .iter()
+        .cloned()
+        .zip(outcome.finger_devices.iter().cloned())
+        .collect();
+    if !super::signals::aborting() {
+        super::emit(&text::render(&summary, &fingers));
+    }
+    if let Some(dir) = run_dir {
+        write_files(dir.path(), &scene, &outcome, &summary)?;
+        dir.release()?;
+    }
+    Ok(exit_status(&summary))
+}
+
+/// The scene `args` names with its design flags, switches and device model
+/// applied; on a bad one, the error is printed and its exit status returned
+/// (1: no such scene, 2: a flag it cannot take).
+fn prepared_scene(args: &RunArgs) -> Result<Scene, ExitCode> {
+    let scene = resolve(&args.scene).map_err(|e| {
+        eprintln!("{e}");
+        ExitCode::from(1)
+    })?;
+    let scene = with_design_flags(scene, &args.free, &args.objective)
+        .and_then(|s| with_design_switches(s, &args.design_on, &args.design_off))
+        .map_err(|e| {
+            eprintln!("{e}");
+            ExitCode::from(2)
+        })?;
+    match &args.device {
+        Some(model) => scene.with_device_model(model).map_err(|e| {
+            eprintln!("haptloop: {e}");
+            ExitCode::from(2)
+        }),
+        None => Ok(scene),
+    }
+}
+
+/// The session's options from the flags (`live`: the live view's hook).
+fn session_options(args: &RunArgs, live: Option<session::LiveHook>) -> SessionOptions {
+    SessionOptions {
         seconds: args.seconds,
         rate_hz: args.rate,
         iterations: args.iterations,
@@ -282,28 +328,15 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         reference_every: None,
         live,
         semantic_mode: args.semantic_mode,
-    };
-    if args.semantic_mode.is_some() && scene.compiled.semantic.is_none() {
-        return Ok(super::usage_error(&format!(
-            "--semantic-mode: scene `{}` has no semantic areas (offer and binding areas)",
-            scene.compiled.name
-        )));
     }
-    // Everything a flag can get wrong is said before the output directory
-    // is claimed.
-    let mut plan = Plan::new(&scene, &options)?;
-    plan.stalls = args.stall.clone();
-    plan.slow_stalls = args.slow_stall.clone();
-    if let Err(msg) = args.rt.check_spin(plan.rate_hz) {
-        return Ok(super::usage_error(&msg));
-    }
-    if let Err(msg) = check_record(args, &plan) {
-        return Ok(super::usage_error(&msg));
-    }
-    // Claimed before anything runs: a non-empty --out is refused, and the
-    // lock keeps a second run out while this one writes. Every exit from
-    // here on gives it back (RunDir's drop) unless the run completes.
-    let run_dir = match (&args.out, args.no_files) {
+}
+
+/// The run's output directory (none with `--no-files`), claimed before
+/// anything runs: a non-empty --out is refused, and the lock keeps a second
+/// run out while this one writes. Every exit from here on gives it back
+/// (RunDir's drop) unless the run completes.
+fn claim_run_dir(args: &RunArgs, scene: &Scene) -> Result<Option<RunDir>> {
+    Ok(match (&args.out, args.no_files) {
         (_, true) => None,
         (Some(d), false) => Some(RunDir::claim(d)?),
         (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
@@ -311,15 +344,19 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             scene.compiled.name,
             utc_stamp()
         )))?),
-    };
-    plan.out_dir = run_dir.as_ref().map(|d| d.path().to_path_buf());
+    })
+}
+
+/// Says on stderr what is about to run: the live view's address (or that
+/// nothing moves the virtual devices without it), the scene, length and rate.
+fn announce(server: Option<&LiveServer>, scene: &Scene, plan: &Plan) {
     let virtuals = scene
         .compiled
         .devices
         .iter()
         .filter(|d| d.model == haptloop_devices::VIRTUAL_MODEL)
         .count();
-    if let Some(s) = &server {
+    if let Some(s) = server {
         eprintln!(
             "haptloop: live view at {} : open it in a browser; the run starts when it connects",
             s.url()
@@ -340,6 +377,16 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
             ""
         }
     );
+}
+
+/// Runs the session, its status lines on a spinner when stderr is a terminal
+/// (else printed, unless `--quiet`).
+fn run_with_progress(
+    args: &RunArgs,
+    scene: &Scene,
+    plan: Plan,
+    stop: &StopFlag,
+) -> Result<session::SessionOutcome> {
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new_spinner();
         b.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("valid template"));
@@ -351,50 +398,36 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         None if !quiet => eprintln!("{line}"),
         None => {}
     };
-    let outcome = session::run(&scene, plan, stop, &mut status);
+    let outcome = session::run(scene, plan, stop, &mut status);
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    if let Some(s) = server {
-        let st = s.finish();
-        let moves: Vec<String> = st
-            .pointer_moves
-            .iter()
-            .map(|(d, n)| format!("{d} {n}"))
-            .collect();
-        eprintln!(
-            "haptloop: live view: {} page(s) served, {} viewer(s), {} frames sent{}{}",
-            st.pages,
-            st.viewers,
-            st.frames,
-            if moves.is_empty() {
-                String::new()
-            } else {
-                format!("; pointer moves: {}", moves.join(", "))
-            },
-            if st.bad_messages > 0 {
-                format!("; {} messages not understood (ignored)", st.bad_messages)
-            } else {
-                String::new()
-            }
-        );
-    }
-    let outcome = outcome?;
-    let summary = Summary::of(&outcome);
-    let fingers: Vec<(String, String)> = outcome
-        .fingers
+    outcome
+}
+
+/// Says on stderr what the live view served.
+fn report_live(st: &view::live::LiveStats) {
+    let moves: Vec<String> = st
+        .pointer_moves
         .iter()
-        .cloned()
-        .zip(outcome.finger_devices.iter().cloned())
+        .map(|(d, n)| format!("{d} {n}"))
         .collect();
-    if !super::signals::aborting() {
-        super::emit(&text::render(&summary, &fingers));
-    }
-    if let Some(dir) = run_dir {
-        write_files(dir.path(), &scene, &outcome, &summary)?;
-        dir.release()?;
-    }
-    Ok(exit_status(&summary))
+    eprintln!(
+        "haptloop: live view: {} page(s) served, {} viewer(s), {} frames sent{}{}",
+        st.pages,
+        st.viewers,
+        st.frames,
+        if moves.is_empty() {
+            String::new()
+        } else {
+            format!("; pointer moves: {}", moves.join(", "))
+        },
+        if st.bad_messages > 0 {
+            format!("; {} messages not understood (ignored)", st.bad_messages)
+        } else {
+            String::new()
+        }
+    );
 }
 
 /// 0 when every planned tick ran and succeeded; [`EXIT_FAILED_TICKS`] when

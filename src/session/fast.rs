@@ -26,7 +26,7 @@ use haptloop_devices::{FaultKind, Health, TraceRecorder, TraceRow};
 use haptloop_rt::clock::Clock;
 use haptloop_rt::exchange::{MailboxWriter, ProgramReceiver};
 use haptloop_rt::schedule::{SafetyEvent, Tick, TickBody, TickStatus};
-use haptloop_solver::{FingerTarget, Program, TickOutcome};
+use haptloop_solver::{FingerTarget, Program, TickOutcome, TickReport};
 use nalgebra::Vector3;
 use std::sync::Arc;
 use std::time::Duration;
@@ -183,13 +183,24 @@ impl<C: Clock> FastLoop<C> {
     }
 }
 
-impl<C: Clock> TickBody for FastLoop<C> {
-    type Fault = SessionFault;
+/// What one tick's solve produced, for the stages after it.
+#[derive(Clone, Copy)]
+struct Solved {
+    report: TickReport,
+    /// The solve converged to a finite, intact state (neither the linkage nor
+    /// the world came apart).
+    solved: bool,
+    /// The solve was finite but a penetration exceeded the broken bound.
+    apart: bool,
+    /// The step simulated.
+    dt: Duration,
+}
 
-    fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
-        self.timer.start();
-        let now = self.session_time(tick);
-        let read_start = self.clock.now();
+impl<C: Clock> FastLoop<C> {
+    /// Handover stage: swaps in a program the slow loop sent, applies witness
+    /// tables, the contact budget, design switches and refreshed factors.
+    #[inline]
+    fn take_over(&mut self, tick: &Tick, now: Duration) {
         let mut prepared = 0;
         let swapped = self.programs.try_swap(&mut self.program, |old, new| {
             prepared += u64::from(new.program.is_prepared());
@@ -198,27 +209,7 @@ impl<C: Clock> TickBody for FastLoop<C> {
         self.stats.programs_swapped += swapped as u64;
         self.stats.contact.prepared_programs += prepared;
         if swapped > 0 {
-            if let Some(at) = self.program.snapshot_tick {
-                self.stats
-                    .contact
-                    .record_latency(tick.index.saturating_sub(at));
-            }
-            if let Some(age) = &mut self.witness_age {
-                match self.program.rows {
-                    RowsStamp::Keep => {}
-                    RowsStamp::At(motion) => age.rows_from(motion),
-                    RowsStamp::Fresh => age.rows_fresh(),
-                }
-            }
-            if let (Some(g), Some(inbox)) = (self.program.generation, &mut self.inbox) {
-                inbox.taken_over(g);
-            }
-            if self.program.broken {
-                // The slow loop saw the world come apart: no force from
-                // it until the backup has settled.
-                self.cut_forces(tick.index);
-                self.stats.contact.broken_handovers += 1;
-            }
+            self.swapped_in(tick);
         }
         if let Some(inbox) = &mut self.inbox
             && let Some(got) = inbox.apply(&mut self.program.program)
@@ -242,8 +233,40 @@ impl<C: Clock> TickBody for FastLoop<C> {
         if let Some(r) = &mut self.refresh {
             r.apply(&mut self.program.program);
         }
-        self.timer.lap(Stage::Handover);
+    }
 
+    /// Bookkeeping for a program just swapped in: its latency, the age of its
+    /// witness rows, the inbox generation, and a force cut if it was built
+    /// from a broken world.
+    #[inline]
+    fn swapped_in(&mut self, tick: &Tick) {
+        if let Some(at) = self.program.snapshot_tick {
+            self.stats
+                .contact
+                .record_latency(tick.index.saturating_sub(at));
+        }
+        if let Some(age) = &mut self.witness_age {
+            match self.program.rows {
+                RowsStamp::Keep => {}
+                RowsStamp::At(motion) => age.rows_from(motion),
+                RowsStamp::Fresh => age.rows_fresh(),
+            }
+        }
+        if let (Some(g), Some(inbox)) = (self.program.generation, &mut self.inbox) {
+            inbox.taken_over(g);
+        }
+        if self.program.broken {
+            // The slow loop saw the world come apart: no force from
+            // it until the backup has settled.
+            self.cut_forces(tick.index);
+            self.stats.contact.broken_handovers += 1;
+        }
+    }
+
+    /// Device-read stage: every finger's target (scene frame), and each
+    /// device's encoder counts and gimbal orientation for the recorders.
+    #[inline]
+    fn read_devices(&mut self, now: Duration) {
         for i in 0..self.targets.len() {
             let dev = &mut self.rig.devices[self.rig.finger_device[i]];
             let r = dev.read_scene(now);
@@ -253,7 +276,13 @@ impl<C: Clock> TickBody for FastLoop<C> {
             self.orientations[d] = [q.w, q.i, q.j, q.k];
             self.targets[i] = self.rig.target(i, r.tip_m_scene, r.orientation_scene);
         }
-        self.timer.lap(Stage::DeviceRead);
+    }
+
+    /// Update stage: steps the program one period towards the targets (after
+    /// a stall, through the catch-up) and judges whether the result may be
+    /// rendered.
+    #[inline]
+    fn solve(&mut self, tick: &Tick) -> Solved {
         let steps = self
             .last_index
             .map_or(1, |last| tick.index.saturating_sub(last).max(1));
@@ -290,12 +319,19 @@ impl<C: Clock> TickBody for FastLoop<C> {
         {
             age.moved(self.program.program.last_contact_motion());
         }
-        let cut = !solved || tick.index < self.cut_until;
-
-        let t_s = now.as_secs_f64();
-        if let Some(d) = &mut self.design {
-            d.record(t_s, &self.program.program, solved);
+        Solved {
+            report,
+            solved,
+            apart,
+            dt,
         }
+    }
+
+    /// Safety-and-write stage: each finger's force (zero while `cut`) through
+    /// its device's safety layer; records the device traffic. Returns a
+    /// device fault latched this tick, if any.
+    #[inline]
+    fn write_forces(&mut self, now: Duration, cut: bool) -> Option<SessionFault> {
         let mut fault = None;
         for i in 0..self.targets.len() {
             let d = self.rig.finger_device[i];
@@ -328,18 +364,19 @@ impl<C: Clock> TickBody for FastLoop<C> {
             }
             self.health[d] = health;
         }
-        self.stats
-            .read_to_write
-            .record((self.clock.now() - read_start).0);
-        self.timer.lap(Stage::SafetyWrite);
+        fault
+    }
 
-        let t_s = now.as_secs_f64();
+    /// Per-finger statistics and one trace row per finger (to the lock-free
+    /// queue; a full queue drops the row).
+    #[inline]
+    fn record_fingers(&mut self, t_s: f64, s: &Solved) {
         for i in 0..self.targets.len() {
             let out = &self.program.program.finger_outputs()[i];
             let fs: &mut FingerStats = &mut self.stats.fingers[i];
             // A failed solve's attachment point means nothing: its tracking
             // error is not a measurement (the tick is counted as failed).
-            let tracking = if solved {
+            let tracking = if s.solved {
                 out.tracking_error_m
             } else {
                 f64::NAN
@@ -351,17 +388,19 @@ impl<C: Clock> TickBody for FastLoop<C> {
                 target_m: self.targets[i].position_m.into(),
                 position_m: out.attachment_m.into(),
                 force_n: self.rendered[i].into(),
-                violation_m: report.max_violation_m,
-                failed: !solved,
+                violation_m: s.report.max_violation_m,
+                failed: !s.solved,
             });
         }
-        self.stats.record_tick(&report, solved, apart);
-        if let Some(r) = &mut self.reference {
-            let p = &self.program.program;
-            self.sampled = r.after(tick.index, p, &self.targets, dt.as_secs_f64(), solved);
-        }
+    }
 
+    /// Publishes the tick's snapshot (state, violations, forces, speeds) to
+    /// the slow loop and the reporter, into its preallocated buffers.
+    #[inline]
+    fn publish(&mut self, tick: &Tick, now: Duration, s: &Solved) {
         let program = &self.program.program;
+        let report = &s.report;
+        let solved = s.solved;
         let v = report.max_violation_m;
         self.violation_peak_m = if self.snapshot.reader_is_current() || v.is_nan() {
             v
@@ -389,10 +428,45 @@ impl<C: Clock> TickBody for FastLoop<C> {
             s.contact_motion = motion;
             program.body_speeds(&mut s.speeds);
         });
+    }
+}
+
+impl<C: Clock> TickBody for FastLoop<C> {
+    type Fault = SessionFault;
+
+    fn tick(&mut self, tick: &Tick) -> TickStatus<SessionFault> {
+        self.timer.start();
+        let now = self.session_time(tick);
+        let read_start = self.clock.now();
+        self.take_over(tick, now);
+        self.timer.lap(Stage::Handover);
+
+        self.read_devices(now);
+        self.timer.lap(Stage::DeviceRead);
+        let s = self.solve(tick);
+        let cut = !s.solved || tick.index < self.cut_until;
+
+        let t_s = now.as_secs_f64();
+        if let Some(d) = &mut self.design {
+            d.record(t_s, &self.program.program, s.solved);
+        }
+        let fault = self.write_forces(now, cut);
+        self.stats
+            .read_to_write
+            .record((self.clock.now() - read_start).0);
+        self.timer.lap(Stage::SafetyWrite);
+
+        self.record_fingers(t_s, &s);
+        self.stats.record_tick(&s.report, s.solved, s.apart);
+        if let Some(r) = &mut self.reference {
+            let p = &self.program.program;
+            self.sampled = r.after(tick.index, p, &self.targets, s.dt.as_secs_f64(), s.solved);
+        }
+        self.publish(tick, now, &s);
         self.timer.lap(Stage::Bookkeeping);
         self.stats.stages.record(&self.timer);
 
-        match (solved, fault) {
+        match (s.solved, fault) {
             (false, _) => TickStatus::Fault(SessionFault::Solver),
             (true, Some(f)) => TickStatus::Fault(f),
             (true, None) => TickStatus::Ok,

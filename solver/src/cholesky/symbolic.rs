@@ -264,91 +264,172 @@ impl Symbolic {
         ordering: Ordering,
         groups: &[u32],
     ) -> Result<Self, faer::sparse::FaerError> {
-        let lead = n - tail;
-        // 2. Elimination tree, then a postorder of the leading block's tree
-        //    (every subtree a contiguous range of columns), the tail after it:
-        //    a topological order of the whole tree.
-        let rows_of = |iperm: &[usize], size: usize| -> Vec<Vec<usize>> {
-            // Row k of the permuted lower triangle: columns j < k.
-            let mut r = vec![Vec::new(); size];
-            for &(rr, c, _) in entries {
-                if rr >= size || c >= size {
-                    continue;
-                }
-                let (i, j) = (iperm[rr], iperm[c]);
-                let (hi, lo) = (i.max(j), i.min(j));
-                if hi != lo {
-                    r[hi].push(lo);
-                }
-            }
-            for row in &mut r {
-                row.sort_unstable();
-                row.dedup();
-            }
-            r
-        };
-        let parent = etree(&rows_of(perm_inv, lead));
-        let post = postorder(&parent);
-        // post[new] = old (in the AMD order); compose.
-        let mut post_inv = vec![0usize; lead];
-        for (new, &old) in post.iter().enumerate() {
-            post_inv[old] = new;
-        }
-        let mut iperm: Vec<usize> = perm_inv.iter().map(|&v| post_inv[v]).collect();
-        iperm.extend(lead..n);
-        let rows = rows_of(&iperm, n);
+        // 2. Elimination tree in the postordered order.
+        let iperm = postordered(n, tail, entries, perm_inv);
+        let rows = permuted_rows(entries, &iperm, n);
         let parent = etree(&rows);
-        // 3. Pattern of L, column by column (rows strictly below the
-        //    diagonal, ascending): row k's pattern is the union of the tree
-        //    paths from its entries up to k.
-        let mut colpat: Vec<Vec<u32>> = vec![Vec::new(); n];
-        let mut mark = vec![usize::MAX; n];
-        for (k, row) in rows.iter().enumerate() {
-            mark[k] = k;
-            for &i in row {
-                let mut j = i;
-                while mark[j] != k {
-                    mark[j] = k;
-                    colpat[j].push(k as u32);
-                    j = parent[j];
-                    if j == usize::MAX {
-                        break;
-                    }
+        // 3. Pattern of L, column by column.
+        let colpat = column_patterns(&rows, &parent);
+        // 4. Supernodes and their rows.
+        let starts = supernode_starts(tail, &parent, &colpat, &iperm, groups);
+        let mut layout = Layout::new(n, &starts, &colpat)?;
+        // 5. Load map: entry (r, c) → its place in L's blocks.
+        let load = entries
+            .iter()
+            .map(|&(rr, c, src)| (src as u32, layout.place(iperm[rr], iperm[c]) as u32))
+            .collect();
+        // 6. Update plan.
+        let (updates, rel) = layout.update_plan();
+        let lead_supernodes = layout.supernodes.len() - usize::from(tail > 0);
+        Ok(Self {
+            n,
+            tail,
+            ordering,
+            induced: false,
+            lead_supernodes,
+            iperm: iperm.iter().map(|&v| v as u32).collect(),
+            load,
+            supernodes: layout.supernodes,
+            rows: layout.rows,
+            updates,
+            rel,
+            len_values: layout.len_values,
+        })
+    }
+}
+
+/// Row k of the lower triangle of `entries` permuted by `iperm`, restricted
+/// to the leading `size` rows and columns: its columns j < k, ascending.
+fn permuted_rows(
+    entries: &[(usize, usize, usize)],
+    iperm: &[usize],
+    size: usize,
+) -> Vec<Vec<usize>> {
+    let mut r = vec![Vec::new(); size];
+    for &(rr, c, _) in entries {
+        if rr >= size || c >= size {
+            continue;
+        }
+        let (i, j) = (iperm[rr], iperm[c]);
+        let (hi, lo) = (i.max(j), i.min(j));
+        if hi != lo {
+            r[hi].push(lo);
+        }
+    }
+    for row in &mut r {
+        row.sort_unstable();
+        row.dedup();
+    }
+    r
+}
+
+/// The factor's order (`iperm[old] = new`): the fill-reducing order
+/// `perm_inv` of the leading block followed by a postorder of its
+/// elimination tree (every subtree a contiguous range of columns), then the
+/// tail: a topological order of the whole tree.
+fn postordered(
+    n: usize,
+    tail: usize,
+    entries: &[(usize, usize, usize)],
+    perm_inv: &[usize],
+) -> Vec<usize> {
+    let lead = n - tail;
+    let parent = etree(&permuted_rows(entries, perm_inv, lead));
+    let post = postorder(&parent);
+    // post[new] = old (in the AMD order); compose.
+    let mut post_inv = vec![0usize; lead];
+    for (new, &old) in post.iter().enumerate() {
+        post_inv[old] = new;
+    }
+    let mut iperm: Vec<usize> = perm_inv.iter().map(|&v| post_inv[v]).collect();
+    iperm.extend(lead..n);
+    iperm
+}
+
+/// Pattern of L, column by column (rows strictly below the diagonal,
+/// ascending): row k's pattern is the union of the tree paths from its
+/// entries up to k.
+fn column_patterns(rows: &[Vec<usize>], parent: &[usize]) -> Vec<Vec<u32>> {
+    let n = rows.len();
+    let mut colpat: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut mark = vec![usize::MAX; n];
+    for (k, row) in rows.iter().enumerate() {
+        mark[k] = k;
+        for &i in row {
+            let mut j = i;
+            while mark[j] != k {
+                mark[j] = k;
+                colpat[j].push(k as u32);
+                j = parent[j];
+                if j == usize::MAX {
+                    break;
                 }
             }
         }
-        // 4. Fundamental supernodes (a column joins its only child's run
-        //    when its pattern is the child's minus the child itself), then
-        //    relaxed amalgamation: a supernode absorbs the child that ends
-        //    right before it when the explicit zeros that adds stay few.
-        let mut children = vec![0u32; n];
-        for &p in &parent {
-            if p != usize::MAX {
-                children[p] += 1;
-            }
+    }
+    colpat
+}
+
+/// First columns of the supernodes, then the end. Fundamental supernodes (a
+/// column joins its only child's run when its pattern is the child's minus
+/// the child itself), then relaxed amalgamation: a supernode absorbs the
+/// child that ends right before it when the explicit zeros that adds stay
+/// few; `groups` splits them again. The tail is one supernode of its own.
+fn supernode_starts(
+    tail: usize,
+    parent: &[usize],
+    colpat: &[Vec<u32>],
+    iperm: &[usize],
+    groups: &[u32],
+) -> Vec<usize> {
+    let n = parent.len();
+    let lead = n - tail;
+    let mut children = vec![0u32; n];
+    for &p in parent {
+        if p != usize::MAX {
+            children[p] += 1;
         }
-        let mut starts = vec![0usize];
-        for j in 1..lead {
-            let same = parent[j - 1] == j
-                && children[j] == 1
-                && colpat[j - 1].len() == colpat[j].len() + 1;
-            if !same {
-                starts.push(j);
-            }
+    }
+    let mut starts = vec![0usize];
+    for j in 1..lead {
+        let same =
+            parent[j - 1] == j && children[j] == 1 && colpat[j - 1].len() == colpat[j].len() + 1;
+        if !same {
+            starts.push(j);
         }
-        starts.push(lead);
-        let mut starts = if lead > 0 {
-            split_groups(&amalgamate(&starts, &parent, &colpat), &iperm, groups)
-        } else {
-            vec![0]
-        };
-        // The tail is one supernode of its own.
-        if tail > 0 {
-            starts.push(n);
-        }
-        // A relaxed supernode's columns take the union of their patterns
-        // (the last column's rows plus the explicit zeros of the earlier
-        // ones): below rows = ∪ colpat[j] minus the supernode's own columns.
+    }
+    starts.push(lead);
+    let mut starts = if lead > 0 {
+        split_groups(&amalgamate(&starts, parent, colpat), iperm, groups)
+    } else {
+        vec![0]
+    };
+    if tail > 0 {
+        starts.push(n);
+    }
+    starts
+}
+
+/// The supernodes' block layout, while the symbolic factor is built.
+struct Layout {
+    supernodes: Vec<Supernode>,
+    /// Every supernode's below rows, concatenated.
+    rows: Vec<u32>,
+    /// Supernode of each column.
+    col_sn: Vec<u32>,
+    len_values: usize,
+}
+
+impl Layout {
+    /// Lays out the supernodes starting at `starts`. A relaxed supernode's
+    /// columns take the union of their patterns (the last column's rows plus
+    /// the explicit zeros of the earlier ones): below rows = ∪ colpat[j]
+    /// minus the supernode's own columns.
+    fn new(
+        n: usize,
+        starts: &[usize],
+        colpat: &[Vec<u32>],
+    ) -> Result<Self, faer::sparse::FaerError> {
         let mut supernodes = Vec::with_capacity(starts.len());
         let mut all_rows: Vec<u32> = Vec::new();
         let mut col_sn = vec![0u32; n];
@@ -379,40 +460,55 @@ impl Symbolic {
         if val > u32::MAX as usize || all_rows.len() > u32::MAX as usize {
             return Err(faer::sparse::FaerError::IndexOverflow);
         }
-        // Local row of global row r in supernode s (r ≥ its first column).
-        let local = |s: &Supernode, r: usize| -> usize {
-            let c0 = s.c0 as usize;
-            if r < c0 + s.w as usize {
-                r - c0
-            } else {
-                let below = &all_rows[s.rows as usize..(s.rows + s.nrows) as usize];
-                s.w as usize
-                    + below
-                        .binary_search(&(r as u32))
-                        .expect("a row of L's pattern is in its supernode's rows")
-            }
-        };
-        // 5. Load map: entry (r, c) → its place in L's blocks.
-        let mut load = Vec::with_capacity(entries.len());
-        for &(rr, c, src) in entries {
-            let (i, j) = (iperm[rr], iperm[c]);
-            let (r, cc) = (i.max(j), i.min(j));
-            let s = &supernodes[col_sn[cc] as usize];
-            let lr = local(s, r);
-            let dst = s.val as usize + lr * s.w as usize + (cc - s.c0 as usize);
-            load.push((src as u32, dst as u32));
+        Ok(Self {
+            supernodes,
+            rows: all_rows,
+            col_sn,
+            len_values: val,
+        })
+    }
+
+    /// Supernode `s`'s rows below its diagonal block.
+    fn below(&self, s: &Supernode) -> &[u32] {
+        &self.rows[s.rows as usize..(s.rows + s.nrows) as usize]
+    }
+
+    /// Local row of global row r in supernode s (r ≥ its first column).
+    fn local(&self, s: &Supernode, r: usize) -> usize {
+        let c0 = s.c0 as usize;
+        if r < c0 + s.w as usize {
+            r - c0
+        } else {
+            s.w as usize
+                + self
+                    .below(s)
+                    .binary_search(&(r as u32))
+                    .expect("a row of L's pattern is in its supernode's rows")
         }
-        // 6. Update plan: each supernode d updates the supernodes that own
-        //    its below rows; the rows falling in one target's columns are a
-        //    contiguous run of d's ascending rows.
-        let mut incoming: Vec<Vec<Update>> = vec![Vec::new(); supernodes.len()];
+    }
+
+    /// Index in the values of the entry at permuted row `i`, column `j` (either
+    /// triangle).
+    fn place(&self, i: usize, j: usize) -> usize {
+        let (r, cc) = (i.max(j), i.min(j));
+        let s = &self.supernodes[self.col_sn[cc] as usize];
+        let lr = self.local(s, r);
+        s.val as usize + lr * s.w as usize + (cc - s.c0 as usize)
+    }
+
+    /// Update plan: each supernode d updates the supernodes that own its
+    /// below rows; the rows falling in one target's columns are a contiguous
+    /// run of d's ascending rows. Sets every supernode's `updates` range and
+    /// returns the updates and their local rows.
+    fn update_plan(&mut self) -> (Vec<Update>, Vec<u32>) {
+        let mut incoming: Vec<Vec<Update>> = vec![Vec::new(); self.supernodes.len()];
         let mut rel = Vec::new();
-        for (d, sd) in supernodes.iter().enumerate() {
-            let below = &all_rows[sd.rows as usize..(sd.rows + sd.nrows) as usize];
+        for (d, sd) in self.supernodes.iter().enumerate() {
+            let below = self.below(sd);
             let mut a = 0;
             while a < below.len() {
-                let t = col_sn[below[a] as usize] as usize;
-                let st = &supernodes[t];
+                let t = self.col_sn[below[a] as usize] as usize;
+                let st = &self.supernodes[t];
                 let end_col = (st.c0 + st.w) as usize;
                 let mut b = a;
                 while b < below.len() && (below[b] as usize) < end_col {
@@ -420,7 +516,7 @@ impl Symbolic {
                 }
                 let r0 = rel.len();
                 for &r in &below[a..] {
-                    rel.push(local(st, r as usize) as u32);
+                    rel.push(self.local(st, r as usize) as u32);
                 }
                 incoming[t].push(Update {
                     src: d as u32,
@@ -436,23 +532,9 @@ impl Symbolic {
         for (s, inc) in incoming.into_iter().enumerate() {
             let first = updates.len() as u32;
             updates.extend(inc);
-            supernodes[s].updates = (first, updates.len() as u32);
+            self.supernodes[s].updates = (first, updates.len() as u32);
         }
-        let lead_supernodes = supernodes.len() - usize::from(tail > 0);
-        Ok(Self {
-            n,
-            tail,
-            ordering,
-            induced: false,
-            lead_supernodes,
-            iperm: iperm.iter().map(|&v| v as u32).collect(),
-            load,
-            supernodes,
-            rows: all_rows,
-            updates,
-            rel,
-            len_values: val,
-        })
+        (updates, rel)
     }
 }
 

@@ -84,15 +84,30 @@ pub fn reference_finger_wrenches(
             });
         }
     }
-    let frame = |o: usize| {
-        BodyFrame::new(
-            Vector3::new(q[o], q[o + 1], q[o + 2]),
-            [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
-        )
-    };
-    // Each finger exactly holds its attachment point (and, rigid, its body's
-    // orientation); a degenerate e fails in `evaluate` below.
-    let targets: Vec<FingerTarget> = model
+    let mut ev = model.evaluation();
+    ev.anchor_rolling(model, q);
+    ev.evaluate(model, q, &holding_targets(model, q))?;
+    let cq = ev.jacobian().to_dense();
+    let motion = Motion { q, q_dot, q_ddot };
+    let dense = Dense::new(model, &motion, cq)?;
+    let (j_rows, f_rows) = partition_rows(model, ev.values());
+    let lambda_f = dense.finger_multipliers(model, &j_rows, &f_rows)?;
+    finger_wrenches(model, q, &dense.cq, &lambda_f)
+}
+
+/// The body frame of the body whose coordinates start at `o` in `q`.
+fn frame_at(q: &[f64], o: usize) -> Result<BodyFrame, ReferenceError> {
+    BodyFrame::new(
+        Vector3::new(q[o], q[o + 1], q[o + 2]),
+        [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
+    )
+    .ok_or(EvalError::NonFiniteCoordinate { index: o + 3 }.into())
+}
+
+/// Each finger exactly holds its attachment point (and, rigid, its body's
+/// orientation); a degenerate e fails in `evaluate`.
+fn holding_targets(model: &Model, q: &[f64]) -> Vec<FingerTarget> {
+    model
         .fingers()
         .iter()
         .enumerate()
@@ -110,83 +125,114 @@ pub fn reference_finger_wrenches(
                 )),
             }
         })
-        .collect();
-    let mut ev = model.evaluation();
-    ev.anchor_rolling(model, q);
-    ev.evaluate(model, q, &targets)?;
-    let cq = ev.jacobian().to_dense();
-    let nb0 = model.layout().body_coords();
-    // The columns with a metric: the bodies', then the auxiliary blocks'
-    // (flexible deformations: metric K_f, b = −K_f q_f − M_f q̈_f + g_f).
-    let cols: Vec<usize> = (0..nb0)
-        .chain(
-            model
-                .layout()
-                .aux_blocks()
-                .iter()
-                .flat_map(|a| a.offset..a.offset + a.width),
-        )
-        .collect();
-    let nb = cols.len();
-    let masses = BodyMass::of_model(model);
-    let g = model.gravity_m_s2();
-    let (mut m, mut b) = (DMatrix::zeros(nb, nb), DVector::zeros(nb));
-    let mut at = nb0;
-    for a in model.layout().aux_blocks() {
-        m.view_mut((at, at), (a.width, a.width))
-            .copy_from(&a.metric_matrix());
-        at += a.width;
-    }
-    let mut flex_b = vec![0.0; model.n_coords()];
-    for fb in &model.flexible {
-        let o = model.layout().body_offset(fb.body).unwrap_or(0);
-        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
-        let (c, w) = (fb.col, fb.width());
-        fb.generalized_force(q, &f.rot, &g, &q_ddot[c..c + w], &mut flex_b[c..c + w]);
-    }
-    for (k, &c) in cols.iter().enumerate().skip(nb0) {
-        b[k] = flex_b[c];
-    }
-    for bm in &masses {
-        let o = bm.offset;
-        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
-        let v4 = |x: &[f64]| Vector4::new(x[o + 3], x[o + 4], x[o + 5], x[o + 6]);
-        let (w, alpha) = angular_motion(&f, &v4(q), &v4(q_dot), &v4(q_ddot));
-        let a = Vector3::new(q_ddot[o], q_ddot[o + 1], q_ddot[o + 2]);
-        let mut out = [0.0; 7];
-        bm.generalized_force(&f, &g, &a, &w, &alpha, &mut out);
-        b.rows_mut(o, 7).copy_from_slice(&out);
-        m.view_mut((o, o), (3, 3)).fill_diagonal(bm.mass);
-        m.view_mut((o + 3, o + 3), (4, 4))
-            .copy_from(&bm.rotational_mass(&f));
-    }
-    let c = ev.values();
-    let (mut j_rows, mut f_rows) = (Vec::new(), Vec::new());
-    for (i, row) in model.rows().iter().enumerate() {
-        if model.constraints()[row.constraint.index()].finger.is_some() {
-            f_rows.push(i);
-        } else if row.sense == Sense::Equality || c[i] <= INEQUALITY_ACTIVE_BAND {
-            j_rows.push(i);
+        .collect()
+}
+
+/// Configuration, augmented velocities and accelerations.
+struct Motion<'a> {
+    q: &'a [f64],
+    q_dot: &'a [f64],
+    q_ddot: &'a [f64],
+}
+
+/// The dense system over the columns with a metric.
+struct Dense {
+    /// C_q, every row and column of the model.
+    cq: DMatrix<f64>,
+    /// The columns with a metric: the bodies', then the auxiliary blocks'.
+    cols: Vec<usize>,
+    /// The metric over `cols`: M of the bodies, K_f of the auxiliary blocks.
+    m: DMatrix<f64>,
+    /// b = Q_e + Q_v − M q̈ over `cols` (auxiliary: −K_f q_f − M_f q̈_f + g_f).
+    b: DVector<f64>,
+}
+
+impl Dense {
+    /// The metric and generalized force of `model` at `motion`, with its C_q.
+    fn new(model: &Model, motion: &Motion, cq: DMatrix<f64>) -> Result<Self, ReferenceError> {
+        let Motion { q, q_dot, q_ddot } = *motion;
+        let nb0 = model.layout().body_coords();
+        // The columns with a metric: the bodies', then the auxiliary blocks'
+        // (flexible deformations: metric K_f, b = −K_f q_f − M_f q̈_f + g_f).
+        let cols: Vec<usize> = (0..nb0)
+            .chain(
+                model
+                    .layout()
+                    .aux_blocks()
+                    .iter()
+                    .flat_map(|a| a.offset..a.offset + a.width),
+            )
+            .collect();
+        let nb = cols.len();
+        let g = model.gravity_m_s2();
+        let (mut m, mut b) = (DMatrix::zeros(nb, nb), DVector::zeros(nb));
+        let mut at = nb0;
+        for a in model.layout().aux_blocks() {
+            m.view_mut((at, at), (a.width, a.width))
+                .copy_from(&a.metric_matrix());
+            at += a.width;
         }
-    }
-    // Null space of C_J (body columns): right singular vectors of C_J padded
-    // with zero rows to a square matrix, so the SVD returns all of V.
-    let mut padded = DMatrix::zeros(j_rows.len().max(nb), nb);
-    for (k, &i) in j_rows.iter().enumerate() {
-        for (x, &c) in cols.iter().enumerate() {
-            padded[(k, x)] = cq[(i, c)];
+        let mut flex_b = vec![0.0; model.n_coords()];
+        for fb in &model.flexible {
+            let o = model.layout().body_offset(fb.body).unwrap_or(0);
+            let f = frame_at(q, o)?;
+            let (c, w) = (fb.col, fb.width());
+            fb.generalized_force(q, &f.rot, &g, &q_ddot[c..c + w], &mut flex_b[c..c + w]);
         }
+        for (k, &c) in cols.iter().enumerate().skip(nb0) {
+            b[k] = flex_b[c];
+        }
+        for bm in &BodyMass::of_model(model) {
+            let o = bm.offset;
+            let f = frame_at(q, o)?;
+            let v4 = |x: &[f64]| Vector4::new(x[o + 3], x[o + 4], x[o + 5], x[o + 6]);
+            let (w, alpha) = angular_motion(&f, &v4(q), &v4(q_dot), &v4(q_ddot));
+            let a = Vector3::new(q_ddot[o], q_ddot[o + 1], q_ddot[o + 2]);
+            let mut out = [0.0; 7];
+            bm.generalized_force(&f, &g, &a, &w, &alpha, &mut out);
+            b.rows_mut(o, 7).copy_from_slice(&out);
+            m.view_mut((o, o), (3, 3)).fill_diagonal(bm.mass);
+            m.view_mut((o + 3, o + 3), (4, 4))
+                .copy_from(&bm.rotational_mass(&f));
+        }
+        Ok(Self { cq, cols, m, b })
     }
-    let svd = padded.svd(false, true);
-    let vt = svd.v_t.expect("requested");
-    let top = svd.singular_values.max();
-    let free: Vec<usize> = (0..nb)
-        .filter(|&k| svd.singular_values[k] <= 1e-10 * top)
-        .collect();
-    let mut lambda_f = DVector::zeros(f_rows.len());
-    if !free.is_empty() {
-        let t = DMatrix::from_fn(nb, free.len(), |r, k| vt[(free[k], r)]);
-        let chol = (t.transpose() * &m * &t)
+
+    /// An orthonormal basis T of the null space of C_J (the joint rows
+    /// `j_rows` over `cols`), by SVD: right singular vectors of C_J padded
+    /// with zero rows to a square matrix, so the SVD returns all of V. `None`
+    /// when the joints allow no motion.
+    fn free_motions(&self, j_rows: &[usize]) -> Option<DMatrix<f64>> {
+        let nb = self.cols.len();
+        let mut padded = DMatrix::zeros(j_rows.len().max(nb), nb);
+        for (k, &i) in j_rows.iter().enumerate() {
+            for (x, &c) in self.cols.iter().enumerate() {
+                padded[(k, x)] = self.cq[(i, c)];
+            }
+        }
+        let svd = padded.svd(false, true);
+        let vt = svd.v_t.expect("requested");
+        let top = svd.singular_values.max();
+        let free: Vec<usize> = (0..nb)
+            .filter(|&k| svd.singular_values[k] <= 1e-10 * top)
+            .collect();
+        (!free.is_empty()).then(|| DMatrix::from_fn(nb, free.len(), |r, k| vt[(free[k], r)]))
+    }
+
+    /// λ_F: the minimum-norm least-squares solution of L⁻¹ Tᵀ C_Fᵀ λ_F ≈
+    /// L⁻¹ Tᵀ b (R = Tᵀ M T = L Lᵀ), angle rows scaled to metres by the
+    /// model's characteristic length; zero when the joints allow no motion.
+    fn finger_multipliers(
+        &self,
+        model: &Model,
+        j_rows: &[usize],
+        f_rows: &[usize],
+    ) -> Result<DVector<f64>, ReferenceError> {
+        let nb = self.cols.len();
+        let Some(t) = self.free_motions(j_rows) else {
+            return Ok(DVector::zeros(f_rows.len()));
+        };
+        let chol = (t.transpose() * &self.m * &t)
             .cholesky()
             .ok_or(ReferenceError::Massless)?;
         let l = chol.l();
@@ -201,16 +247,42 @@ pub fn reference_finger_wrenches(
                 }
             })
             .collect();
-        let cf = DMatrix::from_fn(nb, f_rows.len(), |r, k| cq[(f_rows[k], cols[r])] * scale[k]);
+        let cf = DMatrix::from_fn(nb, f_rows.len(), |r, k| {
+            self.cq[(f_rows[k], self.cols[r])] * scale[k]
+        });
         let lhs = l
             .solve_lower_triangular(&(t.transpose() * cf))
             .ok_or(ReferenceError::Massless)?;
         let rhs = l
-            .solve_lower_triangular(&(t.transpose() * &b))
+            .solve_lower_triangular(&(t.transpose() * &self.b))
             .ok_or(ReferenceError::Massless)?;
         let scaled = min_norm_solve(&lhs, &rhs, 1e-10);
-        lambda_f = DVector::from_fn(f_rows.len(), |k, _| scaled[k] * scale[k]);
+        Ok(DVector::from_fn(f_rows.len(), |k, _| scaled[k] * scale[k]))
     }
+}
+
+/// The joint rows (equalities and active inequalities, `c` the values) and
+/// the finger rows of `model`, ascending.
+fn partition_rows(model: &Model, c: &[f64]) -> (Vec<usize>, Vec<usize>) {
+    let (mut j_rows, mut f_rows) = (Vec::new(), Vec::new());
+    for (i, row) in model.rows().iter().enumerate() {
+        if model.constraints()[row.constraint.index()].finger.is_some() {
+            f_rows.push(i);
+        } else if row.sense == Sense::Equality || c[i] <= INEQUALITY_ACTIVE_BAND {
+            j_rows.push(i);
+        }
+    }
+    (j_rows, f_rows)
+}
+
+/// Each finger's wrench from the finger multipliers `lambda_f` (finger rows
+/// in model order) through C_q's rows of its constraint.
+fn finger_wrenches(
+    model: &Model,
+    q: &[f64],
+    cq: &DMatrix<f64>,
+    lambda_f: &DVector<f64>,
+) -> Result<Vec<FingerWrench>, ReferenceError> {
     let mut out = Vec::with_capacity(model.fingers().len());
     let mut lam = lambda_f.iter();
     for (k, finger) in model.fingers().iter().enumerate() {
@@ -225,7 +297,7 @@ pub fn reference_finger_wrenches(
                 *w += cq[(r, o + c)] * l;
             }
         }
-        let f = frame(o).ok_or(EvalError::NonFiniteCoordinate { index: o + 3 })?;
+        let f = frame_at(q, o)?;
         let p = model
             .finger_point(q, FingerId(k as u32))
             .unwrap_or(Vector3::zeros());

@@ -70,6 +70,7 @@ mod refresh;
 mod release;
 mod report;
 mod semantic;
+mod setup;
 mod stages;
 mod state;
 #[cfg(test)]
@@ -93,13 +94,24 @@ pub use report::{
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::al::SolverSettings;
 use crate::al::fused::Fused;
 use crate::al::projected::Projected;
 use crate::al::scaling::{Role, Scaling, check_stable};
-use crate::al::{RedundancyCheck, SolverSettings};
 use crate::force::Redundancy;
 use crate::force::feedback::Feedback;
 use crate::{Evaluation, FingerTarget, Model, Objectives, UpdateRule};
+
+/// What [`Program::with_objectives`] analyses at q0 before it assembles the
+/// program.
+struct Analysis {
+    ev: Evaluation,
+    scaling: Scaling,
+    feedback: Feedback,
+    redundancy: Redundancy,
+    sigma_max: f64,
+    h: f64,
+}
 
 /// The fast loop's solver state for one model. `Send`: build it on the slow
 /// thread, move it to the fast one. See the [module docs](self).
@@ -204,123 +216,66 @@ impl Program {
         settings: SolverSettings,
     ) -> Result<Program, ProgramError> {
         settings.validate()?;
-        // The fused gradient pass holds at most six rows per constraint; a
-        // contact pair's witness rows are one constraint of many rows.
-        if matches!(
-            settings.force_solver,
-            crate::ForceSolver::Matvec { .. }
-                | crate::ForceSolver::Tree { .. }
-                | crate::ForceSolver::Multilevel { .. }
-        ) {
-            if model.contact().slots > 0 {
-                return Err(ProgramError::Unsupported(
-                    "the conjugate-gradient tick (`--force-solver matvec`, `tree` or `multilevel`) does not cover contact \
-                     rows: this scene needs the Cholesky force solver",
-                ));
-            }
-            if !model.layout().design_vars().is_empty() {
-                return Err(ProgramError::Unsupported(
-                    "the conjugate-gradient tick (`--force-solver matvec`, `tree` or `multilevel`) does not cover design \
-                     variables: this scene needs the Cholesky force solver",
-                ));
-            }
-        }
-        if settings.update == UpdateRule::Gradient && model.contact().slots > 0 {
-            return Err(ProgramError::Unsupported(
-                "the gradient update (Eq. 3) does not cover contact rows: this scene needs \
-                 the projected update (the default; drop `--update gradient`)",
-            ));
-        }
-        if settings.update == UpdateRule::Gradient && !model.layout().aux_blocks().is_empty() {
-            return Err(ProgramError::Unsupported(
-                "the gradient update (Eq. 3) does not cover flexible bodies or surface \
-                 contacts: this scene needs `update = \"projected\"`",
-            ));
-        }
+        setup::check_supported(&model, &settings)?;
         // The scene's `finger` and `least_astonishment` weights.
         let mut settings = settings;
         let weights = &objectives;
         settings.finger_weight *= weights.finger_weight / weights.least_astonishment;
         settings.validate()?;
-        let mut ev = model.evaluation();
-        // Quasi-static programs leave resting bodies' contact rows alone
-        // (`evaluate::since`); under inertial motion every body on a
-        // support creeps a few ulps a tick, so every row would be written
-        // anyway and the bookkeeping is overhead (`stack` 2.0 → 2.5 µs).
-        ev.track_unmoved(&model, !settings.dynamics);
-        ev.anchor_rolling(&model, model.q0());
-        ev.evaluate(&model, model.q0(), &model.initial_targets())?;
+        let ev = setup::initial_evaluation(&model, &settings)?;
         let mut scaling = Scaling::new(&model, &settings);
-        // Rows dependent within their body pair never enter A's pattern.
-        let local = match settings.redundancy {
-            RedundancyCheck::Off => Vec::new(),
-            _ => Feedback::locally_dependent(&model, &ev, &scaling),
-        };
-        scaling.mask(&local);
-        let mut excluded = vec![false; model.n_rows()];
-        for &i in &local {
-            excluded[i] = true;
-        }
-        // Design bounds touch no body: never part of A (the projected update
-        // keeps them as a box on its design step).
-        for (e, role) in excluded.iter_mut().zip(&scaling.role) {
-            *e |= matches!(role, Role::DesignBound | Role::DesignPin);
-        }
-        let mut feedback = Feedback::new(&model, &ev, &settings, &excluded)
-            .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
-        let mut redundancy = feedback.find_redundant(&model, &ev, &scaling, settings.redundancy);
-        redundancy.local = local.len();
-        redundancy.rows.extend_from_slice(&local);
-        redundancy.rows.sort_unstable();
-        scaling.mask(&redundancy.rows);
-        // The rows the ordered check masked leave A's pattern too: kept as
-        // decoupled unit rows they cost factorisation and solve work on
-        // explicit zeros (a planar lattice: 196 of its 1213 joint rows).
-        if redundancy.rows.len() > local.len() {
-            for &i in &redundancy.rows {
-                excluded[i] = true;
-            }
-            feedback = Feedback::new(&model, &ev, &settings, &excluded)
-                .map_err(|e| ProgramError::Factorization(format!("{e:?}")))?;
-        }
+        let (feedback, redundancy) = setup::masked_feedback(&model, &ev, &settings, &mut scaling)?;
         let sigma_max = scaling.sigma_max(ev.jacobian(), settings.gain);
         let h = settings.step / (1.0 + settings.gain * sigma_max);
         check_stable(h, settings.gain, settings.multiplier_gain, sigma_max)
             .map_err(|(a, beta)| ProgramError::Unstable { a, beta })?;
+        let analysis = Analysis {
+            ev,
+            scaling,
+            feedback,
+            redundancy,
+            sigma_max,
+            h,
+        };
+        let mut p = Self::at_rest(model, objectives, settings, analysis);
+        p.reset_velocities();
+        if p.refresh() != TickOutcome::Ok {
+            return Err(ProgramError::Factorization(
+                "the multiplier solve failed at the initial configuration".into(),
+            ));
+        }
+        Ok(p)
+    }
+
+    /// The program at rest at q0 from what
+    /// [`with_objectives`](Self::with_objectives) analysed: its update rules'
+    /// state, divergence limits, friction and inertial bookkeeping, scratch.
+    fn at_rest(
+        model: Arc<Model>,
+        objectives: Arc<Objectives>,
+        settings: SolverSettings,
+        a: Analysis,
+    ) -> Program {
         let (n, m) = (model.n_coords(), model.n_rows());
+        let Analysis {
+            ev,
+            scaling,
+            feedback,
+            redundancy,
+            sigma_max,
+            h,
+        } = a;
         let limits = divergence_limits(&scaling, &settings, feedback.mean_mass_kg());
-        let projected = Projected::new(
+        let projected = setup::projected(
             &model,
             &scaling,
-            settings.gain,
-            settings.finger_weight,
-            feedback.mean_mass_kg(),
-        )
-        .with_design(
-            &model,
-            objective::design_metric_kg(&objectives, feedback.mean_mass_kg()),
-            &masked_equalities(&model, &scaling, &redundancy.rows),
+            &settings,
+            &objectives,
+            &feedback,
+            &redundancy,
         );
         let objective = objective::ObjectivePull::new(&model, &objectives, feedback.mean_mass_kg());
-        let mut friction_slot = vec![false; model.contact().slots];
-        let mut friction_pair = Vec::new();
-        for (k, pair) in model.contact().pairs.iter().enumerate() {
-            if let Some(f) = pair.friction {
-                let n = model.constraints()[pair.normal.index()].rows.len();
-                let rows = model.constraints()[f.index()].rows.len();
-                friction_slot[pair.first_slot + n..pair.first_slot + n + rows].fill(true);
-                friction_pair.push(k);
-            }
-        }
-        let friction_bodies = friction_pair
-            .iter()
-            .map(|&k| {
-                model.contact().pairs[k].bodies.map(|b| {
-                    let o = model.layout().body_offset(b)?;
-                    feedback.masses.iter().position(|m| m.offset == o)
-                })
-            })
-            .collect();
+        let friction = setup::Friction::new(&model, &feedback);
         let finger_rows = (0..m)
             .filter(|&i| matches!(scaling.role[i], Role::Finger | Role::Coupling))
             .collect();
@@ -328,14 +283,15 @@ impl Program {
             &model,
             &feedback.masses,
             finger_rows,
-            friction_pair.len(),
+            friction.pair.len(),
             projected.reach(),
         );
-        let mut p = Program {
+        let fingers = model.fingers().len();
+        Program {
             objectives,
             inertial,
             released: release::Released::new(m),
-            friction_bodies,
+            friction_bodies: friction.bodies,
             q: model.q0().to_vec(),
             q_ref: model.q0().to_vec(),
             q_goal: model.q0().to_vec(),
@@ -346,11 +302,11 @@ impl Program {
             tick_budget: f64::INFINITY,
             speed_limited: false,
             contact_step_m: settings.contact_step_m,
-            prev_error_buf: vec![nalgebra::Vector3::zeros(); model.fingers().len()],
+            prev_error_buf: vec![nalgebra::Vector3::zeros(); fingers],
             objective,
             semantic: semantic::SemanticState::new(&model),
-            friction_slot,
-            friction_pair,
+            friction_slot: friction.slot,
+            friction_pair: friction.pair,
             design_off: vec![false; model.layout().design_coords()],
             lambda: vec![0.0; m],
             saved_lambda: vec![0.0; m],
@@ -358,8 +314,8 @@ impl Program {
             fused: Fused::new(&model),
             projected,
             last_targets: model.initial_targets(),
-            spare_outputs: vec![FingerOutput::default(); model.fingers().len()],
-            outputs: vec![FingerOutput::default(); model.fingers().len()],
+            spare_outputs: vec![FingerOutput::default(); fingers],
+            outputs: vec![FingerOutput::default(); fingers],
             report: TickReport::default(),
             factor_adoptions: 0,
             prepared: false,
@@ -374,14 +330,7 @@ impl Program {
             scaling,
             settings,
             model,
-        };
-        p.reset_velocities();
-        if p.refresh() != TickOutcome::Ok {
-            return Err(ProgramError::Factorization(
-                "the multiplier solve failed at the initial configuration".into(),
-            ));
         }
-        Ok(p)
     }
 
     /// The model this program iterates.
@@ -586,6 +535,7 @@ fn divergence_limits(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::al::RedundancyCheck;
 
     #[test]
     fn program_is_send() {
