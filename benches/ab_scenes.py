@@ -74,6 +74,10 @@ def pair(a, b, key):
 def main():
     a_bin, b_bin = sys.argv[1], sys.argv[2]
     root = sys.argv[3] if len(sys.argv) > 3 else tempfile.mkdtemp(prefix="ab-scenes-")
+    # A run that fails leaves an old run's files in place, and the csv
+    # comparison would compare those: every run gets a fresh directory.
+    if os.path.isdir(root) and os.listdir(root):
+        sys.exit(f"ab_scenes.py: {root} is not empty; give a new directory")
     print("| scene | max violation, m | force error, N | max penetration, m | failed ticks |")
     print("|---|---|---|---|---|")
     for n in scene_names(a_bin):
