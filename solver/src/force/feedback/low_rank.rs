@@ -12,7 +12,7 @@
 //! the two within round-off.
 
 use super::*;
-use crate::force::solve::LowRank;
+use crate::force::solve::{BACK_OFF, LowRank};
 
 impl Feedback {
     /// Gives the spare the buffers of the low-rank release when this
@@ -38,9 +38,15 @@ impl Feedback {
         let Some(lr) = &mut sp.low_rank else {
             return false;
         };
+        // Backing off after a refusal (`BACK_OFF`).
+        if lr.skip > 0 {
+            lr.skip -= 1;
+            return false;
+        }
         lr.clear();
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if self.scale[row] == 0.0 && sp.scale[row] != 0.0 && !lr.release(j) {
+                lr.skip = BACK_OFF;
                 return false;
             }
         }
@@ -52,12 +58,16 @@ impl Feedback {
                 sp.low_rank_holds = true;
                 true
             }
-            Ok(false) => false,
+            Ok(false) => {
+                lr.skip = BACK_OFF;
+                false
+            }
             // A non-finite finger solve: the first multipliers back, and
             // the refactorisation decides (and reports the failure if it
             // fails too).
             Err(_) => {
                 self.solve.restore_low_rank(lr);
+                lr.skip = BACK_OFF;
                 false
             }
         }

@@ -55,6 +55,17 @@ pub(crate) const MAX_CONDITION: f64 = 1e6;
 /// 2.5e5).
 pub(crate) const MAX_INFLATION: f64 = 1e2;
 
+/// Release solves that go straight to the refactorisation after the
+/// correction refused one. A refusal is known only after the k solves that
+/// form U, so on a model whose releases are mostly refused (`cluttered`,
+/// `sit-on-chair`: a box's fourth contact corner is nearly redundant with
+/// the other three) every attempt was a factorisation's worth of wasted
+/// solves: 1.12× and 1.17× their ticks. After a refusal the next
+/// `BACK_OFF` releases refactor at once, which bounds that waste to one
+/// attempt in `BACK_OFF + 1`; a model whose releases the correction serves
+/// (Stewart's stroke limits) never refuses and never backs off.
+pub(crate) const BACK_OFF: u32 = 63;
+
 /// Preallocated buffers of the correction and the first solve's
 /// multipliers it keeps aside.
 #[derive(Debug, Clone)]
@@ -74,6 +85,8 @@ pub(crate) struct LowRank {
     rank: usize,
     /// Solves done by the correction.
     pub done: u64,
+    /// Releases left to refactor without trying ([`BACK_OFF`]).
+    pub skip: u32,
 }
 
 impl LowRank {
@@ -90,6 +103,7 @@ impl LowRank {
             lambda_f: vec![0.0; m],
             rank: 0,
             done: 0,
+            skip: 0,
         }
     }
 
