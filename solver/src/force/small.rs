@@ -77,6 +77,20 @@ pub(crate) fn min_norm_solve(
     rank
 }
 
+/// Cyclic Jacobi eigendecomposition of the symmetric n × n `a` (row-major,
+/// its first n² values): `a` ends diagonal (the eigenvalues), `v`'s columns
+/// the eigenvectors. The sweeps of [`min_norm_solve`], to 1e-15 of `a`'s
+/// Frobenius norm. No allocation.
+pub(crate) fn symmetric_eigen(a: &mut [f64], v: &mut [f64], n: usize) {
+    let v = &mut v[..n * n];
+    v.fill(0.0);
+    for i in 0..n {
+        v[i * n + i] = 1.0;
+    }
+    let scale = a[..n * n].iter().map(|x| x * x).sum::<f64>().sqrt();
+    sweeps_any(a, v, n, scale);
+}
+
 /// The Jacobi sweeps of [`min_norm_solve`] on the n × n `a` (row-major),
 /// accumulating the rotations into `v`, until the off-diagonal norm is
 /// 1e-15 × `scale` or [`MAX_SWEEPS`].

@@ -13,11 +13,8 @@
 //!
 //! Best and median of 9 rounds. Prints; asserts only that the calls succeed.
 
-use std::sync::Arc;
-use std::time::Duration;
-
 use super::{JointSpace, displace};
-use crate::{Program, SolverSettings, TickOutcome};
+use crate::{Program, TickOutcome};
 
 fn cpu_now() -> f64 {
     let mut ts = libc::timespec {
@@ -44,30 +41,7 @@ fn stats(mut v: Vec<f64>) -> (f64, f64) {
 }
 
 fn program(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../scenes")
-        .join(format!("{name}.toml"));
-    let compiled = crate::scene::load(&path).unwrap().compile().unwrap();
-    let mut settings = SolverSettings::default();
-    if let Some(v) = compiled.settings.step {
-        settings.step = v;
-    }
-    if let Some(v) = compiled.settings.iterations {
-        settings.iterations = v;
-    }
-    let model = Arc::new(compiled.model);
-    let mut p = Program::new(model.clone(), settings).unwrap();
-    let t0 = model.initial_targets();
-    let mut t = t0.clone();
-    for k in 0..300 {
-        let a = 2.0 * std::f64::consts::PI * k as f64 / 500.0;
-        for (t, t0) in t.iter_mut().zip(&t0) {
-            t.position_m =
-                t0.position_m + nalgebra::Vector3::new(a.cos() - 1.0, a.sin(), 0.0) * 0.002;
-        }
-        assert_eq!(p.tick(&t, Duration::from_millis(1)).status, TickOutcome::Ok);
-    }
-    p
+    super::tests::program_after(name, 300)
 }
 
 #[test]

@@ -28,6 +28,13 @@ fn scenes() -> Vec<&'static str> {
 
 /// The model and its q after `ticks` ticks of the hand on a 2 mm circle.
 pub(crate) fn state(name: &str, ticks: usize) -> (Arc<Model>, Vec<f64>) {
+    let p = program_after(name, ticks);
+    (p.model_arc().clone(), p.q().to_vec())
+}
+
+/// The scene `name`'s program (its step and iterations) after `ticks` ticks
+/// of the hand on a 2 mm circle.
+pub(crate) fn program_after(name: &str, ticks: usize) -> Program {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenes")
         .join(format!("{name}.toml"));
@@ -51,7 +58,7 @@ pub(crate) fn state(name: &str, ticks: usize) -> (Arc<Model>, Vec<f64>) {
         let r = p.tick(&t, Duration::from_millis(1));
         assert_eq!(r.status, TickOutcome::Ok, "{name} tick {k}");
     }
-    (model, p.q().to_vec())
+    p
 }
 
 /// Each finger holding its attachment point at q.

@@ -4,6 +4,8 @@
 //! coarse unknowns above it), each node's rows contiguous; every coupled
 //! pair of nodes stores its dense block, row-major.
 
+use super::super::small::substitute;
+
 /// The matrix, its diagonal blocks' factors and the node layout.
 #[derive(Debug, Clone)]
 pub(crate) struct BlockMat {
@@ -149,7 +151,7 @@ impl BlockMat {
                     w[i] -= dot(&v[i * sc..(i + 1) * sc], xm);
                 }
             }
-            dense_solve(&self.fac[self.fac_off[n]..self.fac_off[n] + s * s], s, w);
+            substitute(&self.fac[self.fac_off[n]..self.fac_off[n] + s * s], w);
             x[s0..s0 + s].copy_from_slice(w);
         }
     }
@@ -163,7 +165,7 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// In-place lower Cholesky of the dense row-major s × s `a` (its upper
 /// triangle is left as it was and not read afterwards); a pivot below
 /// 1e-10 of the largest diagonal is raised to that floor (and to 1 when the
-/// matrix is zero).
+/// matrix is zero). Solve with it by [`substitute`].
 pub(crate) fn dense_cholesky(a: &mut [f64], s: usize) {
     let top = (0..s).map(|i| a[i * s + i].abs()).fold(0.0, f64::max);
     let floor = if top > 0.0 && top.is_finite() {
@@ -185,23 +187,5 @@ pub(crate) fn dense_cholesky(a: &mut [f64], s: usize) {
             }
             a[i * s + j] = v / d;
         }
-    }
-}
-
-/// v ← (L Lᵀ)⁻¹ v with L from [`dense_cholesky`].
-pub(crate) fn dense_solve(l: &[f64], s: usize, v: &mut [f64]) {
-    for i in 0..s {
-        let mut t = v[i];
-        for k in 0..i {
-            t -= l[i * s + k] * v[k];
-        }
-        v[i] = t / l[i * s + i];
-    }
-    for i in (0..s).rev() {
-        let mut t = v[i];
-        for k in i + 1..s {
-            t -= l[k * s + i] * v[k];
-        }
-        v[i] = t / l[i * s + i];
     }
 }

@@ -5,6 +5,7 @@
 //! the aggregate's own couplings barely resist, of which the loops'
 //! self-stresses are made), and the Galerkin product Tᵀ A T.
 
+use super::super::small::symmetric_eigen;
 use super::block::{BlockMat, dot};
 
 /// The map from a level to the next coarser one.
@@ -174,7 +175,7 @@ impl Coarsening {
                 }
             }
             let v = &mut self.vecs[..s * s];
-            jacobi_eigen(d, v, s);
+            symmetric_eigen(d, v, s);
             // The c smallest eigenvalues' columns, by selection.
             let c = self.t_cols[g];
             let t = &mut self.t[self.t_off[g]..self.t_off[g] + s * c];
@@ -340,55 +341,6 @@ impl Coarsening {
             let t = &self.t[self.t_off[g]..];
             for i in 0..a.size(n) {
                 x[a.start[n] + i] += dot(&t[(on + i) * c..(on + i + 1) * c], &xc[cs..cs + c]);
-            }
-        }
-    }
-}
-
-/// Cyclic Jacobi eigendecomposition of the symmetric s × s `a` (row-major):
-/// `a` ends diagonal (the eigenvalues), `v`'s columns the eigenvectors.
-fn jacobi_eigen(a: &mut [f64], v: &mut [f64], s: usize) {
-    v.fill(0.0);
-    for i in 0..s {
-        v[i * s + i] = 1.0;
-    }
-    let total: f64 = a.iter().map(|x| x * x).sum();
-    for _ in 0..30 {
-        let mut off = 0.0;
-        for p in 0..s {
-            for q in p + 1..s {
-                off += a[p * s + q] * a[p * s + q];
-            }
-        }
-        if off <= 1e-30 * total || !off.is_finite() {
-            break;
-        }
-        for p in 0..s {
-            for q in p + 1..s {
-                let apq = a[p * s + q];
-                if apq.abs() < 1e-300 {
-                    continue;
-                }
-                let theta = (a[q * s + q] - a[p * s + p]) / (2.0 * apq);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let sn = t * c;
-                for k in 0..s {
-                    let (akp, akq) = (a[k * s + p], a[k * s + q]);
-                    a[k * s + p] = c * akp - sn * akq;
-                    a[k * s + q] = sn * akp + c * akq;
-                }
-                for k in 0..s {
-                    let (apk, aqk) = (a[p * s + k], a[q * s + k]);
-                    a[p * s + k] = c * apk - sn * aqk;
-                    a[q * s + k] = sn * apk + c * aqk;
-                }
-                for k in 0..s {
-                    let (vkp, vkq) = (v[k * s + p], v[k * s + q]);
-                    v[k * s + p] = c * vkp - sn * vkq;
-                    v[k * s + q] = sn * vkp + c * vkq;
-                }
             }
         }
     }

@@ -20,8 +20,9 @@
 //!   stalls): a dense Cholesky factor.
 
 use super::super::gram::Gram;
+use super::super::small::substitute;
 use super::super::solve::FactorError;
-use super::block::{BlockMat, dense_cholesky, dense_solve};
+use super::block::{BlockMat, dense_cholesky};
 use super::coarsen::Coarsening;
 
 /// Coarse unknowns per aggregate.
@@ -248,7 +249,7 @@ impl Multilevel {
 /// layout, `dense` its factor) solves `xc` in place.
 fn vcycle(levels: &mut [Level], coarsest: &BlockMat, dense: &[f64], xc: &mut [f64], w: &mut [f64]) {
     let Some((l, rest)) = levels.split_first_mut() else {
-        dense_solve(dense, xc.len(), xc);
+        substitute(dense, xc);
         return;
     };
     l.x.fill(0.0);
@@ -266,7 +267,7 @@ fn vcycle(levels: &mut [Level], coarsest: &BlockMat, dense: &[f64], xc: &mut [f6
         }
         None => {
             l.down.restrict(&l.a, &coarsest.start, &l.r, xc);
-            dense_solve(dense, xc.len(), xc);
+            substitute(dense, xc);
             l.down.prolong_add(&l.a, &coarsest.start, xc, &mut l.x);
         }
     }
