@@ -63,9 +63,9 @@ impl Sink for JointRows<'_> {
             let f = g.lin[end];
             let t = g.ang[end] + r.cross(&f);
             for j in self.tree.path(BodyId(*b as u32)) {
-                for d in j.dof..j.dof + j.freedom.dofs() {
-                    let tw = &self.twists[d];
-                    out[d] += t.dot(&tw.w) + f.dot(&tw.v);
+                let dofs = j.dof..j.dof + j.freedom.dofs();
+                for (o, tw) in out[dofs.clone()].iter_mut().zip(&self.twists[dofs]) {
+                    *o += t.dot(&tw.w) + f.dot(&tw.v);
                 }
             }
         }
@@ -95,7 +95,10 @@ impl RowSet {
         let nb = model.bodies().len();
         let mut list = Vec::new();
         for (k, info) in model.constraints().iter().enumerate() {
-            let wanted = info.rows.clone().any(|r| slot[r] != u32::MAX || also.contains(&r));
+            let wanted = info
+                .rows
+                .clone()
+                .any(|r| slot[r] != u32::MAX || also.contains(&r));
             if !wanted {
                 continue;
             }

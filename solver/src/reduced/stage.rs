@@ -72,14 +72,7 @@ pub(crate) struct Stage {
 impl Stage {
     /// Buffers for n joint coordinates and m kept rows (nl loop rows).
     /// Allocates.
-    pub fn new(
-        model: &Model,
-        tree: &JointTree,
-        n: usize,
-        m: usize,
-        nl: usize,
-        q: &[f64],
-    ) -> Self {
+    pub fn new(model: &Model, tree: &JointTree, n: usize, m: usize, nl: usize, q: &[f64]) -> Self {
         let mf = m - nl;
         let mut mass = vec![None; model.bodies().len()];
         let mut bodies = Vec::new();
@@ -223,8 +216,8 @@ impl Stage {
             }
         }
         self.sk.copy_from_slice(&self.sig);
-        for f in 0..mf {
-            self.sk[f * mf + f] += k_inv[f];
+        for (f, k) in k_inv.iter().enumerate() {
+            self.sk[f * mf + f] += k;
         }
         if !factor_in_place(&mut self.sk, mf) {
             return Err(ReducedError::NotPositive("Σ_F + 1/(K m̄)"));

@@ -205,8 +205,10 @@ impl JointTick {
     /// positive definite.
     pub fn tick(&mut self, targets: &[FingerTarget], dt_s: f64) -> Result<(), ReducedError> {
         let ok = targets.len() == self.model.fingers().len()
-            && targets.iter().all(|t| t.position_m.iter().all(|v| v.is_finite()));
-        if !ok || !(dt_s > 0.0) {
+            && targets
+                .iter()
+                .all(|t| t.position_m.iter().all(|v| v.is_finite()));
+        if !ok || dt_s.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(ReducedError::Unsupported("targets or dt".into()));
         }
         self.steps = self.update(targets)?;
@@ -222,8 +224,13 @@ impl JointTick {
             if k > 0 {
                 self.pose()?;
             }
-            self.set
-                .values(&self.model, &self.q, &self.frames, targets, &mut self.values);
+            self.set.values(
+                &self.model,
+                &self.q,
+                &self.frames,
+                targets,
+                &mut self.values,
+            );
             self.residual();
             self.solve_step();
             // δ = −θ − H⁻¹ (D J_r S)ᵀ y; u holds H⁻¹ (D J_r S)ᵀ y.
@@ -231,7 +238,11 @@ impl JointTick {
             for d in 0..self.theta.len() {
                 size = size.max((step * (self.theta[d] + self.u[d])).abs() * self.dof_len[d]);
             }
-            if !(size <= allowed) {
+            // NaN-safe: a NaN size is refused too.
+            if size
+                .partial_cmp(&allowed)
+                .is_none_or(|o| o == std::cmp::Ordering::Greater)
+            {
                 return Ok(k);
             }
             allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
@@ -326,8 +337,13 @@ impl JointTick {
     /// One evaluation of the loop and finger rows' values (the probe).
     #[cfg(test)]
     pub(crate) fn values_for_probe(&mut self, targets: &[FingerTarget]) {
-        self.set
-            .values(&self.model, &self.q, &self.frames, targets, &mut self.values);
+        self.set.values(
+            &self.model,
+            &self.q,
+            &self.frames,
+            targets,
+            &mut self.values,
+        );
     }
 
     /// The loop rows' largest |C| at the current values.

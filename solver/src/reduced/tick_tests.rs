@@ -24,7 +24,12 @@ fn body_gap(model: &Model, a: &[f64], b: &[f64]) -> f64 {
     model
         .layout()
         .moving_bodies()
-        .map(|(_, o)| (0..3).map(|c| (a[o + c] - b[o + c]).powi(2)).sum::<f64>().sqrt())
+        .map(|(_, o)| {
+            (0..3)
+                .map(|c| (a[o + c] - b[o + c]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
         .fold(0.0, f64::max)
 }
 
@@ -75,13 +80,20 @@ pub(crate) fn compare(name: &str, ticks: usize, radius: f64) -> Gaps {
 /// than 10 × the augmented tick's worst or 1 nm (figures in BENCHMARKS.md).
 #[test]
 fn the_joint_tick_follows_the_augmented_tick() {
-    for (name, radius) in [("four-bar", 0.002), ("bennett", 0.002), ("peaucellier", 0.004)] {
+    for (name, radius) in [
+        ("four-bar", 0.002),
+        ("bennett", 0.002),
+        ("peaucellier", 0.004),
+    ] {
         let g = compare(name, 200, radius);
         println!(
             "{name}: |Δr| {:.2e} m, |ΔF| {:.2e} N of {:.2e} N, violation joint {:.2e} augmented {:.2e}",
             g.position_m, g.force_n, g.largest_force_n, g.joint_violation, g.augmented_violation
         );
-        assert!(g.largest_force_n > 1e-3, "{name}: the load is not trivially zero");
+        assert!(
+            g.largest_force_n > 1e-3,
+            "{name}: the load is not trivially zero"
+        );
         assert!(g.position_m < 1e-6, "{name}: |Δr| {:.2e} m", g.position_m);
         assert!(
             g.force_n < 1e-4 * g.largest_force_n,
@@ -109,14 +121,20 @@ fn the_tree_joints_hold_by_construction() {
         let mut jt = JointTick::new(model.clone(), *p.settings(), p.q(), &t0).unwrap();
         let start = super::tests::evaluation(&model, p.q());
         let tree = jt.space.tree.tree_rows().to_vec();
-        let before = tree.iter().map(|&r| start.values()[r].abs()).fold(0.0, f64::max);
+        let before = tree
+            .iter()
+            .map(|&r| start.values()[r].abs())
+            .fold(0.0, f64::max);
         let mut t = t0.clone();
         for k in 0..200 {
             hand(&t0, k, 0.002, &mut t);
             jt.tick(&t, 1e-3).unwrap();
         }
         let ev = super::tests::evaluation(&model, jt.q());
-        let after = tree.iter().map(|&r| ev.values()[r].abs()).fold(0.0, f64::max);
+        let after = tree
+            .iter()
+            .map(|&r| ev.values()[r].abs())
+            .fold(0.0, f64::max);
         let norms = jt
             .space
             .tree

@@ -33,7 +33,8 @@ fn the_joint_tick_allocates_nothing() {
         let (result, stats) = count(|| {
             for k in 0..100 {
                 let a = 2.0 * std::f64::consts::PI * k as f64 / 500.0;
-                t[0].position_m = t0[0].position_m + Vector3::new(a.cos() - 1.0, a.sin(), 0.0) * 0.002;
+                t[0].position_m =
+                    t0[0].position_m + Vector3::new(a.cos() - 1.0, a.sin(), 0.0) * 0.002;
                 jt.tick(&t, 1e-3)?;
             }
             Ok::<(), haptloop_solver::reduced::ReducedError>(())
