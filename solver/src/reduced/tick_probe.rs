@@ -5,7 +5,9 @@
 //! the scene's assembled q, interleaved in rounds of ≈ 20 ms (the order
 //! alternating), the thread's CPU time per tick; and, at a fixed state, the
 //! joint tick's update alone and its loop/finger evaluation alone. Best and
-//! median of 9 rounds, and the median of the per-round ratios. Prints;
+//! median of 9 rounds, and the median of the per-round ratios.
+//! `HAPTLOOP_TICK_PROBE_EXTRA=k` gives the joint tick k more update steps
+//! than the scene's (the augmented tick keeps the scene's). Prints;
 //! asserts only that the ticks succeed.
 
 use std::time::Duration;
@@ -34,12 +36,18 @@ fn stats(mut v: Vec<f64>) -> (f64, f64) {
 fn tick_probe() {
     let list = std::env::var("HAPTLOOP_TICK_PROBE")
         .unwrap_or_else(|_| "four-bar,bennett,peaucellier".into());
+    let extra: u32 = std::env::var("HAPTLOOP_TICK_PROBE_EXTRA")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     for name in list.split(',').filter(|s| !s.is_empty()) {
         let radius = if name == "peaucellier" { 0.004 } else { 0.002 };
         let mut p = super::tests::program_after(name, 0);
         let model = p.model_arc().clone();
         let t0 = model.initial_targets();
-        let mut jt = JointTick::new(model.clone(), *p.settings(), p.q(), &t0).unwrap();
+        let mut s = *p.settings();
+        s.iterations += extra;
+        let mut jt = JointTick::new(model.clone(), s, p.q(), &t0).unwrap();
         let mut t = t0.clone();
         let reps = 4000;
         let (mut ka, mut kj) = (0usize, 0usize);
@@ -94,10 +102,11 @@ fn tick_probe() {
         let (a, j, r) = (stats(ta), stats(tj), stats(ratio));
         let (u, e) = (stats(tu), stats(te));
         println!(
-            "{name}: {} dofs, {} kept rows ({} loop), {} update steps",
+            "{name}: {} dofs, {} kept rows ({} loop), update steps: joint {}, augmented {}",
             jt.dofs(),
             jt.rows.len(),
             jt.n_loop,
+            s.iterations,
             p.settings().iterations
         );
         let line = |label: &str, (best, med): (f64, f64)| {
