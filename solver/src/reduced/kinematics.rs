@@ -97,6 +97,13 @@ impl Kinematics {
         for (k, f) in self.frames.iter_mut().enumerate() {
             *f = frame_of(model, q, Some(BodyId(k as u32)))?;
         }
+        self.set_twists(tree);
+        Ok(())
+    }
+
+    /// The twists from the frames held (each body's, model order; entries
+    /// past the bodies are ignored). No allocation.
+    pub(crate) fn set_twists(&mut self, tree: &JointTree) {
         for j in &tree.joints {
             let ends = [self.end(j.ends[0]), self.end(j.ends[1])];
             let (p, axes) = joint_axes(j, &ends);
@@ -113,7 +120,6 @@ impl Kinematics {
                 };
             }
         }
-        Ok(())
     }
 
     fn end(&self, b: Option<BodyId>) -> BodyFrame {
@@ -170,13 +176,13 @@ impl Kinematics {
 
 /// A rigid displacement x ↦ Q x + t.
 #[derive(Debug, Clone, Copy)]
-struct Rigid {
+pub(crate) struct Rigid {
     q: UnitQuaternion<f64>,
     t: Vector3<f64>,
 }
 
 impl Rigid {
-    const IDENTITY: Self = Self {
+    pub(crate) const IDENTITY: Self = Self {
         q: UnitQuaternion::new_unchecked(Quaternion::new(1.0, 0.0, 0.0, 0.0)),
         t: Vector3::new(0.0, 0.0, 0.0),
     };
@@ -198,7 +204,7 @@ impl Rigid {
 /// at `q_base`), written to `out`. Revolute and prismatic coordinates are
 /// exact angles and lengths; a universal turns about its first axis after
 /// its second, a spherical by the rotation vector of its three coordinates.
-/// Allocation: `rigid` must hold one entry per tree joint.
+/// Allocates its scratch; [`displace_with`] does not.
 pub fn displace(
     model: &Model,
     tree: &JointTree,
@@ -207,8 +213,22 @@ pub fn displace(
     dtheta: &[f64],
     out: &mut [f64],
 ) {
-    out.copy_from_slice(q_base);
     let mut rigid = vec![Rigid::IDENTITY; tree.joints.len()];
+    displace_with(model, tree, kin, q_base, dtheta, out, &mut rigid);
+}
+
+/// [`displace`] with caller-owned scratch (`rigid`: one entry per tree
+/// joint). No allocation.
+pub(crate) fn displace_with(
+    model: &Model,
+    tree: &JointTree,
+    kin: &Kinematics,
+    q_base: &[f64],
+    dtheta: &[f64],
+    out: &mut [f64],
+    rigid: &mut [Rigid],
+) {
+    out.copy_from_slice(q_base);
     for (k, j) in tree.joints.iter().enumerate() {
         let t = &kin.twists[j.dof..j.dof + j.freedom.dofs()];
         let th = &dtheta[j.dof..j.dof + j.freedom.dofs()];

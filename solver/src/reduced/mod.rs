@@ -12,8 +12,13 @@
 //!   and the finger Schur complement after the loop rows, with the loop
 //!   rows' redundancy masked once (`mask`: an ordered Cholesky of the
 //!   loop block with dropping).
+//! - `tick` (with `rows`, `stage`, `small`): a whole quasi-static tick in
+//!   joint coordinates — the projected update on θ with forward kinematics,
+//!   only the loop and finger rows evaluated, and Eq. 7 — on plain loops
+//!   over preallocated slices; its module docs say what wiring it into
+//!   `Program` would still need.
 //! - `probe` (tests, ignored): times the augmented force stage against this
-//!   one at the same q.
+//!   one at the same q; `tick_probe` times the whole ticks.
 //!
 //! Joints handled: revolute, universal, spherical, prismatic. Models with
 //! design variables, auxiliary columns (flexible bodies, surfaces), free
@@ -22,15 +27,24 @@
 mod core;
 mod kinematics;
 mod mask;
+mod rows;
+mod small;
+mod stage;
+mod tick;
 mod tree;
 
 #[cfg(test)]
 mod probe;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tick_probe;
+#[cfg(test)]
+mod tick_tests;
 
 pub use core::{JointSpace, PINV_RATIO, PIVOT_RATIO, ZERO_ROW};
 pub use kinematics::{Kinematics, displace};
+pub use tick::JointTick;
 pub use tree::JointTree;
 
 /// Why a model or a configuration has no joint-space form here.

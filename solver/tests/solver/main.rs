@@ -13,3 +13,4 @@ mod jacobian_fd;
 mod mechanisms;
 mod model;
 mod pattern;
+mod reduced_tick;

@@ -1,0 +1,388 @@
+//! The joint tick's end: forward kinematics at the last iterate, J_r S
+//! there, and Eq. 7 in joint coordinates with the factors the next tick's
+//! steps reuse (plain loops on preallocated slices; `core` computes the
+//! same quantities with faer and checks them):
+//!
+//! ```text
+//! H = L Lᵀ (composite inertias),  Y = L⁻¹ (D J_r S)ᵀ,  W = Yᵀ Y
+//! W_LL = L_L L_Lᵀ,  Z = L_L⁻¹ W_LF,  Σ_F = W_FF − Zᵀ Z,  Σ_F + 1/(K m̄) = L_K L_Kᵀ
+//! τ = Sᵀ b,  g = Y L⁻¹ τ,  λ̃_F = Σ_F⁺ (g_F − Zᵀ L_L⁻¹ g_L)
+//! ```
+//!
+//! b is the force stage's: gravity and −M q̈ with each body's velocity and
+//! acceleration differenced from its poses (`force::motion`, its filter
+//! included); the finger output adds the virtual coupling as
+//! `Feedback::wrenches` does.
+
+use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
+
+use super::ReducedError;
+use super::kinematics::{Kinematics, Twist};
+use super::small::{dot, forward};
+use super::tick::JointTick;
+use super::tree::JointTree;
+use crate::force::inertia::BodyMass;
+use crate::force::small::{factor_in_place, min_norm_solve};
+use crate::{BodyId, FingerOutput, FingerTarget, Model};
+
+/// `force::motion::ACCELERATION_FILTER_FRACTION` (private there).
+const ACCELERATION_FILTER_FRACTION: f64 = 0.25;
+
+/// One body's motion history (`force::motion`).
+#[derive(Debug, Clone, Copy)]
+struct History {
+    e: UnitQuaternion<f64>,
+    r: Vector3<f64>,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    a: Vector3<f64>,
+    alpha: Vector3<f64>,
+}
+
+/// Factors and buffers of the force stage.
+pub(crate) struct Stage {
+    /// H, then its factor (n × n).
+    pub h: Vec<f64>,
+    /// Y row by row: row i = L⁻¹ (D J_r S)ᵢ (m × n).
+    yt: Vec<f64>,
+    w: Vec<f64>,
+    /// W_LL's factor (nl × nl), Z row by finger row (mf × nl).
+    pub wll: Vec<f64>,
+    pub z: Vec<f64>,
+    sig: Vec<f64>,
+    /// Σ_F + 1/(K m̄), factored (mf × mf).
+    pub sk: Vec<f64>,
+    work: Vec<f64>,
+    eig: Vec<f64>,
+    g: Vec<f64>,
+    tau: Vec<f64>,
+    pub lambda_f: Vec<f64>,
+    reference: f64,
+    ic: Vec<Matrix6<f64>>,
+    /// Per body (model order).
+    mass: Vec<Option<BodyMass>>,
+    /// Moving bodies (index, first column) with their history.
+    bodies: Vec<(usize, usize, History)>,
+    ticks: u32,
+    /// Per finger: its first kept row, row count, the body's end.
+    fingers: Vec<(usize, usize, usize)>,
+    prev_error: Vec<Vector3<f64>>,
+}
+
+impl Stage {
+    /// Buffers for n joint coordinates and m kept rows (nl loop rows).
+    /// Allocates.
+    pub fn new(model: &Model, tree: &JointTree, n: usize, m: usize, nl: usize, q: &[f64]) -> Self {
+        let mf = m - nl;
+        let mut mass = vec![None; model.bodies().len()];
+        let mut bodies = Vec::new();
+        for bm in BodyMass::of_model(model) {
+            let (b, _) = model
+                .layout()
+                .moving_bodies()
+                .find(|(_, o)| *o == bm.offset)
+                .expect("moving body");
+            let (r, e) = pose(q, bm.offset);
+            let h = History {
+                e,
+                r,
+                v: Vector3::zeros(),
+                w: Vector3::zeros(),
+                a: Vector3::zeros(),
+                alpha: Vector3::zeros(),
+            };
+            bodies.push((b.index(), bm.offset, h));
+            mass[b.index()] = Some(bm);
+        }
+        let mut fingers = Vec::new();
+        let mut next = nl;
+        for f in model.fingers() {
+            let c = f.constraint.index();
+            let rows = model.constraints()[c].rows.len();
+            let end = usize::from(model.geometry[c].frames()[0] != f.body.index());
+            fingers.push((next, rows, end));
+            next += rows;
+        }
+        Self {
+            h: vec![0.0; n * n],
+            yt: vec![0.0; m * n],
+            w: vec![0.0; m * m],
+            wll: vec![0.0; nl * nl],
+            z: vec![0.0; mf * nl],
+            sig: vec![0.0; mf * mf],
+            sk: vec![0.0; mf * mf],
+            work: vec![0.0; mf * mf],
+            eig: vec![0.0; mf * mf],
+            g: vec![0.0; m],
+            tau: vec![0.0; n],
+            lambda_f: vec![0.0; mf],
+            reference: 0.0,
+            ic: vec![Matrix6::zeros(); tree.joints.len()],
+            mass,
+            bodies,
+            ticks: 0,
+            fingers,
+            prev_error: vec![Vector3::zeros(); model.fingers().len()],
+        }
+    }
+
+    /// H = Sᵀ M S by composite inertias (as `JointSpace::inertia`).
+    fn inertia(&mut self, tree: &JointTree, kin: &Kinematics) {
+        let n = tree.dofs;
+        self.h.fill(0.0);
+        for (k, j) in tree.joints.iter().enumerate() {
+            let m = self.mass[j.child.index()].as_ref().expect("moving");
+            let f = &kin.frames[j.child.index()];
+            let c = f.r.cross_matrix();
+            let mut i6 = Matrix6::zeros();
+            i6.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&(m.world_inertia(f) - c * c * m.mass));
+            i6.fixed_view_mut::<3, 3>(0, 3).copy_from(&(c * m.mass));
+            i6.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-c * m.mass));
+            i6.fixed_view_mut::<3, 3>(3, 3)
+                .copy_from(&(Matrix3::identity() * m.mass));
+            self.ic[k] = i6;
+        }
+        for k in (0..tree.joints.len()).rev() {
+            if let Some(p) = tree.joints[k].parent_joint {
+                let add = self.ic[k];
+                self.ic[p] += add;
+            }
+        }
+        let six = |t: &Twist| Vector6::new(t.w.x, t.w.y, t.w.z, t.v.x, t.v.y, t.v.z);
+        for (k, j) in tree.joints.iter().enumerate() {
+            for d in j.dof..j.dof + j.freedom.dofs() {
+                let f = self.ic[k] * six(&kin.twists[d]);
+                let mut up = Some(k);
+                while let Some(u) = up {
+                    let ju = &tree.joints[u];
+                    for e in ju.dof..ju.dof + ju.freedom.dofs() {
+                        let v = f.dot(&six(&kin.twists[e]));
+                        self.h[d * n + e] = v;
+                        self.h[e * n + d] = v;
+                    }
+                    up = ju.parent_joint;
+                }
+            }
+        }
+    }
+
+    /// Factors H, W, W_LL, Σ_F and Σ_F + 1/(K m̄) from D J_r S (`jr`).
+    fn factor(
+        &mut self,
+        tree: &JointTree,
+        kin: &Kinematics,
+        jr: &[f64],
+        nl: usize,
+        k_inv: &[f64],
+    ) -> Result<(), ReducedError> {
+        self.inertia(tree, kin);
+        let n = tree.dofs;
+        let m = jr.len() / n.max(1);
+        let mf = m - nl;
+        if !factor_in_place(&mut self.h, n) {
+            return Err(ReducedError::NotPositive("H"));
+        }
+        self.yt.copy_from_slice(jr);
+        for i in 0..m {
+            forward(&self.h, &mut self.yt[i * n..(i + 1) * n]);
+        }
+        for a in 0..m {
+            for b in 0..=a {
+                let v = dot(&self.yt[a * n..(a + 1) * n], &self.yt[b * n..(b + 1) * n]);
+                self.w[a * m + b] = v;
+                self.w[b * m + a] = v;
+            }
+        }
+        for a in 0..nl {
+            self.wll[a * nl..(a + 1) * nl].copy_from_slice(&self.w[a * m..a * m + nl]);
+        }
+        if !factor_in_place(&mut self.wll, nl) {
+            return Err(ReducedError::NotPositive("W_LL"));
+        }
+        for f in 0..mf {
+            let zf = &mut self.z[f * nl..(f + 1) * nl];
+            for (a, z) in zf.iter_mut().enumerate() {
+                *z = self.w[a * m + nl + f];
+            }
+            forward(&self.wll, zf);
+        }
+        self.reference = 0.0;
+        for f in 0..mf {
+            self.reference = self.reference.max(self.w[(nl + f) * m + nl + f]);
+            for g in 0..mf {
+                let zz = dot(&self.z[f * nl..(f + 1) * nl], &self.z[g * nl..(g + 1) * nl]);
+                self.sig[f * mf + g] = self.w[(nl + f) * m + nl + g] - zz;
+            }
+        }
+        self.sk.copy_from_slice(&self.sig);
+        for (f, k) in k_inv.iter().enumerate() {
+            self.sk[f * mf + f] += k;
+        }
+        if !factor_in_place(&mut self.sk, mf) {
+            return Err(ReducedError::NotPositive("Σ_F + 1/(K m̄)"));
+        }
+        Ok(())
+    }
+
+    /// Advances the motion history to `frames` (as `Motion::advance`) and
+    /// forms τ = Sᵀ b.
+    #[allow(clippy::too_many_arguments)]
+    fn load(
+        &mut self,
+        model: &Model,
+        tree: &JointTree,
+        kin: &Kinematics,
+        q: &[f64],
+        dt_s: f64,
+        tau_s: f64,
+    ) {
+        let (af, aa) = if tau_s > 0.0 {
+            let ratio = ACCELERATION_FILTER_FRACTION;
+            (dt_s / (tau_s + dt_s), dt_s / (ratio * tau_s + dt_s))
+        } else {
+            (1.0, 1.0)
+        };
+        let first = self.ticks == 0;
+        let g = model.gravity_m_s2();
+        self.tau.fill(0.0);
+        for (b, o, h) in self.bodies.iter_mut() {
+            let f = &kin.frames[*b];
+            let (r, e) = pose(q, *o);
+            let v_raw = (r - h.r) / dt_s;
+            let w_raw = (e * h.e.inverse()).scaled_axis() / dt_s;
+            let v = h.v + (v_raw - h.v) * af;
+            let w = h.w + (w_raw - h.w) * af;
+            if first {
+                h.a = Vector3::zeros();
+                h.alpha = Vector3::zeros();
+            } else {
+                h.a += ((v - h.v) / dt_s - h.a) * aa;
+                h.alpha += ((w - h.w) / dt_s - h.alpha) * aa;
+            }
+            (h.v, h.w, h.r, h.e) = (v, w, r, e);
+            let m = self.mass[*b].as_ref().expect("moving");
+            let mut b7 = [0.0; 7];
+            m.generalized_force(f, &g, &h.a, &h.w, &h.alpha, &mut b7);
+            kin.project(tree, BodyId(*b as u32), &b7, &mut self.tau);
+        }
+        self.ticks = self.ticks.saturating_add(1);
+    }
+
+    /// λ̃_F for τ (after [`Self::factor`] and [`Self::load`]).
+    fn finger_solve(&mut self, n: usize, nl: usize) {
+        let m = self.g.len();
+        let mf = m - nl;
+        forward(&self.h, &mut self.tau);
+        for i in 0..m {
+            self.g[i] = dot(&self.yt[i * n..(i + 1) * n], &self.tau);
+        }
+        let (gl, gf) = self.g.split_at_mut(nl);
+        forward(&self.wll, gl);
+        for (f, v) in gf.iter_mut().enumerate() {
+            *v -= dot(&self.z[f * nl..(f + 1) * nl], gl);
+        }
+        self.work.copy_from_slice(&self.sig);
+        debug_assert_eq!(gf.len(), mf);
+        min_norm_solve(
+            &mut self.work,
+            gf,
+            &mut self.lambda_f,
+            &mut self.eig,
+            self.reference,
+        );
+    }
+}
+
+/// Position and unit orientation of the body at column `o` of q.
+fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let e = nalgebra::Quaternion::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
+    (
+        Vector3::new(q[o], q[o + 1], q[o + 2]),
+        UnitQuaternion::new_normalize(e),
+    )
+}
+
+impl JointTick {
+    /// Forward kinematics at θ (`advance`), J_r S there, the factors and
+    /// the finger outputs; the chord point moves to the result.
+    pub(crate) fn end_of_tick(
+        &mut self,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        advance: bool,
+    ) -> Result<(), ReducedError> {
+        if advance {
+            self.pose()?;
+        }
+        let nb = self.model.bodies().len();
+        self.kin.frames[..nb].copy_from_slice(&self.frames[..nb]);
+        self.kin.set_twists(&self.space.tree);
+        let ok = self.set.jacobian(
+            &self.model,
+            &self.space.tree,
+            &self.q,
+            &self.frames,
+            &self.kin.twists,
+            targets,
+            &self.scale,
+            &mut self.values,
+            &mut self.jr,
+            &mut self.grads,
+        );
+        if !ok {
+            return Err(ReducedError::Unsupported("a raw Jacobian entry".into()));
+        }
+        self.max_violation = self.violation();
+        let tree = &self.space.tree;
+        self.stage
+            .factor(tree, &self.kin, &self.jr, self.n_loop, &self.k_inv)?;
+        if advance {
+            let tau_s = self.settings.velocity_filter.as_secs_f64();
+            let (model, kin, q) = (&self.model, &self.kin, &self.q);
+            self.stage.load(model, tree, kin, q, dt_s, tau_s);
+            self.stage.finger_solve(tree.dofs, self.n_loop);
+            self.outputs_at(targets, dt_s);
+        }
+        self.q_s.copy_from_slice(&self.q);
+        Ok(())
+    }
+
+    /// The finger outputs from λ̃_F and the coupling (`Feedback::wrenches`).
+    fn outputs_at(&mut self, targets: &[FingerTarget], dt_s: f64) {
+        let st = &mut self.stage;
+        let k = self.settings.coupling_stiffness_n_per_m;
+        let c = self.settings.coupling_damping_n_s_per_m;
+        for (i, fi) in self.model.fingers().iter().enumerate() {
+            let (first, rows, end) = st.fingers[i];
+            let fr = &self.frames[fi.body.index()];
+            let (mut force, mut torque) = (Vector3::zeros(), Vector3::zeros());
+            for row in first..first + rows {
+                let lam = self.scale[row] * st.lambda_f[row - self.n_loop];
+                force += self.grads[row].lin[end] * lam;
+                torque += self.grads[row].ang[end] * lam;
+            }
+            let p = fr.point(&fi.point_m);
+            let torque = torque - (p - fr.r).cross(&force);
+            let err = p - targets[i].position_m;
+            let rate = if st.ticks > 1 {
+                (err - st.prev_error[i]) / dt_s
+            } else {
+                Vector3::zeros()
+            };
+            st.prev_error[i] = err;
+            let coupling = err * k + rate * c;
+            self.outputs[i] = FingerOutput {
+                force_n: force + coupling,
+                torque_nm: torque,
+                constraint_force_n: force,
+                constraint_torque_nm: torque,
+                coupling_force_n: coupling,
+                coupling_torque_nm: Vector3::zeros(),
+                attachment_m: p,
+                target_m: targets[i].position_m,
+                tracking_error_m: err.norm(),
+            };
+        }
+    }
+}
