@@ -9,15 +9,16 @@ use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
 use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
 use haptloop_rt::clock::Clock;
-use haptloop_rt::exchange::{mailbox, program_channel};
+use haptloop_rt::exchange::{MailboxReader, MailboxWriter, mailbox, program_channel};
 use haptloop_solver::{Model, Objectives, Placement, PlacementOptions, Program, SolveInfo};
 use nalgebra::Vector3;
 
+use super::reference::{ReferenceCapture, ReferenceCheck};
 use super::{
-    Built, ContactLoop, DesignTracker, FastLoop, Handover, LivePointer, PROGRAM_QUEUE, Plan,
-    RECORD_QUEUE, Rig, RunStats, SLOW_BUILD_ENV, SemanticLoop, SemanticPlan, SlowLoop, SlowStats,
-    Snapshot, StageClock, TRACE_QUEUE, WitnessFrame, WitnessInbox, design, live, reference,
-    refresh, track,
+    Built, ContactLoop, DesignTracker, FastLoop, FingerFrame, Handover, LiveFrame, LivePointer,
+    LiveSources, PROGRAM_QUEUE, Plan, RECORD_QUEUE, Rig, RunStats, SLOW_BUILD_ENV, SemanticLoop,
+    SemanticPlan, SlowLoop, SlowStats, Snapshot, StageClock, TRACE_QUEUE, WitnessFrame,
+    WitnessInbox, design, live, reference, refresh, track,
 };
 use crate::scenes::Scene;
 
@@ -42,14 +43,7 @@ struct Start {
 /// their fingers), the exchange between the loops and every buffer the fast
 /// loop will use. All allocation of a session happens here.
 pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
-    // A testing aid: stretch the build (off the real-time thread, before any
-    // device is driven) so a test can signal the process while it builds.
-    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-    {
-        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
-    }
+    stretch_for_tests();
     let mut start = assemble(scene, plan)?;
     with_semantic(&mut start, scene, plan)?;
     with_contact(&mut start, scene, plan)?;
@@ -67,65 +61,26 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     } = start;
     // The converged reference of sampled ticks, where it applies.
     let reference_unsupported = reference::unsupported(contact.is_some());
-    let (capture, check) = match reference_unsupported {
-        Some(_) => (None, None),
-        None if plan.reference_every_ticks == 0 => (None, None),
-        None => {
-            let (c, k) = reference::pair(&program, plan.reference_every_ticks)
-                .context("building the converged reference")?;
-            (Some(c), Some(k))
-        }
-    };
+    let (capture, check) = references(&program, plan, reference_unsupported)?;
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
-    let n = model.n_coords();
     let n_fingers = model.fingers().len();
-    let (snapshot, snapshots) = mailbox(|| Snapshot {
-        q: Vec::with_capacity(n),
-        solved: true,
-        finger_force_n: Vec::with_capacity(n_fingers),
-        speeds: Vec::with_capacity(model.bodies().len()),
-        ..Snapshot::default()
-    });
+    let (snapshot, snapshots) = snapshot_mailbox(&model);
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
-    let (refresh_tx, refresh_rx) = match refresh::channel(&program.program) {
-        Some((tx, rx)) => (Some(tx), Some(rx)),
-        None => (None, None),
-    };
+    let (refresh_tx, refresh_rx) = refresh::channel(&program.program).unzip();
     let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
     let (recorders, device_traces) = recording(scene, plan, &rig)?;
     let (design, design_columns) =
-        match DesignTracker::new(&model, &objectives, program.program.q()) {
-            Some((t, c)) => (Some(t), Some(c)),
-            None => (None, None),
-        };
+        DesignTracker::new(&model, &objectives, program.program.q()).unzip();
+    let limits = Limits::of(&model, plan, inbox.is_some());
     let rig_devices = rig.devices.len();
-    // A violation above the scene's tolerance (else 0.1 mm) triggers a
-    // re-projection; one above a tenth of the mechanism's size means it came
-    // apart.
-    let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
-    let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
-    // Contact: a penetration beyond its bound means the world came apart;
-    // the witness rows' age bounds the motion (`witness_age`).
-    let (broken_penetration_m, witness_age) = match &inbox {
-        Some(_) => {
-            let per_cycle = (super::SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round();
-            (
-                super::contact::broken_penetration_m(&plan.contact),
-                Some(super::witness_age::WitnessAge::new(
-                    per_cycle.max(1.0) as u64
-                )),
-            )
-        }
-        None => (f64::INFINITY, None),
-    };
     let fast = FastLoop {
         clock,
         period: plan.period(),
         program,
-        broken_m,
-        broken_penetration_m,
-        witness_age,
+        broken_m: limits.broken_m,
+        broken_penetration_m: limits.broken_penetration_m,
+        witness_age: limits.witness_age,
         programs: programs_rx,
         refresh: refresh_rx,
         targets: model.initial_targets(),
@@ -150,16 +105,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         rendered: vec![Vector3::zeros(); n_fingers],
         commanded: vec![Vector3::zeros(); n_fingers],
     };
-    // The live viewer's exchange: the slow loop and the reporter write, the
-    // viewer reads; the fast loop takes no part.
-    let (live_frames, live) = match &plan.live {
-        None => (None, None),
-        Some(_) => {
-            let pointers = fast_pointers(&fast.rig, scene);
-            let (sinks, sources) = live::exchange(pointers);
-            (Some(sinks.frames), Some((sources, sinks.fingers)))
-        }
-    };
+    let (live_frames, live) = live_exchange(&fast.rig, scene, plan);
     let mut slow = SlowLoop {
         track: track::BodyTrack::of_model(&model),
         track_model: model.clone(),
@@ -176,8 +122,8 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         placement: Placement::analyze(&scene.compiled.joints_only, &options)
             .context("analysing the scene's joints for re-projection")?,
         joints_only: scene.compiled.joints_only.clone(),
-        threshold_m,
-        broken_m,
+        threshold_m: limits.threshold_m,
+        broken_m: limits.broken_m,
         last_good: q.clone(),
         stats: SlowStats {
             reference_unsupported,
@@ -188,14 +134,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         semantic,
         step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
-    // The track starts at the assembled configuration, at t = 0.
-    track::poses_at(&model, &q, &mut slow.poses);
-    if let Some(c) = &slow.contact {
-        c.contacts(&mut slow.contact_points);
-    }
-    let at_rest = vec![[0.0; 3]; n_fingers];
-    slow.track
-        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
+    start_track(&mut slow, &model, &q, n_fingers);
     Ok(Built {
         fast,
         slow,
@@ -205,6 +144,122 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         design: design_columns,
         live,
     })
+}
+
+/// The converged reference's capture (fast loop) and check (slow loop),
+/// unless `unsupported` says why not or the plan samples no tick.
+fn references(
+    program: &Program,
+    plan: &Plan,
+    unsupported: Option<&'static str>,
+) -> Result<(Option<ReferenceCapture>, Option<ReferenceCheck>)> {
+    Ok(match unsupported {
+        Some(_) => (None, None),
+        None if plan.reference_every_ticks == 0 => (None, None),
+        None => {
+            let (c, k) = reference::pair(program, plan.reference_every_ticks)
+                .context("building the converged reference")?;
+            (Some(c), Some(k))
+        }
+    })
+}
+
+/// The snapshot mailbox, its buffers sized for `model`.
+fn snapshot_mailbox(model: &Model) -> (MailboxWriter<Snapshot>, MailboxReader<Snapshot>) {
+    let n = model.n_coords();
+    let n_fingers = model.fingers().len();
+    mailbox(|| Snapshot {
+        q: Vec::with_capacity(n),
+        solved: true,
+        finger_force_n: Vec::with_capacity(n_fingers),
+        speeds: Vec::with_capacity(model.bodies().len()),
+        ..Snapshot::default()
+    })
+}
+
+/// A testing aid: stretch the build (off the real-time thread, before any
+/// device is driven) so a test can signal the process while it builds.
+fn stretch_for_tests() {
+    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
+    }
+}
+
+/// When the loops call the mechanism broken or re-project it.
+struct Limits {
+    /// A violation above this triggers a re-projection, m.
+    threshold_m: f64,
+    /// A violation above this means the mechanism came apart, m.
+    broken_m: f64,
+    /// A penetration above this means the world came apart, m.
+    broken_penetration_m: f64,
+    /// The witness rows' age, which bounds the motion (contact scenes).
+    witness_age: Option<super::witness_age::WitnessAge>,
+}
+
+impl Limits {
+    /// A violation above the scene's tolerance (else 0.1 mm) triggers a
+    /// re-projection; one above a tenth of the mechanism's size means it
+    /// came apart. Contact (`contact`): a penetration beyond its bound
+    /// means the world came apart; the witness rows' age bounds the motion
+    /// (`witness_age`).
+    fn of(model: &Model, plan: &Plan, contact: bool) -> Self {
+        let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
+        let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
+        let (broken_penetration_m, witness_age) = if contact {
+            let per_cycle = (super::SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round();
+            (
+                super::contact::broken_penetration_m(&plan.contact),
+                Some(super::witness_age::WitnessAge::new(
+                    per_cycle.max(1.0) as u64
+                )),
+            )
+        } else {
+            (f64::INFINITY, None)
+        };
+        Self {
+            threshold_m,
+            broken_m,
+            broken_penetration_m,
+            witness_age,
+        }
+    }
+}
+
+/// The live viewer's exchange: the slow loop and the reporter write, the
+/// viewer reads; the fast loop takes no part.
+#[allow(clippy::type_complexity)]
+fn live_exchange(
+    rig: &Rig,
+    scene: &Scene,
+    plan: &Plan,
+) -> (
+    Option<MailboxWriter<LiveFrame>>,
+    Option<(LiveSources, MailboxWriter<FingerFrame>)>,
+) {
+    match &plan.live {
+        None => (None, None),
+        Some(_) => {
+            let pointers = fast_pointers(rig, scene);
+            let (sinks, sources) = live::exchange(pointers);
+            (Some(sinks.frames), Some((sources, sinks.fingers)))
+        }
+    }
+}
+
+/// The track starts at the assembled configuration `q`, at t = 0, the
+/// fingers at rest.
+fn start_track(slow: &mut SlowLoop, model: &Model, q: &[f64], n_fingers: usize) {
+    track::poses_at(model, q, &mut slow.poses);
+    if let Some(c) = &slow.contact {
+        c.contacts(&mut slow.contact_points);
+    }
+    let at_rest = vec![[0.0; 3]; n_fingers];
+    slow.track
+        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
 }
 
 /// The fast-loop program of the scene's model, at the configuration the
