@@ -171,3 +171,20 @@ pub fn follow(
     });
     f
 }
+
+/// The comparison fails on a one-ulp difference when bits are asked for,
+/// and on a difference just over the tolerance when a relative one is;
+/// it passes equal vectors and returns the relative difference.
+#[test]
+fn the_comparison_fails_on_what_it_must() {
+    let v = Vector3::new(2.0, -3.0, 0.5);
+    let ulp = Vector3::new(f64::from_bits(2.0f64.to_bits() + 1), -3.0, 0.5);
+    assert_eq!(agree(0, Agree::Bits, &[(v, v)]), 0.0);
+    let bits = std::panic::catch_unwind(|| agree(0, Agree::Bits, &[(ulp, v)]));
+    assert!(bits.is_err(), "a one-ulp difference passed as bit for bit");
+    let rel = agree(0, Agree::Relative(1e-9), &[(ulp, v)]);
+    assert!(rel > 0.0 && rel < 1e-15, "{rel:e}");
+    let over = v + Vector3::new(2e-9 * v.norm(), 0.0, 0.0);
+    let far = std::panic::catch_unwind(|| agree(0, Agree::Relative(1e-9), &[(over, v)]));
+    assert!(far.is_err(), "a difference of 2e-9 passed a 1e-9 tolerance");
+}
