@@ -632,10 +632,10 @@ fn kept_hull(
     })
 }
 
-/// A positive finite mass, and principal moments that are finite, ≥ 0,
-/// > 0 on a moving body (a zero one leaves a rotation without inertia and
-/// M singular: the force solve's factorisation then fails), and satisfy
-/// the triangle inequalities.
+/// A positive finite mass, and principal moments that are finite, at
+/// least 0, above 0 on a moving body (a zero one leaves a rotation without
+/// inertia and M singular: the force solve's factorisation then fails),
+/// and satisfy the triangle inequalities.
 fn check_mass(
     s: &BodySpec,
     mass_kg: f64,
