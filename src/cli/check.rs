@@ -5,9 +5,9 @@ use crate::session::{self, Plan, SessionOptions};
 use anyhow::Result;
 use haptloop_rt::clock::{MockClock, Nanos};
 use haptloop_rt::schedule::StopFlag;
-use haptloop_solver::scene::HandPath;
 use haptloop_solver::scene::SceneError;
-use haptloop_solver::{Grasp, RowUnit, Sense};
+use haptloop_solver::scene::{CompiledScene, HandPath};
+use haptloop_solver::{Grasp, Model, RowUnit, Sense};
 use std::collections::BTreeMap;
 use std::process::ExitCode;
 
@@ -120,7 +120,29 @@ pub fn builds(scene: &Scene) -> std::result::Result<(), SceneError> {
 /// The compiled scene, one aspect per line.
 pub fn summary(scene: &Scene) -> String {
     let c = &scene.compiled;
-    let m = &c.model;
+    let mut out = format!(
+        "{}: ok — scene `{}`: {}\n",
+        scene.loaded.file, c.name, c.description
+    );
+    out += &structure_lines(&c.model);
+    out += &design_lines(&c.model);
+    for o in &c.objectives.terms {
+        out += &format!(
+            "  objective    {} ({}, weight {})\n",
+            o.name, o.kind, o.weight
+        );
+    }
+    out += &row_lines(&c.model);
+    out += &device_lines(c);
+    out += &finger_lines(c);
+    out += &contact_lines(c);
+    out += &crate::report::semantic::check_lines(c);
+    out
+}
+
+/// The bodies, coordinates, auxiliary blocks and constraints (count and
+/// rows per kind) of `m`.
+fn structure_lines(m: &Model) -> String {
     let moving = m.bodies().iter().filter(|b| !b.fixed).count();
     let design = m.layout().design_vars().len();
     let mut kinds: BTreeMap<String, (usize, usize)> = BTreeMap::new();
@@ -133,18 +155,7 @@ pub fn summary(scene: &Scene) -> String {
         .iter()
         .map(|(k, (n, r))| format!("{n} {k} ({r} row{})", if *r == 1 { "" } else { "s" }))
         .collect();
-    let angle_rows = m.rows().iter().filter(|r| r.unit == RowUnit::Angle).count();
-    let ineq = m
-        .rows()
-        .iter()
-        .filter(|r| r.sense == Sense::Inequality)
-        .count();
-    let nnz = m.evaluation().jacobian().nnz();
     let mut out = format!(
-        "{}: ok — scene `{}`: {}\n",
-        scene.loaded.file, c.name, c.description
-    );
-    out += &format!(
         "  bodies       {} ({moving} moving with 7 coordinates each, {} fixed with none)\n",
         m.bodies().len(),
         m.bodies().len() - moving
@@ -166,6 +177,12 @@ pub fn summary(scene: &Scene) -> String {
         );
     }
     out += &format!("  constraints  {}\n", kinds.join(", "));
+    out
+}
+
+/// Each design variable of `m`: its components and bounds.
+fn design_lines(m: &Model) -> String {
+    let mut out = String::new();
     for d in m.layout().design_vars() {
         let bounds = d.bounds.map_or("unbounded".to_string(), |b| {
             let r: Vec<String> = b[..d.width]
@@ -181,13 +198,19 @@ pub fn summary(scene: &Scene) -> String {
         };
         out += &format!("  design       {} ({parts}, m; {bounds})\n", d.name);
     }
-    for o in &c.objectives.terms {
-        out += &format!(
-            "  objective    {} ({}, weight {})\n",
-            o.name, o.kind, o.weight
-        );
-    }
-    out += &format!(
+    out
+}
+
+/// The rows of `m` by sense and unit, and its Jacobian's size.
+fn row_lines(m: &Model) -> String {
+    let angle_rows = m.rows().iter().filter(|r| r.unit == RowUnit::Angle).count();
+    let ineq = m
+        .rows()
+        .iter()
+        .filter(|r| r.sense == Sense::Inequality)
+        .count();
+    let nnz = m.evaluation().jacobian().nnz();
+    let mut out = format!(
         "  rows         {} ({} equality, {ineq} inequality; {angle_rows} angular)\n",
         m.n_rows(),
         m.n_rows() - ineq
@@ -197,6 +220,12 @@ pub fn summary(scene: &Scene) -> String {
         m.n_rows(),
         m.n_coords()
     );
+    out
+}
+
+/// Each device: model, scale and the hand's path.
+fn device_lines(c: &CompiledScene) -> String {
+    let mut out = String::new();
     for d in &c.devices {
         let hand = match &d.hand.path {
             HandPath::Still => "still".to_string(),
@@ -214,6 +243,13 @@ pub fn summary(scene: &Scene) -> String {
             d.name, d.model, d.scale
         );
     }
+    out
+}
+
+/// Each finger: its device, body and grasp.
+fn finger_lines(c: &CompiledScene) -> String {
+    let m = &c.model;
+    let mut out = String::new();
     for f in &c.fingers {
         let mf = &m.fingers()[f.finger.index()];
         let grasp = match mf.grasp {
@@ -228,14 +264,19 @@ pub fn summary(scene: &Scene) -> String {
             m.bodies()[mf.body.index()].name
         );
     }
-    out += &match c.shaped_bodies {
+    out
+}
+
+/// Whether contact is compiled, and every hull cut to the vertex budget.
+fn contact_lines(c: &CompiledScene) -> String {
+    let mut out = match c.shaped_bodies {
         0 => "  contact      no shapes: no contact machinery compiled\n".to_string(),
         n => format!(
             "  contact      {n} shaped bod{}: witnesses on the slow loop, their rows in the fast loop\n",
             if n == 1 { "y" } else { "ies" }
         ),
     };
-    for b in m.bodies() {
+    for b in c.model.bodies() {
         if let Some(h) = &b.hull {
             out += &format!(
                 "  hull         {}: {} points cut to {} (at most {} per hull); the shape lies within {:.3} mm of the one given\n",
@@ -247,6 +288,5 @@ pub fn summary(scene: &Scene) -> String {
             );
         }
     }
-    out += &crate::report::semantic::check_lines(c);
     out
 }

@@ -250,102 +250,136 @@ fn trial(scene: &Scene, seconds: f64, stop: &StopFlag) -> anyhow::Result<Vec<Fin
     let plan = Plan::new(scene, &trial_options(seconds))?;
     let o = session::run(scene, plan, stop, &mut |_| {})?;
     let mut out = Vec::new();
-    let name_span = scene.loaded.spec.scene.name.span();
-    let s = &o.stats;
     out.extend(tick_cost(scene, &o, seconds));
-    if s.solver_failures > 0 {
-        let kinds: Vec<String> = session::FailureKind::ALL
-            .iter()
-            .zip(&s.failure_kinds)
-            .filter(|(_, n)| **n > 0)
-            .map(|(k, n)| format!("{} × {n}", k.as_str()))
-            .collect();
-        let span = match scene.loaded.text.find("[solver]") {
-            Some(at) => at..at + 1,
-            None => name_span.clone(),
-        };
+    out.extend(failures(scene, &o, seconds));
+    for k in 0..scene.compiled.devices.len() {
+        out.extend(device_load(scene, &o, seconds, k)?);
+    }
+    out.extend(device_limits(scene, &o, seconds));
+    Ok(out)
+}
+
+/// The span a finding about device `k` points at: its model, else the
+/// scene's name.
+fn device_span(scene: &Scene, k: usize) -> Range<usize> {
+    let name_span = scene.loaded.spec.scene.name.span();
+    scene
+        .loaded
+        .spec
+        .devices
+        .get(k)
+        .map_or(name_span, |d| d.model.span())
+}
+
+/// The trial's failed ticks, by kind (a warning: zero force was written
+/// on them).
+fn failures(scene: &Scene, o: &session::SessionOutcome, seconds: f64) -> Option<Finding> {
+    let s = &o.stats;
+    if s.solver_failures == 0 {
+        return None;
+    }
+    let kinds: Vec<String> = session::FailureKind::ALL
+        .iter()
+        .zip(&s.failure_kinds)
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{} × {n}", k.as_str()))
+        .collect();
+    let span = match scene.loaded.text.find("[solver]") {
+        Some(at) => at..at + 1,
+        None => scene.loaded.spec.scene.name.span(),
+    };
+    Some(warning(
+        scene,
+        span,
+        format!(
+            "in a {seconds} s trial, {} of {} ticks failed ({}): zero force was written on \
+             them; see `haptloop run` for the figures, and the `[solver]` settings",
+            s.solver_failures,
+            s.ticks,
+            kinds.join(", ")
+        ),
+    ))
+}
+
+/// Device `k`'s load in the trial against its model's ratings: a force
+/// asked above its peak (a warning), an RMS force after the start-up ramp
+/// above its continuous rating (a note: the thermal model would cut it).
+fn device_load(
+    scene: &Scene,
+    o: &session::SessionOutcome,
+    seconds: f64,
+    k: usize,
+) -> anyhow::Result<Vec<Finding>> {
+    let d = &scene.compiled.devices[k];
+    let s = &o.stats;
+    let mut out = Vec::new();
+    let model = PhantomModel::by_name(&d.model)?;
+    let fingers: Vec<usize> = scene
+        .compiled
+        .fingers
+        .iter()
+        .filter(|f| f.device == k)
+        .map(|f| f.finger.index())
+        .collect();
+    let asked = fingers
+        .iter()
+        .map(|&i| s.fingers[i].commanded_max)
+        .fold(0.0, f64::max);
+    // What heats the motors: the force rendered once the start-up ramp
+    // is over (the assembly's first moments are not the run's).
+    let ramp = haptloop_devices::SafetyConfig::default().ramp.as_secs_f64();
+    let mean_sq = fingers
+        .iter()
+        .map(|&i| {
+            let late: Vec<f64> = o.recorder.force[i]
+                .points
+                .iter()
+                .filter(|(t, _)| *t >= ramp)
+                .map(|(_, f)| f * f)
+                .collect();
+            late.iter().sum::<f64>() / late.len().max(1) as f64
+        })
+        .fold(0.0, f64::max);
+    let what = "change `[solver] coupling_stiffness`, the hand's path or the bodies' masses, \
+                or use a stronger device `model`";
+    if asked > model.peak_force_n {
         out.push(warning(
             scene,
-            span,
+            device_span(scene, k),
             format!(
-                "in a {seconds} s trial, {} of {} ticks failed ({}): zero force was written on \
-                 them; see `haptloop run` for the figures, and the `[solver]` settings",
-                s.solver_failures,
-                s.ticks,
-                kinds.join(", ")
+                "device `{}`: in a {seconds} s trial the solver asks for up to {asked:.3} N, \
+                 above the {}'s {} N peak force: the safety layer clamps it and the user \
+                 feels less than the scene — {what}",
+                d.name, d.model, model.peak_force_n
             ),
         ));
     }
-    let device_span = |k: usize| {
-        scene
-            .loaded
-            .spec
-            .devices
-            .get(k)
-            .map_or(name_span.clone(), |d| d.model.span())
-    };
-    for (k, d) in scene.compiled.devices.iter().enumerate() {
-        let model = PhantomModel::by_name(&d.model)?;
-        let fingers: Vec<usize> = scene
-            .compiled
-            .fingers
-            .iter()
-            .filter(|f| f.device == k)
-            .map(|f| f.finger.index())
-            .collect();
-        let asked = fingers
-            .iter()
-            .map(|&i| s.fingers[i].commanded_max)
-            .fold(0.0, f64::max);
-        // What heats the motors: the force rendered once the start-up ramp
-        // is over (the assembly's first moments are not the run's).
-        let ramp = haptloop_devices::SafetyConfig::default().ramp.as_secs_f64();
-        let mean_sq = fingers
-            .iter()
-            .map(|&i| {
-                let late: Vec<f64> = o.recorder.force[i]
-                    .points
-                    .iter()
-                    .filter(|(t, _)| *t >= ramp)
-                    .map(|(_, f)| f * f)
-                    .collect();
-                late.iter().sum::<f64>() / late.len().max(1) as f64
-            })
-            .fold(0.0, f64::max);
-        let what = "change `[solver] coupling_stiffness`, the hand's path or the bodies' masses, \
-                    or use a stronger device `model`";
-        if asked > model.peak_force_n {
-            out.push(warning(
-                scene,
-                device_span(k),
-                format!(
-                    "device `{}`: in a {seconds} s trial the solver asks for up to {asked:.3} N, \
-                     above the {}'s {} N peak force: the safety layer clamps it and the user \
-                     feels less than the scene — {what}",
-                    d.name, d.model, model.peak_force_n
-                ),
-            ));
-        }
-        let cont = model.continuous_force_n;
-        let cut_already = o.device_limits.get(k).is_some_and(|l| l.thermal_cut > 0);
-        if mean_sq > cont * cont && !cut_already {
-            let steady = mean_sq / (cont * cont);
-            let after = -model.thermal_time_constant_s * (1.0 - 1.0 / steady).ln();
-            out.push(note(
-                scene,
-                device_span(k),
-                format!(
-                    "device `{}`: in a {seconds} s trial the force after the start-up ramp is \
-                     {:.3} N RMS, above the {}'s {cont} N continuous rating: if that lasts, the \
-                     thermal model cuts the force to {cont} N after about {after:.1} s of a run \
-                     (a run's report says whether it did) — {what}",
-                    d.name,
-                    mean_sq.sqrt(),
-                    d.model
-                ),
-            ));
-        }
+    let cont = model.continuous_force_n;
+    let cut_already = o.device_limits.get(k).is_some_and(|l| l.thermal_cut > 0);
+    if mean_sq > cont * cont && !cut_already {
+        let steady = mean_sq / (cont * cont);
+        let after = -model.thermal_time_constant_s * (1.0 - 1.0 / steady).ln();
+        out.push(note(
+            scene,
+            device_span(scene, k),
+            format!(
+                "device `{}`: in a {seconds} s trial the force after the start-up ramp is \
+                 {:.3} N RMS, above the {}'s {cont} N continuous rating: if that lasts, the \
+                 thermal model cuts the force to {cont} N after about {after:.1} s of a run \
+                 (a run's report says whether it did) — {what}",
+                d.name,
+                mean_sq.sqrt(),
+                d.model
+            ),
+        ));
     }
+    Ok(out)
+}
+
+/// The devices' limits the trial met (workspace stops, thermal cuts, motor
+/// saturation), a warning per device.
+fn device_limits(scene: &Scene, o: &session::SessionOutcome, seconds: f64) -> Vec<Finding> {
+    let mut out = Vec::new();
     for (k, l) in o.device_limits.iter().enumerate() {
         let met: Vec<String> = [
             (l.outside_workspace, "at a workspace stop"),
@@ -359,7 +393,7 @@ fn trial(scene: &Scene, seconds: f64, stop: &StopFlag) -> anyhow::Result<Vec<Fin
         if !met.is_empty() {
             out.push(warning(
                 scene,
-                device_span(k),
+                device_span(scene, k),
                 format!(
                     "device `{}` in a {seconds} s trial: {}",
                     l.device,
@@ -368,5 +402,5 @@ fn trial(scene: &Scene, seconds: f64, stop: &StopFlag) -> anyhow::Result<Vec<Fin
             ));
         }
     }
-    Ok(out)
+    out
 }

@@ -4,7 +4,7 @@
 use super::output::{RunDir, produce_atomic, write_atomic};
 use super::values;
 use crate::report::sweep as report;
-use crate::scenes::resolve;
+use crate::scenes::{Scene, resolve};
 use crate::session::{Plan, SessionOptions};
 use crate::sweep::{self, Grid, Options, Progress};
 use anyhow::Result;
@@ -98,9 +98,70 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     };
-    // The scene's own gain and filter where the lists are not given.
+    let grid = grid(args, &scene)?;
+    if let Some(why) = refused(args, &grid) {
+        eprintln!("haptloop: error: {why}");
+        return Ok(ExitCode::from(2));
+    }
+    let n = grid.points().len();
+    let run_dir = match (&args.out, args.no_files) {
+        (_, true) => None,
+        (Some(d), false) => Some(RunDir::claim(d)?),
+        (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
+            "sweep-{}-{}",
+            scene.compiled.name,
+            super::output::utc_stamp()
+        )))?),
+    };
+    let threads = args.threads.map_or_else(
+        || haptloop_rt::thread::available_cores().len().max(1),
+        |t| t as usize,
+    );
+    let options = Options {
+        seconds: args.seconds,
+        reference_every: Duration::from_secs_f64(args.reference_ms / 1000.0),
+        threads,
+        force_tolerance: args.force_tolerance,
+    };
+    eprintln!(
+        "haptloop: sweeping `{}` over {n} points ({} s each, {threads} thread{} for accuracy, then timing alone); Ctrl-C stops",
+        scene.compiled.name,
+        args.seconds,
+        if threads == 1 { "" } else { "s" }
+    );
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| progress_bar(n));
+    let progress = |p: Progress| {
+        if let Some(b) = &bar {
+            b.set_message(match p {
+                Progress::Accuracy(_) => "(accuracy, in parallel)",
+                Progress::Timing(_) => "(timing, alone)",
+            });
+            b.inc(1);
+        }
+    };
+    let result = sweep::run(&scene, &grid, &options, stop, &progress)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    super::emit(&report::table(&result));
+    if let Some(dir) = run_dir {
+        write_files(dir, &result)?;
+    }
+    if result.stopped_early {
+        eprintln!(
+            "haptloop: the sweep was stopped by a signal (exit status {})",
+            super::signals::EXIT_SIGNAL
+        );
+        return Ok(ExitCode::from(super::signals::EXIT_SIGNAL));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The grid of the flags' lists, the scene's own gain and filter where
+/// those lists are not given.
+fn grid(args: &SweepArgs, scene: &Scene) -> Result<Grid> {
     let base = Plan::new(
-        &scene,
+        scene,
         &SessionOptions {
             seconds: args.seconds,
             deterministic: true,
@@ -121,98 +182,60 @@ pub fn run(args: &SweepArgs, stop: &StopFlag) -> Result<ExitCode> {
     let rate_hz = first_of_each(&args.rate);
     let update = first_of_each(&args.update);
     let force_solver = first_of_each(&args.force_solver);
-    let grid = Grid {
+    Ok(Grid {
         iterations,
         update,
         force_solver,
         gain,
         rate_hz,
         velocity_filter_ms,
-    };
-    // Every session must have a tick to measure.
+    })
+}
+
+/// Why the grid cannot be swept (a usage error), if it cannot: every
+/// session must have a tick to measure, and the grid at most `MAX_POINTS`
+/// points.
+fn refused(args: &SweepArgs, grid: &Grid) -> Option<String> {
     if let Some(&slowest) = grid.rate_hz.iter().min()
         && (args.seconds * f64::from(slowest)).round() < 1.0
     {
-        eprintln!(
-            "haptloop: error: --seconds {} gives no tick at {slowest} Hz; at least {} s",
+        return Some(format!(
+            "--seconds {} gives no tick at {slowest} Hz; at least {} s",
             args.seconds,
             1.0 / f64::from(slowest)
-        );
-        return Ok(ExitCode::from(2));
+        ));
     }
     let n = grid.points().len();
     if n > MAX_POINTS {
-        eprintln!(
-            "haptloop: error: the grid has {n} points (the product of the lists); at most {MAX_POINTS}"
-        );
-        return Ok(ExitCode::from(2));
-    }
-    let run_dir = match (&args.out, args.no_files) {
-        (_, true) => None,
-        (Some(d), false) => Some(RunDir::claim(d)?),
-        (None, false) => Some(RunDir::claim_fresh(&Path::new("runs").join(format!(
-            "sweep-{}-{}",
-            scene.compiled.name,
-            super::run::utc_stamp()
-        )))?),
-    };
-    let threads = args.threads.map_or_else(
-        || haptloop_rt::thread::available_cores().len().max(1),
-        |t| t as usize,
-    );
-    let options = Options {
-        seconds: args.seconds,
-        reference_every: Duration::from_secs_f64(args.reference_ms / 1000.0),
-        threads,
-        force_tolerance: args.force_tolerance,
-    };
-    eprintln!(
-        "haptloop: sweeping `{}` over {n} points ({} s each, {threads} thread{} for accuracy, then timing alone); Ctrl-C stops",
-        scene.compiled.name,
-        args.seconds,
-        if threads == 1 { "" } else { "s" }
-    );
-    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
-        let b = ProgressBar::new(2 * n as u64);
-        b.set_style(
-            ProgressStyle::with_template("{bar:40} {pos}/{len} runs {msg} [{elapsed} < {eta}]")
-                .expect("valid template"),
-        );
-        b
-    });
-    let progress = |p: Progress| {
-        if let Some(b) = &bar {
-            b.set_message(match p {
-                Progress::Accuracy(_) => "(accuracy, in parallel)",
-                Progress::Timing(_) => "(timing, alone)",
-            });
-            b.inc(1);
-        }
-    };
-    let result = sweep::run(&scene, &grid, &options, stop, &progress)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
-    super::emit(&report::table(&result));
-    if let Some(dir) = run_dir {
-        let d = dir.path();
-        write_atomic(&d.join("sweep.json"), report::json(&result)?.as_bytes())?;
-        write_atomic(&d.join("sweep.csv"), report::csv(&result).as_bytes())?;
-        produce_atomic(&d.join("front.svg"), |p| report::front_svg(p, &result))?;
-        super::emit(&format!(
-            "wrote {}/: sweep.json, sweep.csv, front.svg",
-            d.display()
+        return Some(format!(
+            "the grid has {n} points (the product of the lists); at most {MAX_POINTS}"
         ));
-        dir.release()?;
     }
-    if result.stopped_early {
-        eprintln!(
-            "haptloop: the sweep was stopped by a signal (exit status {})",
-            super::signals::EXIT_SIGNAL
-        );
-        return Ok(ExitCode::from(super::signals::EXIT_SIGNAL));
-    }
-    Ok(ExitCode::SUCCESS)
+    None
+}
+
+/// The progress bar of the 2 `n` runs (accuracy, then timing).
+fn progress_bar(n: usize) -> ProgressBar {
+    let b = ProgressBar::new(2 * n as u64);
+    b.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} runs {msg} [{elapsed} < {eta}]")
+            .expect("valid template"),
+    );
+    b
+}
+
+/// sweep.json, sweep.csv and front.svg in `dir`.
+fn write_files(dir: RunDir, result: &sweep::Sweep) -> Result<()> {
+    let d = dir.path();
+    write_atomic(&d.join("sweep.json"), report::json(result)?.as_bytes())?;
+    write_atomic(&d.join("sweep.csv"), report::csv(result).as_bytes())?;
+    produce_atomic(&d.join("front.svg"), |p| report::front_svg(p, result))?;
+    super::emit(&format!(
+        "wrote {}/: sweep.json, sweep.csv, front.svg",
+        d.display()
+    ));
+    dir.release()?;
+    Ok(())
 }
 
 #[cfg(test)]

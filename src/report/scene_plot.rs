@@ -5,10 +5,11 @@
 //! fingertip paths as lines. A silhouette is the 2-D convex hull of
 //! the shape's projected outline points.
 
-use crate::session::BodyTrack;
+use crate::session::{BodyTrack, TrackSample};
 use anyhow::{Result, anyhow};
 use haptloop_solver::geometry::{Pose3, Shape};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -102,54 +103,140 @@ fn pose_of(r: &[f64; 3], q: &[f64; 4]) -> Pose3 {
     }
 }
 
-/// Draws `contact.svg` (see the module docs).
-pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
-    // The shaped moving bodies: (index into the track's bodies, outline).
-    let shaped: Vec<(usize, Vec<Vector3<f64>>)> = t
-        .bodies
-        .iter()
-        .enumerate()
-        .filter_map(|(k, b)| b.shape.as_ref().map(|s| (k, outline(s))))
-        .collect();
-    let fixed: Vec<(&str, Vec<Vector3<f64>>, Pose3)> = t
-        .fixed
-        .iter()
-        .filter_map(|(n, s, p)| s.as_ref().map(|s| (n.as_str(), outline(s), *p)))
-        .collect();
-    let samples: Vec<(f64, &crate::session::TrackSample)> = t.samples.iter().collect();
-    let n = samples.len();
-    let picks: Vec<usize> = if n == 0 {
-        Vec::new()
-    } else {
-        (0..INSTANTS)
-            .map(|k| k * (n - 1) / (INSTANTS - 1).max(1))
-            .collect()
-    };
-    let world = |k: usize, b: usize, o: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
-        let (r, q) = &samples[k].1.poses[b];
+/// The chart of one panel.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// What `contact.svg` draws: the shapes' outlines and the sampled instants.
+struct Shapes<'t> {
+    /// The shaped moving bodies: (index into the track's bodies, outline).
+    shaped: Vec<(usize, Vec<Vector3<f64>>)>,
+    /// The shaped fixed bodies: name, outline, pose.
+    fixed: Vec<(&'t str, Vec<Vector3<f64>>, Pose3)>,
+    /// The track's samples: time, poses.
+    samples: Vec<(f64, &'t TrackSample)>,
+    /// The samples drawn (`INSTANTS` of them, evenly spread).
+    picks: Vec<usize>,
+}
+
+impl<'t> Shapes<'t> {
+    /// The shapes and instants of the track `t`.
+    fn of(t: &'t BodyTrack) -> Self {
+        let shaped: Vec<(usize, Vec<Vector3<f64>>)> = t
+            .bodies
+            .iter()
+            .enumerate()
+            .filter_map(|(k, b)| b.shape.as_ref().map(|s| (k, outline(s))))
+            .collect();
+        let fixed: Vec<(&str, Vec<Vector3<f64>>, Pose3)> = t
+            .fixed
+            .iter()
+            .filter_map(|(n, s, p)| s.as_ref().map(|s| (n.as_str(), outline(s), *p)))
+            .collect();
+        let samples: Vec<(f64, &TrackSample)> = t.samples.iter().collect();
+        let n = samples.len();
+        let picks: Vec<usize> = if n == 0 {
+            Vec::new()
+        } else {
+            (0..INSTANTS)
+                .map(|k| k * (n - 1) / (INSTANTS - 1).max(1))
+                .collect()
+        };
+        Self {
+            shaped,
+            fixed,
+            samples,
+            picks,
+        }
+    }
+
+    /// The outline `o` of body `b` placed at sample `k`.
+    fn world(&self, k: usize, b: usize, o: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let (r, q) = &self.samples[k].1.poses[b];
         let p = pose_of(r, q);
         o.iter().map(|v| p.point(v)).collect()
-    };
-    // Keep the moving bodies in view: a large table must not shrink them to
-    // dots. The window covers the moving bodies with a 50 % margin.
-    let moving: Vec<Vector3<f64>> = picks
-        .iter()
-        .flat_map(|&k| shaped.iter().flat_map(move |(b, o)| world(k, *b, o)))
-        .collect();
-    let all: Vec<Vector3<f64>> = fixed
-        .iter()
-        .flat_map(|(_, o, p)| o.iter().map(|v| p.point(v)).collect::<Vec<_>>())
-        .collect();
-    let focus = if moving.is_empty() { &all } else { &moving };
-    let lo = focus
-        .iter()
-        .fold(Vector3::repeat(f64::INFINITY), |a, v| a.inf(v));
-    let hi = focus
-        .iter()
-        .fold(Vector3::repeat(f64::NEG_INFINITY), |a, v| a.sup(v));
-    let times: Vec<String> = picks
-        .iter()
-        .map(|&k| format!("{:.2}", samples[k].0))
+    }
+
+    /// The box the panels show: the moving bodies at the picked instants
+    /// (a large table must not shrink them to dots), else the fixed ones.
+    fn bounds(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let moving: Vec<Vector3<f64>> = self
+            .picks
+            .iter()
+            .flat_map(|&k| (self.shaped.iter()).flat_map(move |(b, o)| self.world(k, *b, o)))
+            .collect();
+        let all: Vec<Vector3<f64>> = (self.fixed.iter())
+            .flat_map(|(_, o, p)| o.iter().map(|v| p.point(v)).collect::<Vec<_>>())
+            .collect();
+        let focus = if moving.is_empty() { &all } else { &moving };
+        let lo = focus
+            .iter()
+            .fold(Vector3::repeat(f64::INFINITY), |a, v| a.inf(v));
+        let hi = focus
+            .iter()
+            .fold(Vector3::repeat(f64::NEG_INFINITY), |a, v| a.sup(v));
+        (lo, hi)
+    }
+}
+
+/// One panel's projection and window.
+struct View {
+    /// The horizontal and vertical axes (0 x, 1 y, 2 z).
+    ax: usize,
+    ay: usize,
+    /// The window's centre and half width, m.
+    cx: f64,
+    cy: f64,
+    half: f64,
+}
+
+impl View {
+    /// The projection on axes (`ax`, `ay`) of the box (`lo`, `hi`) with a
+    /// 50 % margin.
+    fn new(ax: usize, ay: usize, lo: &Vector3<f64>, hi: &Vector3<f64>) -> Self {
+        let (cx, cy) = ((lo[ax] + hi[ax]) / 2.0, (lo[ay] + hi[ay]) / 2.0);
+        let half = ((hi[ax] - lo[ax]).max(hi[ay] - lo[ay]) * 0.75).max(1e-3);
+        Self {
+            ax,
+            ay,
+            cx,
+            cy,
+            half,
+        }
+    }
+
+    fn project(&self, v: &Vector3<f64>) -> (f64, f64) {
+        (v[self.ax], v[self.ay])
+    }
+
+    fn inside(&self, p: (f64, f64)) -> bool {
+        (p.0 - self.cx).abs() < self.half && (p.1 - self.cy).abs() < self.half
+    }
+}
+
+/// The centre of a polygon's vertices.
+fn centre(h: &[(f64, f64)]) -> (f64, f64) {
+    let k = h.len().max(1) as f64;
+    (
+        h.iter().map(|p| p.0).sum::<f64>() / k,
+        h.iter().map(|p| p.1).sum::<f64>() / k,
+    )
+}
+
+/// A body's name at `at`, in colour `c`.
+fn label(name: &str, at: (f64, f64), c: RGBColor) -> Text<'static, (f64, f64), String> {
+    Text::new(
+        name.to_string(),
+        at,
+        ("sans-serif", 13).into_font().color(&c),
+    )
+}
+
+/// Draws `contact.svg` (see the module docs).
+pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
+    let shapes = Shapes::of(t);
+    let (lo, hi) = shapes.bounds();
+    let times: Vec<String> = (shapes.picks.iter())
+        .map(|&k| format!("{:.2}", shapes.samples[k].0))
         .collect();
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
@@ -167,13 +254,13 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
         .iter()
         .zip([(0usize, 2usize, "x, m", "z, m"), (0, 1, "x, m", "y, m")])
     {
-        let (cx, cy) = ((lo[ax] + hi[ax]) / 2.0, (lo[ay] + hi[ay]) / 2.0);
-        let half = ((hi[ax] - lo[ax]).max(hi[ay] - lo[ay]) * 0.75).max(1e-3);
+        let view = View::new(ax, ay, &lo, &hi);
         let title = if ay == 2 {
             "side (x–z)"
         } else {
             "top (x–y)"
         };
+        let (cx, cy, half) = (view.cx, view.cy, view.half);
         let mut chart = ChartBuilder::on(panel)
             .caption(title, ("sans-serif", 16))
             .margin(10)
@@ -189,106 +276,89 @@ pub fn contact(path: &Path, scene: &str, t: &BodyTrack) -> Result<()> {
             .y_label_formatter(&|v| format!("{v:.3}"))
             .draw()
             .map_err(err)?;
-        let project = |v: &Vector3<f64>| (v[ax], v[ay]);
-        let centre = |h: &[(f64, f64)]| {
-            let k = h.len().max(1) as f64;
-            (
-                h.iter().map(|p| p.0).sum::<f64>() / k,
-                h.iter().map(|p| p.1).sum::<f64>() / k,
-            )
-        };
-        let inside = |p: (f64, f64)| (p.0 - cx).abs() < half && (p.1 - cy).abs() < half;
-        let label = |name: &str, at: (f64, f64), c: RGBColor| {
-            Text::new(
-                name.to_string(),
-                at,
-                ("sans-serif", 13).into_font().color(&c),
-            )
-        };
-        for (name, o, p) in &fixed {
-            let h = hull(o.iter().map(|v| project(&p.point(v))).collect());
-            // A fixed body's name at the upper left of the part of it in
-            // view, clear of the moving bodies at the centre.
-            let (x0, y1) = h
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.0), b.max(p.1))
-                });
-            let at = (
-                x0.max(cx - half * 0.95),
-                y1.min(cy + half * 0.95) - half * 0.06,
-            );
-            chart
-                .draw_series(std::iter::once(Polygon::new(
-                    h,
-                    RGBColor(170, 170, 170).mix(0.5),
-                )))
-                .map_err(err)?;
-            if inside(at) {
-                chart
-                    .draw_series(std::iter::once(label(name, at, RGBColor(90, 90, 90))))
-                    .map_err(err)?;
-            }
-        }
-        for (step, &k) in picks.iter().enumerate() {
-            let alpha = 0.15 + 0.6 * step as f64 / (INSTANTS - 1).max(1) as f64;
-            for (b, o) in &shaped {
-                let h = hull(world(k, *b, o).iter().map(&project).collect());
-                let c = COLOURS[b % COLOURS.len()];
-                let mut closed = h.clone();
-                if let Some(f) = h.first() {
-                    closed.push(*f);
-                }
-                let at = centre(&h);
-                chart
-                    .draw_series(std::iter::once(Polygon::new(h, c.mix(alpha * 0.5))))
-                    .map_err(err)?;
-                chart
-                    .draw_series(std::iter::once(PathElement::new(closed, c.mix(alpha))))
-                    .map_err(err)?;
-                // Names at the last instant, where the bodies ended up.
-                if step + 1 == picks.len() {
-                    chart
-                        .draw_series(std::iter::once(label(&t.bodies[*b].name, at, BLACK)))
-                        .map_err(err)?;
-                }
-            }
-        }
-        for (f, _) in shaped.iter().filter(|(b, _)| t.bodies[*b].fingertip) {
-            let c = COLOURS[f % COLOURS.len()];
-            let path: Vec<(f64, f64)> = samples
-                .iter()
-                .map(|s| project(&Vector3::from(s.1.poses[*f].0)))
-                .collect();
-            chart
-                .draw_series(std::iter::once(PathElement::new(path, c.stroke_width(1))))
-                .map_err(err)?;
-        }
+        draw_fixed(&mut chart, &shapes, &view)?;
+        draw_moving(&mut chart, &shapes, &view, t)?;
+        draw_fingertips(&mut chart, &shapes, &view, t)?;
     }
     root.present().map_err(err)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_hull_of_a_square_and_its_centre_is_the_square() {
-        let h = hull(vec![
-            (0.0, 0.0),
-            (1.0, 0.0),
-            (1.0, 1.0),
-            (0.0, 1.0),
-            (0.5, 0.5),
-        ]);
-        assert_eq!(h.len(), 4);
-        let area: f64 = (0..h.len())
-            .map(|i| {
-                let (a, b) = (h[i], h[(i + 1) % h.len()]);
-                a.0 * b.1 - b.0 * a.1
-            })
-            .sum::<f64>()
-            / 2.0;
-        assert!((area - 1.0).abs() < 1e-12, "{area}");
+/// The fixed bodies in grey, each named at the upper left of the part of
+/// it in view, clear of the moving bodies at the centre.
+fn draw_fixed(chart: &mut Chart, shapes: &Shapes, view: &View) -> Result<()> {
+    let (cx, cy, half) = (view.cx, view.cy, view.half);
+    for (name, o, p) in &shapes.fixed {
+        let h = hull(o.iter().map(|v| view.project(&p.point(v))).collect());
+        let (x0, y1) = h
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.0), b.max(p.1))
+            });
+        let at = (
+            x0.max(cx - half * 0.95),
+            y1.min(cy + half * 0.95) - half * 0.06,
+        );
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                h,
+                RGBColor(170, 170, 170).mix(0.5),
+            )))
+            .map_err(err)?;
+        if view.inside(at) {
+            chart
+                .draw_series(std::iter::once(label(name, at, RGBColor(90, 90, 90))))
+                .map_err(err)?;
+        }
     }
+    Ok(())
+}
+
+/// The moving bodies at each picked instant, later ones darker, named at
+/// the last instant, where they ended up.
+fn draw_moving(chart: &mut Chart, shapes: &Shapes, view: &View, t: &BodyTrack) -> Result<()> {
+    let picks = &shapes.picks;
+    for (step, &k) in picks.iter().enumerate() {
+        let alpha = 0.15 + 0.6 * step as f64 / (INSTANTS - 1).max(1) as f64;
+        for (b, o) in &shapes.shaped {
+            let h = hull(
+                shapes
+                    .world(k, *b, o)
+                    .iter()
+                    .map(|v| view.project(v))
+                    .collect(),
+            );
+            let c = COLOURS[b % COLOURS.len()];
+            let mut closed = h.clone();
+            if let Some(f) = h.first() {
+                closed.push(*f);
+            }
+            let at = centre(&h);
+            chart
+                .draw_series(std::iter::once(Polygon::new(h, c.mix(alpha * 0.5))))
+                .map_err(err)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(closed, c.mix(alpha))))
+                .map_err(err)?;
+            if step + 1 == picks.len() {
+                chart
+                    .draw_series(std::iter::once(label(&t.bodies[*b].name, at, BLACK)))
+                    .map_err(err)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The fingertips' paths over every sample.
+fn draw_fingertips(chart: &mut Chart, shapes: &Shapes, view: &View, t: &BodyTrack) -> Result<()> {
+    for (f, _) in (shapes.shaped.iter()).filter(|(b, _)| t.bodies[*b].fingertip) {
+        let c = COLOURS[f % COLOURS.len()];
+        let path: Vec<(f64, f64)> = (shapes.samples.iter())
+            .map(|s| view.project(&Vector3::from(s.1.poses[*f].0)))
+            .collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(path, c.stroke_width(1))))
+            .map_err(err)?;
+    }
+    Ok(())
 }

@@ -52,6 +52,70 @@ pub struct Violation {
     pub verdict: String,
 }
 
+/// What the clock of the run measures (deterministic or real time).
+fn clock_note(deterministic: bool) -> String {
+    if deterministic {
+        "deterministic: the scheduler ran on a mock clock, which never wakes late and \
+         takes no time between a device read and a force write, so lateness_ns and \
+         read_to_write_ns are null and period_ns is exactly the period; compute_ns, \
+         stages_ns, slow_loop.step_ns and wall_clock_s are measured on the monotonic clock"
+            .into()
+    } else {
+        "real time: every timing figure is measured on the monotonic clock".into()
+    }
+}
+
+/// The fingers' tracking error over the run, m (NaN without samples).
+fn tracking(o: &SessionOutcome) -> MaxRms {
+    let s = &o.stats;
+    let n: u64 = s.fingers.iter().map(|f| f.tracking_n).sum();
+    let (max, rms) = if n == 0 {
+        (f64::NAN, f64::NAN)
+    } else {
+        (
+            s.fingers.iter().map(|f| f.tracking_max).fold(0.0, f64::max),
+            (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt(),
+        )
+    };
+    MaxRms { max, rms }
+}
+
+/// Each finger's force over the run, by name.
+fn finger_forces(o: &SessionOutcome) -> BTreeMap<String, FingerForce> {
+    let s = &o.stats;
+    (0..s.fingers.len())
+        .map(|i| {
+            let f = &s.fingers[i];
+            (
+                o.fingers[i].clone(),
+                FingerForce {
+                    mean: f.force_mean(),
+                    max: f.force_max,
+                    commanded_max: f.commanded_max,
+                },
+            )
+        })
+        .collect()
+}
+
+/// Each objective's value over the run, with its kind and weight.
+fn objectives(o: &SessionOutcome) -> BTreeMap<String, ObjectiveFigure> {
+    o.design
+        .objectives
+        .iter()
+        .map(|(n, kind, weight, r)| {
+            (
+                n.clone(),
+                ObjectiveFigure {
+                    kind: kind.clone(),
+                    weight: *weight,
+                    value: (*r).into(),
+                },
+            )
+        })
+        .collect()
+}
+
 impl Violation {
     fn verdict(
         max: f64,
@@ -608,16 +672,6 @@ impl Summary {
     /// Collects the summary of a finished session.
     pub fn of(o: &SessionOutcome) -> Summary {
         let s = &o.stats;
-        let model_fingers = s.fingers.len();
-        let n: u64 = s.fingers.iter().map(|f| f.tracking_n).sum();
-        let (tracking_max, tracking_rms) = if n == 0 {
-            (f64::NAN, f64::NAN)
-        } else {
-            (
-                s.fingers.iter().map(|f| f.tracking_max).fold(0.0, f64::max),
-                (s.fingers.iter().map(|f| f.tracking_sumsq).sum::<f64>() / n as f64).sqrt(),
-            )
-        };
         Summary {
             scene: o.plan.scene.clone(),
             seconds: o.plan.seconds,
@@ -636,33 +690,10 @@ impl Summary {
             stages_ns: Stages::of(&s.stages),
             period_ns: o.report.period_ns.into(),
             read_to_write_ns: (!o.plan.deterministic).then(|| s.read_to_write.summary().into()),
-            clock_note: if o.plan.deterministic {
-                "deterministic: the scheduler ran on a mock clock, which never wakes late and \
-                 takes no time between a device read and a force write, so lateness_ns and \
-                 read_to_write_ns are null and period_ns is exactly the period; compute_ns, \
-                 stages_ns, slow_loop.step_ns and wall_clock_s are measured on the monotonic clock"
-                    .into()
-            } else {
-                "real time: every timing figure is measured on the monotonic clock".into()
-            },
+            clock_note: clock_note(o.plan.deterministic),
             violation: Violation::of(o),
-            tracking_m: MaxRms {
-                max: tracking_max,
-                rms: tracking_rms,
-            },
-            force_n: (0..model_fingers)
-                .map(|i| {
-                    let f = &s.fingers[i];
-                    (
-                        o.fingers[i].clone(),
-                        FingerForce {
-                            mean: f.force_mean(),
-                            max: f.force_max,
-                            commanded_max: f.commanded_max,
-                        },
-                    )
-                })
-                .collect(),
+            tracking_m: tracking(o),
+            force_n: finger_forces(o),
             faults: s.faults,
             stalls: Stalls::of(o),
             safety: Safety::of(o),
@@ -698,21 +729,7 @@ impl Summary {
                 .iter()
                 .map(|(n, r)| (n.clone(), (*r).into()))
                 .collect(),
-            objectives: o
-                .design
-                .objectives
-                .iter()
-                .map(|(n, kind, weight, r)| {
-                    (
-                        n.clone(),
-                        ObjectiveFigure {
-                            kind: kind.clone(),
-                            weight: *weight,
-                            value: (*r).into(),
-                        },
-                    )
-                })
-                .collect(),
+            objectives: objectives(o),
             joint_torques: o
                 .design
                 .torques

@@ -9,47 +9,28 @@ use anyhow::{Context, Result};
 use crossbeam::queue::ArrayQueue;
 use haptloop_devices::{TraceHeader, TraceRecorder, TraceRow, TraceStream};
 use haptloop_rt::clock::Clock;
-use haptloop_rt::exchange::{mailbox, program_channel};
+use haptloop_rt::exchange::{MailboxReader, MailboxWriter, mailbox, program_channel};
 use haptloop_solver::{Model, Objectives, Placement, PlacementOptions, Program, SolveInfo};
 use nalgebra::Vector3;
 
+use super::reference::{ReferenceCapture, ReferenceCheck};
 use super::{
-    Built, ContactLoop, DesignTracker, FastLoop, Handover, LivePointer, PROGRAM_QUEUE, Plan,
-    RECORD_QUEUE, Rig, RunStats, SLOW_BUILD_ENV, SemanticLoop, SemanticPlan, SlowLoop, SlowStats,
-    Snapshot, StageClock, TRACE_QUEUE, WitnessFrame, WitnessInbox, design, live, reference,
-    refresh, track,
+    Built, ContactLoop, DesignTracker, FastLoop, FingerFrame, Handover, LiveFrame, LivePointer,
+    LiveSources, PROGRAM_QUEUE, Plan, RECORD_QUEUE, Rig, RunStats, SLOW_BUILD_ENV, SemanticLoop,
+    SemanticPlan, SlowLoop, SlowStats, Snapshot, StageClock, TRACE_QUEUE, WitnessFrame,
+    WitnessInbox, design, live, reference, refresh, track,
 };
 use crate::scenes::Scene;
 
-/// The program the fast loop starts with, and what building it produced.
-struct Start {
-    /// The scene's model (its q layout is every snapshot's).
-    model: Arc<Model>,
-    /// The model with the semantic rows of the start (the scene's without).
-    mechanism: Arc<Model>,
-    objectives: Arc<Objectives>,
-    program: Program,
-    /// The assembled configuration.
-    q: Vec<f64>,
-    assembly: Option<SolveInfo>,
-    options: PlacementOptions,
-    semantic: Option<SemanticLoop>,
-    contact: Option<ContactLoop>,
-    inbox: Option<WitnessInbox>,
-}
+mod start;
+
+use start::{Start, assemble, with_contact, with_semantic};
 
 /// Builds the program (and assembles the scene), the devices (registered on
 /// their fingers), the exchange between the loops and every buffer the fast
 /// loop will use. All allocation of a session happens here.
 pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>> {
-    // A testing aid: stretch the build (off the real-time thread, before any
-    // device is driven) so a test can signal the process while it builds.
-    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-    {
-        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
-    }
+    stretch_for_tests();
     let mut start = assemble(scene, plan)?;
     with_semantic(&mut start, scene, plan)?;
     with_contact(&mut start, scene, plan)?;
@@ -67,65 +48,26 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     } = start;
     // The converged reference of sampled ticks, where it applies.
     let reference_unsupported = reference::unsupported(contact.is_some());
-    let (capture, check) = match reference_unsupported {
-        Some(_) => (None, None),
-        None if plan.reference_every_ticks == 0 => (None, None),
-        None => {
-            let (c, k) = reference::pair(&program, plan.reference_every_ticks)
-                .context("building the converged reference")?;
-            (Some(c), Some(k))
-        }
-    };
+    let (capture, check) = references(&program, plan, reference_unsupported)?;
     let program = Box::new(Handover::new(program));
     let rig = Rig::build(scene, plan.rate_hz, plan.replay.as_deref(), plan.duration())?;
-    let n = model.n_coords();
     let n_fingers = model.fingers().len();
-    let (snapshot, snapshots) = mailbox(|| Snapshot {
-        q: Vec::with_capacity(n),
-        solved: true,
-        finger_force_n: Vec::with_capacity(n_fingers),
-        speeds: Vec::with_capacity(model.bodies().len()),
-        ..Snapshot::default()
-    });
+    let (snapshot, snapshots) = snapshot_mailbox(&model);
     let (programs_tx, programs_rx) = program_channel(PROGRAM_QUEUE);
-    let (refresh_tx, refresh_rx) = match refresh::channel(&program.program) {
-        Some((tx, rx)) => (Some(tx), Some(rx)),
-        None => (None, None),
-    };
+    let (refresh_tx, refresh_rx) = refresh::channel(&program.program).unzip();
     let trace = Arc::new(ArrayQueue::new(TRACE_QUEUE));
     let (recorders, device_traces) = recording(scene, plan, &rig)?;
     let (design, design_columns) =
-        match DesignTracker::new(&model, &objectives, program.program.q()) {
-            Some((t, c)) => (Some(t), Some(c)),
-            None => (None, None),
-        };
+        DesignTracker::new(&model, &objectives, program.program.q()).unzip();
+    let limits = Limits::of(&model, plan, inbox.is_some());
     let rig_devices = rig.devices.len();
-    // A violation above the scene's tolerance (else 0.1 mm) triggers a
-    // re-projection; one above a tenth of the mechanism's size means it came
-    // apart.
-    let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
-    let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
-    // Contact: a penetration beyond its bound means the world came apart;
-    // the witness rows' age bounds the motion (`witness_age`).
-    let (broken_penetration_m, witness_age) = match &inbox {
-        Some(_) => {
-            let per_cycle = (super::SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round();
-            (
-                super::contact::broken_penetration_m(&plan.contact),
-                Some(super::witness_age::WitnessAge::new(
-                    per_cycle.max(1.0) as u64
-                )),
-            )
-        }
-        None => (f64::INFINITY, None),
-    };
     let fast = FastLoop {
         clock,
         period: plan.period(),
         program,
-        broken_m,
-        broken_penetration_m,
-        witness_age,
+        broken_m: limits.broken_m,
+        broken_penetration_m: limits.broken_penetration_m,
+        witness_age: limits.witness_age,
         programs: programs_rx,
         refresh: refresh_rx,
         targets: model.initial_targets(),
@@ -150,16 +92,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         rendered: vec![Vector3::zeros(); n_fingers],
         commanded: vec![Vector3::zeros(); n_fingers],
     };
-    // The live viewer's exchange: the slow loop and the reporter write, the
-    // viewer reads; the fast loop takes no part.
-    let (live_frames, live) = match &plan.live {
-        None => (None, None),
-        Some(_) => {
-            let pointers = fast_pointers(&fast.rig, scene);
-            let (sinks, sources) = live::exchange(pointers);
-            (Some(sinks.frames), Some((sources, sinks.fingers)))
-        }
-    };
+    let (live_frames, live) = live_exchange(&fast.rig, scene, plan);
     let mut slow = SlowLoop {
         track: track::BodyTrack::of_model(&model),
         track_model: model.clone(),
@@ -176,8 +109,8 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         placement: Placement::analyze(&scene.compiled.joints_only, &options)
             .context("analysing the scene's joints for re-projection")?,
         joints_only: scene.compiled.joints_only.clone(),
-        threshold_m,
-        broken_m,
+        threshold_m: limits.threshold_m,
+        broken_m: limits.broken_m,
         last_good: q.clone(),
         stats: SlowStats {
             reference_unsupported,
@@ -188,14 +121,7 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
         semantic,
         step_times: haptloop_rt::hist::LatencyHistogram::new(),
     };
-    // The track starts at the assembled configuration, at t = 0.
-    track::poses_at(&model, &q, &mut slow.poses);
-    if let Some(c) = &slow.contact {
-        c.contacts(&mut slow.contact_points);
-    }
-    let at_rest = vec![[0.0; 3]; n_fingers];
-    slow.track
-        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
+    start_track(&mut slow, &model, &q, n_fingers);
     Ok(Built {
         fast,
         slow,
@@ -207,99 +133,120 @@ pub fn build<C: Clock>(scene: &Scene, plan: &Plan, clock: C) -> Result<Built<C>>
     })
 }
 
-/// The fast-loop program of the scene's model, at the configuration the
-/// initial assembly (Newton-KKT placement from q0 onto the constraints and
-/// the fingers' initial positions) finds, or at q0 (`--no-assembly`).
-fn assemble(scene: &Scene, plan: &Plan) -> Result<Start> {
-    let model = Arc::new(scene.compiled.model.clone());
-    let objectives = scene.compiled.objectives.clone();
-    let mut program = Program::with_objectives(model.clone(), objectives.clone(), plan.solver)
-        .context("building the fast-loop program")?;
-    let options = PlacementOptions::from_scene(
-        Some(plan.assembly_tolerance_m),
-        scene.compiled.settings.damping,
-    );
-    let mut placement =
-        Placement::analyze(&model, &options).context("analysing the scene for placement")?;
-    let mut q = model.q0().to_vec();
-    let assembly = if plan.assemble {
-        let info = placement
-            .solve(&model, &mut q, model.q0(), &model.initial_targets())
-            .context("assembling the scene")?;
-        program
-            .set_q(&q)
-            .context("starting from the assembled configuration")?;
-        Some(info)
-    } else {
-        None
-    };
-    Ok(Start {
-        mechanism: model.clone(),
-        model,
-        objectives,
-        program,
-        q,
-        assembly,
-        options,
-        semantic: None,
-        contact: None,
-        inbox: None,
+/// The converged reference's capture (fast loop) and check (slow loop),
+/// unless `unsupported` says why not or the plan samples no tick.
+fn references(
+    program: &Program,
+    plan: &Plan,
+    unsupported: Option<&'static str>,
+) -> Result<(Option<ReferenceCapture>, Option<ReferenceCheck>)> {
+    Ok(match unsupported {
+        Some(_) => (None, None),
+        None if plan.reference_every_ticks == 0 => (None, None),
+        None => {
+            let (c, k) = reference::pair(program, plan.reference_every_ticks)
+                .context("building the converged reference")?;
+            (Some(c), Some(k))
+        }
     })
 }
 
-/// Semantic constraints: those aligned at the assembled configuration are
-/// satisfied, and their rows are part of the mechanism from the start.
-fn with_semantic(start: &mut Start, scene: &Scene, plan: &Plan) -> Result<()> {
-    start.semantic = SemanticLoop::new(
-        start.model.clone(),
-        scene.compiled.semantic.as_ref(),
-        &scene.compiled.holds,
-        &SemanticPlan {
-            ops: scene.compiled.schedule.clone(),
-            absent: scene.compiled.absent.clone(),
-            mode: plan.semantic_mode,
-        },
-        &start.q,
-    )?;
-    if let Some(s) = &start.semantic {
-        start.mechanism = s.current_model().clone();
-        start.program = Program::with_objectives(
-            start.mechanism.clone(),
-            start.objectives.clone(),
-            plan.solver,
-        )
-        .context("building the fast-loop program with the semantic rows")?;
-        start
-            .program
-            .set_q(&start.q)
-            .context("starting from the assembled configuration")?;
-    }
-    Ok(())
+/// The snapshot mailbox, its buffers sized for `model`.
+fn snapshot_mailbox(model: &Model) -> (MailboxWriter<Snapshot>, MailboxReader<Snapshot>) {
+    let n = model.n_coords();
+    let n_fingers = model.fingers().len();
+    mailbox(|| Snapshot {
+        q: Vec::with_capacity(n),
+        solved: true,
+        finger_force_n: Vec::with_capacity(n_fingers),
+        speeds: Vec::with_capacity(model.bodies().len()),
+        ..Snapshot::default()
+    })
 }
 
-/// Contact: the active set at the assembled configuration decides the model
-/// (the mechanism plus the contact rows of the pairs in reach) the fast loop
-/// starts with.
-fn with_contact(start: &mut Start, scene: &Scene, plan: &Plan) -> Result<()> {
-    let (frames_tx, frames_rx) = mailbox(WitnessFrame::default);
-    start.contact = ContactLoop::new(
-        start.mechanism.clone(),
-        plan.solver,
-        plan.contact,
-        frames_tx,
-        start.objectives.clone(),
-    );
-    if let Some(c) = &mut start.contact {
-        let absent: Vec<u32> = scene.compiled.absent.iter().map(|b| b.0).collect();
-        c.set_absent(&absent);
-        start.program = c.initial(&start.q).context("building the contact rows")?;
-        start
-            .program
-            .set_q(&start.q)
-            .context("starting from the assembled configuration")?;
-        start.inbox = Some(WitnessInbox::new(frames_rx));
+/// A testing aid: stretch the build (off the real-time thread, before any
+/// device is driven) so a test can signal the process while it builds.
+fn stretch_for_tests() {
+    if let Some(ms) = std::env::var(SLOW_BUILD_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(Duration::from_millis(ms.min(60_000)));
     }
-    Ok(())
+}
+
+/// When the loops call the mechanism broken or re-project it.
+struct Limits {
+    /// A violation above this triggers a re-projection, m.
+    threshold_m: f64,
+    /// A violation above this means the mechanism came apart, m.
+    broken_m: f64,
+    /// A penetration above this means the world came apart, m.
+    broken_penetration_m: f64,
+    /// The witness rows' age, which bounds the motion (contact scenes).
+    witness_age: Option<super::witness_age::WitnessAge>,
+}
+
+impl Limits {
+    /// A violation above the scene's tolerance (else 0.1 mm) triggers a
+    /// re-projection; one above a tenth of the mechanism's size means it
+    /// came apart. Contact (`contact`): a penetration beyond its bound
+    /// means the world came apart; the witness rows' age bounds the motion
+    /// (`witness_age`).
+    fn of(model: &Model, plan: &Plan, contact: bool) -> Self {
+        let threshold_m = plan.violation_tolerance_m.unwrap_or(1e-4);
+        let broken_m = (0.1 * model.characteristic_length_m()).max(threshold_m * 10.0);
+        let (broken_penetration_m, witness_age) = if contact {
+            let per_cycle = (super::SLOW_PERIOD.as_secs_f64() * f64::from(plan.rate_hz)).round();
+            (
+                super::contact::broken_penetration_m(&plan.contact),
+                Some(super::witness_age::WitnessAge::new(
+                    per_cycle.max(1.0) as u64
+                )),
+            )
+        } else {
+            (f64::INFINITY, None)
+        };
+        Self {
+            threshold_m,
+            broken_m,
+            broken_penetration_m,
+            witness_age,
+        }
+    }
+}
+
+/// The live viewer's exchange: the slow loop and the reporter write, the
+/// viewer reads; the fast loop takes no part.
+#[allow(clippy::type_complexity)]
+fn live_exchange(
+    rig: &Rig,
+    scene: &Scene,
+    plan: &Plan,
+) -> (
+    Option<MailboxWriter<LiveFrame>>,
+    Option<(LiveSources, MailboxWriter<FingerFrame>)>,
+) {
+    match &plan.live {
+        None => (None, None),
+        Some(_) => {
+            let pointers = fast_pointers(rig, scene);
+            let (sinks, sources) = live::exchange(pointers);
+            (Some(sinks.frames), Some((sources, sinks.fingers)))
+        }
+    }
+}
+
+/// The track starts at the assembled configuration `q`, at t = 0, the
+/// fingers at rest.
+fn start_track(slow: &mut SlowLoop, model: &Model, q: &[f64], n_fingers: usize) {
+    track::poses_at(model, q, &mut slow.poses);
+    if let Some(c) = &slow.contact {
+        c.contacts(&mut slow.contact_points);
+    }
+    let at_rest = vec![[0.0; 3]; n_fingers];
+    slow.track
+        .offer(0.0, &slow.poses, &slow.contact_points, 0.0, &at_rest);
 }
 
 /// Recording streams (`--record`): the fast loop pushes rows into a bounded

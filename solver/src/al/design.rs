@@ -230,8 +230,22 @@ impl DesignStep {
         if let Some(mr) = &mut self.masked {
             mr.prepare(ev, d, r);
         }
-        let (n, m) = (self.cols.len(), self.m);
-        for k in 0..n {
+        self.start_frozen(q, d);
+        for _round in 0..self.cols.len() + 2 {
+            self.shift_frozen(q, y);
+            self.woodbury()?;
+            if !self.refreeze(q, step) {
+                break;
+            }
+        }
+        Ok(self.finish(q, d, y))
+    }
+
+    /// Each column's d₀ and whether it starts frozen (pinned, switched
+    /// off, or already at a bound) and where.
+    #[inline]
+    fn start_frozen(&mut self, q: &[f64], d: &[f64]) {
+        for k in 0..self.cols.len() {
             let c = self.cols[k];
             self.d0[k] = d[c];
             let pinned = self.lo[k] == self.hi[k];
@@ -248,89 +262,111 @@ impl DesignStep {
                 self.lo[k]
             };
         }
-        let mut changed = false;
-        for _round in 0..n + 2 {
-            // ŷ₀ with the frozen columns' d moved to their bounds.
-            self.y0[..m].copy_from_slice(&y[..m]);
-            self.dd.fill(0.0);
-            for &k in &self.moving {
-                if self.frozen[k] {
-                    let dd = (q[self.cols[k]] - self.at[k]) - self.d0[k];
-                    self.dd[k] = dd;
-                    if dd != 0.0 {
-                        let z = &self.z[k * m..(k + 1) * m];
-                        for (y0, zk) in self.y0.iter_mut().zip(z) {
-                            *y0 -= zk * dd;
-                        }
+    }
+
+    /// ŷ₀ (from `y`) with the frozen columns' d moved to their bounds.
+    #[inline]
+    fn shift_frozen(&mut self, q: &[f64], y: &[f64]) {
+        let m = self.m;
+        self.y0[..m].copy_from_slice(&y[..m]);
+        self.dd.fill(0.0);
+        for &k in &self.moving {
+            if self.frozen[k] {
+                let dd = (q[self.cols[k]] - self.at[k]) - self.d0[k];
+                self.dd[k] = dd;
+                if dd != 0.0 {
+                    let z = &self.z[k * m..(k + 1) * m];
+                    for (y0, zk) in self.y0.iter_mut().zip(z) {
+                        *y0 -= zk * dd;
                     }
                 }
-            }
-            // Woodbury over the free columns.
-            self.free.clear();
-            self.free
-                .extend(self.moving.iter().copied().filter(|&k| !self.frozen[k]));
-            let nf = self.free.len();
-            for (i, &a) in self.free.iter().enumerate() {
-                self.rhs[i] = dot(&self.u[a * m..(a + 1) * m], &self.y0);
-                for (j, &b) in self.free.iter().enumerate() {
-                    self.small[i * nf + j] = self.s[a * n + b];
-                }
-            }
-            let solved = match &mut self.masked {
-                Some(mr) => mr.solve(
-                    &self.small[..nf * nf],
-                    &mut self.rhs[..nf],
-                    &self.free,
-                    &self.dd,
-                    n,
-                ),
-                None => nf == 0 || cholesky_solve(&mut self.small[..nf * nf], &mut self.rhs[..nf]),
-            };
-            if !solved {
-                return Err(());
-            }
-            for (i, &a) in self.free.iter().enumerate() {
-                let (z, s) = (&self.z[a * m..(a + 1) * m], self.rhs[i]);
-                for (y0, zk) in self.y0.iter_mut().zip(z) {
-                    *y0 -= zk * s;
-                }
-            }
-            // t = Uᵀ ŷ, each column's step, and the active set's changes.
-            let mut again = false;
-            for k in 0..n {
-                self.t[k] = dot(&self.u[k * m..(k + 1) * m], &self.y0)
-                    + self.masked.as_ref().map_or(0.0, |mr| mr.pull(k, n));
-                let c = self.cols[k];
-                let want = -(self.d0[k] + self.t[k] / self.w[k]);
-                let pinned = self.lo[k] == self.hi[k] || self.off[k];
-                if self.frozen[k] {
-                    let inward = (self.at[k] == self.lo[k] && want > 0.0)
-                        || (self.at[k] == self.hi[k] && want < 0.0);
-                    if !pinned
-                        && inward
-                        && q[c] + step * want <= self.hi[k] + BOX_SLACK_M
-                        && q[c] + step * want >= self.lo[k] - BOX_SLACK_M
-                    {
-                        self.frozen[k] = false;
-                        again = true;
-                    }
-                } else {
-                    let next = q[c] + step * want;
-                    if next < self.lo[k] - BOX_SLACK_M || next > self.hi[k] + BOX_SLACK_M {
-                        self.frozen[k] = true;
-                        self.at[k] = if next < self.lo[k] {
-                            self.lo[k]
-                        } else {
-                            self.hi[k]
-                        };
-                        again = true;
-                    }
-                }
-            }
-            if !again {
-                break;
             }
         }
+    }
+
+    /// Woodbury over the free columns: ŷ₀ corrected by their n_f × n_f
+    /// system.
+    #[inline]
+    fn woodbury(&mut self) -> Result<(), ()> {
+        let (n, m) = (self.cols.len(), self.m);
+        self.free.clear();
+        self.free
+            .extend(self.moving.iter().copied().filter(|&k| !self.frozen[k]));
+        let nf = self.free.len();
+        for (i, &a) in self.free.iter().enumerate() {
+            self.rhs[i] = dot(&self.u[a * m..(a + 1) * m], &self.y0);
+            for (j, &b) in self.free.iter().enumerate() {
+                self.small[i * nf + j] = self.s[a * n + b];
+            }
+        }
+        let solved = match &mut self.masked {
+            Some(mr) => mr.solve(
+                &self.small[..nf * nf],
+                &mut self.rhs[..nf],
+                &self.free,
+                &self.dd,
+                n,
+            ),
+            None => nf == 0 || cholesky_solve(&mut self.small[..nf * nf], &mut self.rhs[..nf]),
+        };
+        if !solved {
+            return Err(());
+        }
+        for (i, &a) in self.free.iter().enumerate() {
+            let (z, s) = (&self.z[a * m..(a + 1) * m], self.rhs[i]);
+            for (y0, zk) in self.y0.iter_mut().zip(z) {
+                *y0 -= zk * s;
+            }
+        }
+        Ok(())
+    }
+
+    /// t = Uᵀ ŷ, each column's step, and the active set's changes: frees
+    /// a frozen column its step pulls inward, freezes a free one its step
+    /// takes out of the box. Returns whether anything changed.
+    #[inline]
+    fn refreeze(&mut self, q: &[f64], step: f64) -> bool {
+        let (n, m) = (self.cols.len(), self.m);
+        let mut again = false;
+        for k in 0..n {
+            self.t[k] = dot(&self.u[k * m..(k + 1) * m], &self.y0)
+                + self.masked.as_ref().map_or(0.0, |mr| mr.pull(k, n));
+            let c = self.cols[k];
+            let want = -(self.d0[k] + self.t[k] / self.w[k]);
+            let pinned = self.lo[k] == self.hi[k] || self.off[k];
+            if self.frozen[k] {
+                let inward = (self.at[k] == self.lo[k] && want > 0.0)
+                    || (self.at[k] == self.hi[k] && want < 0.0);
+                if !pinned
+                    && inward
+                    && q[c] + step * want <= self.hi[k] + BOX_SLACK_M
+                    && q[c] + step * want >= self.lo[k] - BOX_SLACK_M
+                {
+                    self.frozen[k] = false;
+                    again = true;
+                }
+            } else {
+                let next = q[c] + step * want;
+                if next < self.lo[k] - BOX_SLACK_M || next > self.hi[k] + BOX_SLACK_M {
+                    self.frozen[k] = true;
+                    self.at[k] = if next < self.lo[k] {
+                        self.lo[k]
+                    } else {
+                        self.hi[k]
+                    };
+                    again = true;
+                }
+            }
+        }
+        again
+    }
+
+    /// The corrected y, d moved to the bounds on frozen columns, and each
+    /// column's step in [`Self::mg`]. Returns whether `d` changed.
+    #[inline]
+    fn finish(&mut self, q: &[f64], d: &mut [f64], y: &mut [f64]) -> bool {
+        let m = self.m;
+        let mut changed = false;
         y[..m].copy_from_slice(&self.y0[..m]);
         for &k in &self.moving {
             let c = self.cols[k];
@@ -343,7 +379,7 @@ impl DesignStep {
                 self.mg[k] = self.t[k] / self.w[k];
             }
         }
-        Ok(changed)
+        changed
     }
 }
 

@@ -56,7 +56,7 @@ use super::moved::Moved;
 use super::prediction::Prediction;
 use super::scaling::{Role, Scaling};
 use crate::force::feedback::Feedback;
-use crate::{EvalError, Evaluation, FingerTarget, Model};
+use crate::{EvalError, Evaluation, FingerTarget, Jacobian, Model};
 
 /// A predicted violation below this (metres) makes an inactive inequality
 /// row active within the tick (10 nm: round-off of a step that slides along
@@ -331,6 +331,33 @@ impl Projected {
         self.moved
             .evaluate(model, ev, q, targets)
             .map_err(StepError::Eval)?;
+        let ev: &Evaluation = ev;
+        self.displacement(ev.jacobian(), q, q_ref)?;
+        self.residual(s, ev.values(), fb.row_scale(), coupling);
+        self.solve(ev, fb, q, step)?;
+        let mut step = step;
+        let mut size = self
+            .d
+            .iter()
+            .zip(&self.mg)
+            .zip(&s.sqrt_metric)
+            .map(|((d, mg), w)| (step * (d + mg)).abs() * w)
+            .fold(0.0, f64::max);
+        if size > max_size_m {
+            return Ok(Step::Refused);
+        }
+        self.speed_limit(contact_step_m, &mut step, &mut size);
+        let Some(last) = self.predict(ev, s, fb, step)? else {
+            return Ok(Step::Activate);
+        };
+        self.apply(s, q, step, last, lambda);
+        Ok(Step::Taken(size))
+    }
+
+    /// d = q − q_ref (design columns pinned) and C_q d, kept across the
+    /// steps of a sequence unless d changed outside them.
+    #[inline]
+    fn displacement(&mut self, jac: &Jacobian, q: &[f64], q_ref: &[f64]) -> Result<(), StepError> {
         let mut moved = false;
         for ((d, a), b) in self.d.iter_mut().zip(q.iter()).zip(q_ref) {
             *d = a - b;
@@ -340,7 +367,6 @@ impl Projected {
             design.pin(q, &mut self.d);
             self.jd_current = false;
         }
-        let jac = ev.jacobian();
         if !self.jd_current {
             if moved || self.design.is_some() {
                 jac.mul_vec(&self.d, &mut self.jd)
@@ -350,7 +376,13 @@ impl Projected {
             }
             self.jd_current = true;
         }
-        let (c, scale) = (ev.values(), fb.row_scale());
+        Ok(())
+    }
+
+    /// The scaled right-hand side r = ℓ (C − C_q d), the proxies' coupling
+    /// and the fingers' pull limit applied.
+    #[inline]
+    fn residual(&mut self, s: &Scaling, c: &[f64], scale: &[f64], coupling: &CouplingStep) {
         for i in 0..c.len() {
             self.r[i] = scale[i] * (c[i] - self.jd[i]);
         }
@@ -388,6 +420,19 @@ impl Projected {
                 }
             }
         }
+    }
+
+    /// The multipliers y (unscaled) by the force factor and the design
+    /// correction, and the step's direction mg = M⁻¹ C_qᵀ y.
+    #[inline]
+    fn solve(
+        &mut self,
+        ev: &Evaluation,
+        fb: &mut Feedback,
+        q: &[f64],
+        step: f64,
+    ) -> Result<(), StepError> {
+        let jac = ev.jacobian();
         fb.project(&self.r, &self.k_inv, &mut self.y)
             .map_err(|_| StepError::Solve)?;
         let mut d_changed = false;
@@ -422,21 +467,15 @@ impl Projected {
                     .map_err(|_| StepError::NonFinite)?;
             }
         }
-        let mut step = step;
-        let mut size = self
-            .d
-            .iter()
-            .zip(&self.mg)
-            .zip(&s.sqrt_metric)
-            .map(|((d, mg), w)| (step * (d + mg)).abs() * w)
-            .fold(0.0, f64::max);
-        if size > max_size_m {
-            return Ok(Step::Refused);
-        }
-        // The contact speed limit (SolverSettings::contact_step_m, per body
-        // `allow`; `contact_step_m` is the fraction of it left this tick):
-        // how far any point of a shaped body would move, |Δr| + R |Δθ| with
-        // |Δθ| ≈ 2 |Δe| (unit e); shorten the step, keeping its direction.
+        Ok(())
+    }
+
+    /// The contact speed limit (SolverSettings::contact_step_m, per body
+    /// `allow`; `contact_step_m` is the fraction of it left this tick):
+    /// how far any point of a shaped body would move, |Δr| + R |Δθ| with
+    /// |Δθ| ≈ 2 |Δe| (unit e); shortens the step, keeping its direction.
+    #[inline]
+    fn speed_limit(&mut self, contact_step_m: f64, step: &mut f64, size: &mut f64) {
         if contact_step_m.is_finite() {
             let mut moved: f64 = 0.0;
             for (k, &(o, radius)) in self.reach.iter().enumerate() {
@@ -448,12 +487,12 @@ impl Projected {
                     .map(|c| (self.d[o + c] + self.mg[o + c]).powi(2))
                     .sum::<f64>()
                     .sqrt();
-                moved = moved.max(step * (dr + 2.0 * radius * de) / self.allow[k]);
+                moved = moved.max(*step * (dr + 2.0 * radius * de) / self.allow[k]);
             }
             self.speed_limited = moved > contact_step_m;
             if self.speed_limited {
-                step *= contact_step_m / moved;
-                size *= contact_step_m / moved;
+                *step *= contact_step_m / moved;
+                *size *= contact_step_m / moved;
                 moved = contact_step_m;
             }
             self.moved_m = moved;
@@ -461,8 +500,21 @@ impl Projected {
             self.moved_m = 0.0;
             self.speed_limited = false;
         }
-        // Predicted values of the inactive inequality rows after the step
-        // (and the update of C_q d).
+    }
+
+    /// Predicted values of the inactive inequality rows after the step
+    /// (and the update of C_q d): `None` when some would be violated (they
+    /// are marked in `fb.forced`), else whether this was the sequence's
+    /// last step.
+    #[inline]
+    fn predict(
+        &mut self,
+        ev: &Evaluation,
+        s: &Scaling,
+        fb: &mut Feedback,
+        step: f64,
+    ) -> Result<Option<bool>, StepError> {
+        let jac = ev.jacobian();
         // The last step of a sequence needs the product only for the
         // activation test (no C_q d update follows); with design columns or
         // the contact bookkeeping on, every step forms it as before.
@@ -489,9 +541,13 @@ impl Projected {
                 activate = true;
             }
         }
-        if activate {
-            return Ok(Step::Activate);
-        }
+        Ok((!activate).then_some(last))
+    }
+
+    /// Applies the step to q and C_q d, and stores the multipliers as λ
+    /// (equalities) and ν = max(0, −y) (inequalities).
+    #[inline]
+    fn apply(&mut self, s: &Scaling, q: &mut [f64], step: f64, last: bool, lambda: &mut [f64]) {
         for ((qc, d), mg) in q.iter_mut().zip(&self.d).zip(&self.mg) {
             *qc -= step * (d + mg);
         }
@@ -515,6 +571,5 @@ impl Projected {
                 Role::Inequality | Role::Contact => (-y).max(0.0),
             };
         }
-        Ok(Step::Taken(size))
     }
 }

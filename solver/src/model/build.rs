@@ -17,6 +17,7 @@ use super::{Body, Model, initial_frame, next_model_id};
 use crate::constraint::bound::DesignBound;
 use crate::constraint::quat_norm::QuatNorm;
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry, RowInfo};
+use crate::geometry::HullSimplification;
 use crate::geometry::simplify::{MAX_HULL_VERTICES, simplify_hull};
 use crate::rotation::BodyFrame;
 use crate::{BodyId, ConstraintId, FingerId};
@@ -535,6 +536,7 @@ fn mass_and_inertia(
     Ok((mass_kg, inertia))
 }
 
+/// The body of spec `s` (the `i`-th), every key checked.
 fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
     if s.name.is_empty() {
         return Err(BuildError::EmptyName {
@@ -542,69 +544,17 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         });
     }
     let owner = || Owner::Body(s.name.clone());
-    let finite = |field, v: &[f64]| {
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(BuildError::NonFinite {
-                owner: owner(),
-                field,
-            })
-        }
-    };
+    let finite = |field, v: &[f64]| finite(&owner, field, v);
     finite("position", &s.position_m)?;
     super::compiler::in_range(&owner(), "position", &s.position_m)?;
     finite("orientation", &s.orientation_wxyz)?;
     if let Some(m) = s.mass_kg {
         finite("mass", &[m])?;
     }
-    // A hull past the vertex budget is cut before anything uses it (mass
-    // properties included): every later collider is built from the kept
-    // vertices.
-    let (shape, hull) = match &s.shape {
-        Some(Shape::Convex { points_m }) => {
-            match simplify_hull(points_m, MAX_HULL_VERTICES).map_err(|e| BuildError::Shape {
-                owner: owner(),
-                field: "shape",
-                error: e.into(),
-            })? {
-                Some(cut) => (
-                    Some(Shape::Convex {
-                        points_m: cut.points_m.clone(),
-                    }),
-                    (cut.error_m > 0.0).then(|| cut.summary()),
-                ),
-                None => (s.shape.clone(), None),
-            }
-        }
-        other => (other.clone(), None),
-    };
+    let (shape, hull) = kept_hull(s, &owner)?;
     let slack = hull.map_or(0.0, |h| h.error_m);
     let (mass_kg, inertia) = mass_and_inertia(s, shape.as_ref(), slack, &owner)?;
-    finite("mass", &[mass_kg])?;
-    if mass_kg <= 0.0 {
-        return Err(BuildError::NonPositiveMass {
-            owner: owner(),
-            mass_kg,
-        });
-    }
-    finite("inertia", &inertia)?;
-    let [a, b, c] = inertia;
-    let slack = 1e-9 * (a + b + c);
-    // A moving body needs every principal moment > 0: a zero one leaves a
-    // rotation without inertia and M singular (the force solve's
-    // factorisation then fails).
-    if inertia.iter().any(|&x| x < 0.0)
-        || (!s.fixed && inertia.iter().any(|&x| x <= 0.0))
-        || a > b + c + slack
-        || b > a + c + slack
-        || c > a + b + slack
-    {
-        return Err(BuildError::BadInertia {
-            owner: owner(),
-            inertia_kg_m2: inertia,
-        });
-    }
+    check_mass(s, mass_kg, inertia, &owner)?;
     if !(s.friction.is_finite() && (0.0..=MAX_FRICTION).contains(&s.friction)) {
         return Err(BuildError::BadFriction {
             owner: owner(),
@@ -612,37 +562,8 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         });
     }
     motion(s, &owner)?;
-    for (k, &param) in s.free.iter().enumerate() {
-        if param != DesignParam::Position || !s.fixed {
-            return Err(BuildError::UnsupportedBodyFree {
-                owner: owner(),
-                param,
-            });
-        }
-        if s.free[..k].contains(&param) {
-            return Err(BuildError::DuplicateFree {
-                owner: owner(),
-                param,
-            });
-        }
-    }
-    if let Some(beam) = &s.flexible {
-        let why = if s.fixed {
-            Some("a flexible body must move (weld it to a fixed body at its clamp)".into())
-        } else if s.shape.is_some() {
-            Some("a flexible body takes part in no contact: its shape would not bend".into())
-        } else {
-            beam.check()
-                .err()
-                .map(|(field, why)| format!("flexible `{field}` {why}"))
-        };
-        if let Some(why) = why {
-            return Err(BuildError::Flexible {
-                owner: owner(),
-                why,
-            });
-        }
-    }
+    check_free(s, &owner)?;
+    check_flexible(s, &owner)?;
     let freed: Vec<(DesignParam, &[f64])> =
         s.free.iter().map(|&p| (p, &s.position_m[..])).collect();
     check_bounds(&owner(), &s.name, s.bounds.as_ref(), &freed)?;
@@ -668,6 +589,123 @@ fn body(i: usize, s: &BodySpec) -> Result<Body, BuildError> {
         velocity_m_s: Vector3::from(s.velocity_m_s),
         angular_velocity_rad_s: Vector3::from(s.angular_velocity_rad_s),
     })
+}
+
+/// Fails with `NonFinite` naming `field` unless every value of `v` is
+/// finite.
+fn finite(owner: &dyn Fn() -> Owner, field: &'static str, v: &[f64]) -> Result<(), BuildError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(BuildError::NonFinite {
+            owner: owner(),
+            field,
+        })
+    }
+}
+
+/// The body's shape with a hull past the vertex budget cut, and what the
+/// cut cost (when it cost anything). The cut comes before anything uses
+/// the hull (mass properties included): every later collider is built
+/// from the kept vertices.
+fn kept_hull(
+    s: &BodySpec,
+    owner: &dyn Fn() -> Owner,
+) -> Result<(Option<Shape>, Option<HullSimplification>), BuildError> {
+    Ok(match &s.shape {
+        Some(Shape::Convex { points_m }) => {
+            match simplify_hull(points_m, MAX_HULL_VERTICES).map_err(|e| BuildError::Shape {
+                owner: owner(),
+                field: "shape",
+                error: e.into(),
+            })? {
+                Some(cut) => (
+                    Some(Shape::Convex {
+                        points_m: cut.points_m.clone(),
+                    }),
+                    (cut.error_m > 0.0).then(|| cut.summary()),
+                ),
+                None => (s.shape.clone(), None),
+            }
+        }
+        other => (other.clone(), None),
+    })
+}
+
+/// A positive finite mass, and principal moments that are finite, at
+/// least 0, above 0 on a moving body (a zero one leaves a rotation without
+/// inertia and M singular: the force solve's factorisation then fails),
+/// and satisfy the triangle inequalities.
+fn check_mass(
+    s: &BodySpec,
+    mass_kg: f64,
+    inertia: [f64; 3],
+    owner: &dyn Fn() -> Owner,
+) -> Result<(), BuildError> {
+    finite(owner, "mass", &[mass_kg])?;
+    if mass_kg <= 0.0 {
+        return Err(BuildError::NonPositiveMass {
+            owner: owner(),
+            mass_kg,
+        });
+    }
+    finite(owner, "inertia", &inertia)?;
+    let [a, b, c] = inertia;
+    let slack = 1e-9 * (a + b + c);
+    if inertia.iter().any(|&x| x < 0.0)
+        || (!s.fixed && inertia.iter().any(|&x| x <= 0.0))
+        || a > b + c + slack
+        || b > a + c + slack
+        || c > a + b + slack
+    {
+        return Err(BuildError::BadInertia {
+            owner: owner(),
+            inertia_kg_m2: inertia,
+        });
+    }
+    Ok(())
+}
+
+/// A body's design parameters: its position only, on a fixed body, each
+/// once.
+fn check_free(s: &BodySpec, owner: &dyn Fn() -> Owner) -> Result<(), BuildError> {
+    for (k, &param) in s.free.iter().enumerate() {
+        if param != DesignParam::Position || !s.fixed {
+            return Err(BuildError::UnsupportedBodyFree {
+                owner: owner(),
+                param,
+            });
+        }
+        if s.free[..k].contains(&param) {
+            return Err(BuildError::DuplicateFree {
+                owner: owner(),
+                param,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A flexible body moves, has no shape, and its beam's keys are valid.
+fn check_flexible(s: &BodySpec, owner: &dyn Fn() -> Owner) -> Result<(), BuildError> {
+    if let Some(beam) = &s.flexible {
+        let why = if s.fixed {
+            Some("a flexible body must move (weld it to a fixed body at its clamp)".into())
+        } else if s.shape.is_some() {
+            Some("a flexible body takes part in no contact: its shape would not bend".into())
+        } else {
+            beam.check()
+                .err()
+                .map(|(field, why)| format!("flexible `{field}` {why}"))
+        };
+        if let Some(why) = why {
+            return Err(BuildError::Flexible {
+                owner: owner(),
+                why,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Largest initial speed a body may be given, m/s (a bullet is 1 km/s).

@@ -11,6 +11,7 @@ use super::error::{BuildError, Owner};
 use crate::BodyId;
 use crate::constraint::block::{Ctx, Pair, Param3};
 use crate::constraint::gear::{Ends, Gear};
+use crate::constraint::prismatic::Prismatic;
 use crate::constraint::rack_pinion::RackPinion;
 use crate::constraint::{ConstraintInfo, ConstraintKind, Geometry};
 
@@ -128,6 +129,63 @@ pub(super) fn compile_gear(
     if s.name.is_empty() {
         return Err(BuildError::EmptyName { owner: owner() });
     }
+    let ids = joint_ids(s, out, n_joints, &owner)?;
+    let pairs = ids.map(|j| *joint_pair(&out.geometry[j]));
+    let (pair, ends, bodies) = coupling(&pairs, cx, &owner)?;
+    if !(s.ratio.is_finite() && s.ratio != 0.0) {
+        return Err(BuildError::GearRatio {
+            owner: owner(),
+            ratio: s.ratio,
+            why: "a finite, non-zero number",
+        });
+    }
+    let geometry = match (out.geometry[ids[0]], out.geometry[ids[1]]) {
+        (Geometry::Revolute(a), Geometry::Revolute(b)) => {
+            let (num, den) = tooth_ratio(s, &owner)?;
+            Geometry::Gear(Gear {
+                pair,
+                joints: [a, b],
+                ends,
+                num: num as f64,
+                den: den as f64,
+            })
+        }
+        (Geometry::Revolute(pinion), Geometry::Prismatic(rack)) => {
+            let s0_m = rack_start(s, &rack, cx, origin_cols, &owner)?;
+            Geometry::RackPinion(RackPinion {
+                pair,
+                pinion,
+                rack,
+                ends,
+                ratio_m: s.ratio,
+                s0_m,
+            })
+        }
+        _ => unreachable!("kinds checked above"),
+    };
+    let kind = match s.kind {
+        GearKind::Gear => ConstraintKind::Gear,
+        GearKind::RackPinion => ConstraintKind::RackPinion,
+    };
+    let info = ConstraintInfo {
+        name: s.name.clone(),
+        kind,
+        rows: 0..0,
+        bodies,
+        finger: None,
+        limits: None,
+    };
+    Ok((info, geometry))
+}
+
+/// The two joints `s` couples (by name among the first `n_joints` of
+/// `out`): distinct, and of the kinds its kind couples.
+fn joint_ids(
+    s: &GearSpec,
+    out: &Assembler,
+    n_joints: usize,
+    owner: &dyn Fn() -> Owner,
+) -> Result<[usize; 2], BuildError> {
     let find = |name: &str| {
         (0..n_joints)
             .find(|&j| out.infos[j].name == name)
@@ -165,84 +223,55 @@ pub(super) fn compile_gear(
             });
         }
     }
-    let pairs = ids.map(|j| *joint_pair(&out.geometry[j]));
-    let (pair, ends, bodies) = coupling(&pairs, cx, &owner)?;
-    if !(s.ratio.is_finite() && s.ratio != 0.0) {
-        return Err(BuildError::GearRatio {
+    Ok(ids)
+}
+
+/// A gear's ratio as tooth counts (num, den).
+fn tooth_ratio(s: &GearSpec, owner: &dyn Fn() -> Owner) -> Result<(i64, u64), BuildError> {
+    as_fraction(s.ratio, MAX_GEAR_TEETH).ok_or_else(|| BuildError::GearRatio {
+        owner: owner(),
+        ratio: s.ratio,
+        why: "a ratio of whole numbers (tooth counts) with a denominator up to 10000: \
+              gears repeat after whole turns",
+    })
+}
+
+/// The rack's slide at the model's build (its coordinate s₀), refused when
+/// a design variable moves the rack's anchors or frames.
+fn rack_start(
+    s: &GearSpec,
+    rack: &Prismatic,
+    cx: &Compiler,
+    origin_cols: &[Option<usize>],
+    owner: &dyn Fn() -> Owner,
+) -> Result<f64, BuildError> {
+    let frozen = rack
+        .pair
+        .anchor
+        .iter()
+        .any(|a| matches!(a, Param3::Free(_) | Param3::Flex(_)))
+        || rack
+            .pair
+            .frame
+            .iter()
+            .any(|&f| origin_cols.get(f).copied().flatten().is_some());
+    if frozen {
+        return Err(BuildError::GearRackDesign {
             owner: owner(),
-            ratio: s.ratio,
-            why: "a finite, non-zero number",
+            joint: s.joints[1].clone(),
         });
     }
-    let geometry = match (out.geometry[ids[0]], out.geometry[ids[1]]) {
-        (Geometry::Revolute(a), Geometry::Revolute(b)) => {
-            let Some((num, den)) = as_fraction(s.ratio, MAX_GEAR_TEETH) else {
-                return Err(BuildError::GearRatio {
-                    owner: owner(),
-                    ratio: s.ratio,
-                    why: "a ratio of whole numbers (tooth counts) with a denominator up to 10000: \
-                          gears repeat after whole turns",
-                });
-            };
-            Geometry::Gear(Gear {
-                pair,
-                joints: [a, b],
-                ends,
-                num: num as f64,
-                den: den as f64,
-            })
-        }
-        (Geometry::Revolute(pinion), Geometry::Prismatic(rack)) => {
-            let frozen = rack
-                .pair
-                .anchor
-                .iter()
-                .any(|a| matches!(a, Param3::Free(_) | Param3::Flex(_)))
-                || rack
-                    .pair
-                    .frame
-                    .iter()
-                    .any(|&f| origin_cols.get(f).copied().flatten().is_some());
-            if frozen {
-                return Err(BuildError::GearRackDesign {
-                    owner: owner(),
-                    joint: s.joints[1].clone(),
-                });
-            }
-            // No flexible anchors here (refused above with design ones).
-            let x = Ctx {
-                q: &[],
-                frames: cx.frames,
-                targets: &[],
-                witnesses: &[],
-                flex: &[],
-                surfaces: &[],
-                rolling: &[],
-            };
-            Geometry::RackPinion(RackPinion {
-                pair,
-                pinion,
-                rack,
-                ends,
-                ratio_m: s.ratio,
-                s0_m: rack.coordinate(&x).0,
-            })
-        }
-        _ => unreachable!("kinds checked above"),
+    // No flexible anchors here (refused above with design ones).
+    let x = Ctx {
+        q: &[],
+        frames: cx.frames,
+        targets: &[],
+        witnesses: &[],
+        flex: &[],
+        surfaces: &[],
+        rolling: &[],
     };
-    let kind = match s.kind {
-        GearKind::Gear => ConstraintKind::Gear,
-        GearKind::RackPinion => ConstraintKind::RackPinion,
-    };
-    let info = ConstraintInfo {
-        name: s.name.clone(),
-        kind,
-        rows: 0..0,
-        bodies,
-        finger: None,
-        limits: None,
-    };
-    Ok((info, geometry))
+    Ok(rack.coordinate(&x).0)
 }
 
 fn joint_pair(g: &Geometry) -> &Pair {

@@ -161,11 +161,45 @@ impl Model {
         for (info, g) in self.constraints[..split].iter().zip(&self.geometry) {
             out.push(info.clone(), *g);
         }
-        let total: usize = surfaces.iter().map(|s| 3 + s.inclusion.len()).sum();
         let mut layout = SemanticLayout {
             snap,
             ..SemanticLayout::default()
         };
+        let inclusions = self.push_surfaces(&mut out, &mut layout, surfaces, world)?;
+        self.push_holds(&mut out, &mut layout, holds, world)?;
+        let equality_rows = out.rows.len();
+        for (info, g) in self.constraints[split..]
+            .iter()
+            .zip(&self.geometry[split..])
+        {
+            out.push(info.clone(), *g);
+        }
+        for (k, info, rows) in inclusions {
+            layout.surfaces[k].inclusion = Some(ConstraintId(out.infos.len() as u32));
+            out.push(info, Geometry::Surface(rows));
+        }
+        Ok(Model {
+            id: next_model_id(),
+            geometry: out.geometry,
+            constraints: out.infos,
+            rows: out.rows,
+            equality_rows,
+            semantic: layout,
+            ..self.clone()
+        })
+    }
+
+    /// The plane rows of `surfaces` (pushed on `out`, their witness slots
+    /// and entries on `layout`); returns their inclusion rows, which go
+    /// after the inequalities: (surface index, constraint, rows).
+    fn push_surfaces(
+        &self,
+        out: &mut Assembler,
+        layout: &mut SemanticLayout,
+        surfaces: &[SurfaceSpec],
+        world: usize,
+    ) -> Result<Vec<(usize, ConstraintInfo, SurfaceRows)>, BuildError> {
+        let total: usize = surfaces.iter().map(|s| 3 + s.inclusion.len()).sum();
         let mut inclusions = Vec::new();
         for s in surfaces {
             let owner = || Owner::Inequality(s.name.clone());
@@ -205,6 +239,19 @@ impl Model {
                 slots: 3 + s.inclusion.len(),
             });
         }
+        Ok(inclusions)
+    }
+
+    /// The rows of `holds` (a weld with a relative orientation, else a
+    /// spherical joint between the anchors), pushed on `out` and listed in
+    /// `layout`.
+    fn push_holds(
+        &self,
+        out: &mut Assembler,
+        layout: &mut SemanticLayout,
+        holds: &[HoldSpec],
+        world: usize,
+    ) -> Result<(), BuildError> {
         for h in holds {
             let owner = || Owner::Inequality(h.name.clone());
             let mut pair = self.pair(&owner, h.tip, h.body, world)?;
@@ -248,26 +295,7 @@ impl Model {
             );
             layout.holds.push((h.name.clone(), h.tip, h.body, id));
         }
-        let equality_rows = out.rows.len();
-        for (info, g) in self.constraints[split..]
-            .iter()
-            .zip(&self.geometry[split..])
-        {
-            out.push(info.clone(), *g);
-        }
-        for (k, info, rows) in inclusions {
-            layout.surfaces[k].inclusion = Some(ConstraintId(out.infos.len() as u32));
-            out.push(info, Geometry::Surface(rows));
-        }
-        Ok(Model {
-            id: next_model_id(),
-            geometry: out.geometry,
-            constraints: out.infos,
-            rows: out.rows,
-            equality_rows,
-            semantic: layout,
-            ..self.clone()
-        })
+        Ok(())
     }
 
     /// The two ends of a semantic constraint between bodies `a` and `b`.

@@ -56,137 +56,9 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
         if out.terms.iter().any(|t| t.name == name) {
             return Err(BuildError::DuplicateName { owner: owner() });
         }
-        let body = |n: &str| {
-            model.body_id(n).ok_or_else(|| BuildError::UnknownBody {
-                owner: owner(),
-                body: n.to_owned(),
-            })
-        };
-        let finite = |field: &'static str, v: &[f64]| {
-            if v.iter().all(|x| x.is_finite()) {
-                Ok(())
-            } else {
-                Err(BuildError::NonFinite {
-                    owner: owner(),
-                    field,
-                })
-            }
-        };
-        let term = match s {
-            ObjectiveSpec::Finger { .. } => {
-                if std::mem::replace(&mut seen.0, true) {
-                    return Err(bad(
-                        "kind",
-                        "given once: a scene has one `finger` objective (its weight is the fingers' pull)",
-                    ));
-                }
-                if w <= 0.0 {
-                    return Err(bad(
-                        "weight",
-                        "> 0 for finger (a finger that does not pull holds nothing)",
-                    ));
-                }
-                out.finger_weight = w;
-                continue;
-            }
-            ObjectiveSpec::LeastAstonishment { design_weight, .. } => {
-                if std::mem::replace(&mut seen.1, true) {
-                    return Err(bad(
-                        "kind",
-                        "given once: a scene has one `least_astonishment` objective (its weight divides every other)",
-                    ));
-                }
-                if w <= 0.0 {
-                    return Err(bad(
-                        "weight",
-                        "> 0 for least_astonishment (every other weight is divided by it)",
-                    ));
-                }
-                if !(design_weight.is_finite() && *design_weight > 0.0) {
-                    return Err(bad("design_weight", "a finite number > 0"));
-                }
-                out.least_astonishment = w;
-                out.design_weight = *design_weight;
-                continue;
-            }
-            ObjectiveSpec::Dexterity {
-                chain,
-                point_m,
-                directions,
-                angular_directions,
-                closure,
-                ..
-            } => {
-                finite("point", point_m)?;
-                for d in directions {
-                    finite("directions", d)?;
-                }
-                for d in angular_directions {
-                    finite("angular_directions", d)?;
-                }
-                let spec = ChainSpec {
-                    chain,
-                    closure,
-                    point_m,
-                    directions,
-                    angular: angular_directions,
-                };
-                Term::Dexterity(dexterity(model, &spec, &owner, &bad)?)
-            }
-            ObjectiveSpec::Obstacle {
-                points,
-                obstacle,
-                distance_m,
-                ..
-            } => {
-                if !(distance_m.is_finite() && *distance_m > 0.0) {
-                    return Err(bad("distance", "a finite number > 0 (metres)"));
-                }
-                let (points, obstacle) = avoided(model, points, obstacle, &owner, &bad)?;
-                Term::Obstacle(Avoid {
-                    points,
-                    obstacle,
-                    distance_m: *distance_m,
-                })
-            }
-            ObjectiveSpec::InverseDistance {
-                points, obstacle, ..
-            } => {
-                let (points, obstacle) = avoided(model, points, obstacle, &owner, &bad)?;
-                Term::InverseDistance(InverseDistance {
-                    points,
-                    obstacle,
-                    scale_m: model.characteristic_length_m(),
-                })
-            }
-            ObjectiveSpec::WorkspaceVolume { chain, point_m, .. } => {
-                finite("point", point_m)?;
-                Term::Workspace(workspace(model, chain, point_m, &owner, &bad)?)
-            }
-            ObjectiveSpec::StraightLine {
-                body: b,
-                point_m,
-                line_point_m,
-                direction,
-                ..
-            } => {
-                finite("point", point_m)?;
-                finite("line_point", line_point_m)?;
-                finite("direction", direction)?;
-                let u = Vector3::from(*direction);
-                if u.norm() < 1e-12 {
-                    return Err(bad("direction", "a non-zero vector"));
-                }
-                Term::StraightLine(StraightLine {
-                    body: body(b)?,
-                    point: Vector3::from(*point_m),
-                    line_point: Vector3::from(*line_point_m),
-                    direction: u.normalize(),
-                })
-            }
-            ObjectiveSpec::JointLimitDistance { joints, .. } => {
-                Term::JointLimits(joint_limits(model, joints, &owner, &bad)?)
-            }
+        global(&mut out, &mut seen, s, w, &bad)?;
+        let Some(term) = term(model, s, &owner, &bad)? else {
+            continue;
         };
         out.terms.push(Objective {
             name,
@@ -196,6 +68,165 @@ pub(crate) fn compile(specs: &[ObjectiveSpec], model: &Model) -> Result<Objectiv
         });
     }
     Ok(out)
+}
+
+/// The objectives that set a weight of the whole problem (`finger`,
+/// `least_astonishment`, each at most once; `seen` says which came): sets
+/// it in `out`; any other kind leaves `out` as it is.
+fn global(
+    out: &mut Objectives,
+    seen: &mut (bool, bool),
+    s: &ObjectiveSpec,
+    w: f64,
+    bad: Bad,
+) -> Result<(), BuildError> {
+    match s {
+        ObjectiveSpec::Finger { .. } => {
+            if std::mem::replace(&mut seen.0, true) {
+                return Err(bad(
+                    "kind",
+                    "given once: a scene has one `finger` objective (its weight is the fingers' pull)",
+                ));
+            }
+            if w <= 0.0 {
+                return Err(bad(
+                    "weight",
+                    "> 0 for finger (a finger that does not pull holds nothing)",
+                ));
+            }
+            out.finger_weight = w;
+        }
+        ObjectiveSpec::LeastAstonishment { design_weight, .. } => {
+            if std::mem::replace(&mut seen.1, true) {
+                return Err(bad(
+                    "kind",
+                    "given once: a scene has one `least_astonishment` objective (its weight divides every other)",
+                ));
+            }
+            if w <= 0.0 {
+                return Err(bad(
+                    "weight",
+                    "> 0 for least_astonishment (every other weight is divided by it)",
+                ));
+            }
+            if !(design_weight.is_finite() && *design_weight > 0.0) {
+                return Err(bad("design_weight", "a finite number > 0"));
+            }
+            out.least_astonishment = w;
+            out.design_weight = *design_weight;
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Fails with `NonFinite` naming `field` unless every value of `v` is
+/// finite.
+fn finite(owner: &dyn Fn() -> Owner, field: &'static str, v: &[f64]) -> Result<(), BuildError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(BuildError::NonFinite {
+            owner: owner(),
+            field,
+        })
+    }
+}
+
+/// The term of an objective of the problem's sum; `None` for `finger` and
+/// `least_astonishment`, which set weights of the whole problem
+/// (`global`).
+fn term(
+    model: &Model,
+    s: &ObjectiveSpec,
+    owner: &dyn Fn() -> Owner,
+    bad: Bad,
+) -> Result<Option<Term>, BuildError> {
+    let finite = |field: &'static str, v: &[f64]| finite(owner, field, v);
+    Ok(Some(match s {
+        ObjectiveSpec::Finger { .. } | ObjectiveSpec::LeastAstonishment { .. } => return Ok(None),
+        ObjectiveSpec::Dexterity {
+            chain,
+            point_m,
+            directions,
+            angular_directions,
+            closure,
+            ..
+        } => {
+            finite("point", point_m)?;
+            for d in directions {
+                finite("directions", d)?;
+            }
+            for d in angular_directions {
+                finite("angular_directions", d)?;
+            }
+            let spec = ChainSpec {
+                chain,
+                closure,
+                point_m,
+                directions,
+                angular: angular_directions,
+            };
+            Term::Dexterity(dexterity(model, &spec, owner, bad)?)
+        }
+        ObjectiveSpec::Obstacle {
+            points,
+            obstacle,
+            distance_m,
+            ..
+        } => {
+            if !(distance_m.is_finite() && *distance_m > 0.0) {
+                return Err(bad("distance", "a finite number > 0 (metres)"));
+            }
+            let (points, obstacle) = avoided(model, points, obstacle, owner, bad)?;
+            Term::Obstacle(Avoid {
+                points,
+                obstacle,
+                distance_m: *distance_m,
+            })
+        }
+        ObjectiveSpec::InverseDistance {
+            points, obstacle, ..
+        } => {
+            let (points, obstacle) = avoided(model, points, obstacle, owner, bad)?;
+            Term::InverseDistance(InverseDistance {
+                points,
+                obstacle,
+                scale_m: model.characteristic_length_m(),
+            })
+        }
+        ObjectiveSpec::WorkspaceVolume { chain, point_m, .. } => {
+            finite("point", point_m)?;
+            Term::Workspace(workspace(model, chain, point_m, owner, bad)?)
+        }
+        ObjectiveSpec::StraightLine {
+            body,
+            point_m,
+            line_point_m,
+            direction,
+            ..
+        } => {
+            finite("point", point_m)?;
+            finite("line_point", line_point_m)?;
+            finite("direction", direction)?;
+            let u = Vector3::from(*direction);
+            if u.norm() < 1e-12 {
+                return Err(bad("direction", "a non-zero vector"));
+            }
+            Term::StraightLine(StraightLine {
+                body: model.body_id(body).ok_or_else(|| BuildError::UnknownBody {
+                    owner: owner(),
+                    body: body.to_owned(),
+                })?,
+                point: Vector3::from(*point_m),
+                line_point: Vector3::from(*line_point_m),
+                direction: u.normalize(),
+            })
+        }
+        ObjectiveSpec::JointLimitDistance { joints, .. } => {
+            Term::JointLimits(joint_limits(model, joints, owner, bad)?)
+        }
+    }))
 }
 
 /// Body points kept away from an obstacle (body, point in its frame).

@@ -40,6 +40,7 @@ mod analyze;
 mod cache;
 mod factor;
 mod least_squares;
+mod line_search;
 mod lowrank;
 mod newton;
 mod options;

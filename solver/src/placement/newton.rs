@@ -18,14 +18,15 @@
 //! [`SolveStatus::LeastSquares`] (λ = g/μ there).
 
 use super::least_squares::lm_update;
+use super::line_search::Merit;
+use super::options::Knobs;
 use super::step::H_MIN;
 use super::{IterationRecord, Placement, PlacementError, SolveInfo, SolveStatus};
 use crate::{FingerTarget, Model, RowUnit};
 
 /// Damping beyond which a solve gives up (the step would be ~1e-4 of Newton's).
 const MU_MAX: f64 = 1e4;
-/// Backtracking halvings per step.
-const MAX_HALVINGS: u32 = 6;
+
 /// Slack below which an inequality row counts as active.
 const Y_FLOOR: f64 = 1e-6;
 /// A row with Y < `Y_FLOOR` and λ above this pulls (wrong sign): it is
@@ -44,22 +45,6 @@ const STAGNATION: f64 = 0.9;
 /// Stalled iterations in a row that switch to least-squares mode.
 const STAGNANT_STEPS: u32 = 3;
 
-/// The state a trial is judged against.
-#[derive(Debug, Clone, Copy)]
-struct Merit {
-    theta: f64,
-    f: f64,
-    theta_ok: f64,
-}
-
-impl Merit {
-    fn accepts(&self, alpha: f64, theta_t: f64, f_t: f64) -> bool {
-        let feasible = theta_t <= (1.0 - 1e-4 * alpha) * self.theta;
-        let tangential = theta_t <= self.theta_ok && f_t < self.f;
-        feasible || tangential
-    }
-}
-
 /// The smallest damping at residual θ: θ², between 1e-4·μ₀ and μ₀.
 fn damping_floor(theta: f64, mu0: f64) -> f64 {
     (theta * theta).clamp(MU_FLOOR_RATIO * mu0, mu0)
@@ -76,6 +61,39 @@ fn norm2(v: &[f64]) -> f64 {
 
 fn norm_inf(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// Where the Newton-KKT iteration stands.
+struct Iterate {
+    /// θ = ‖g‖₂ and f at the current iterate.
+    theta: f64,
+    f: f64,
+    /// θ below which a trial may trade θ for f (10 × tolerance).
+    theta_ok: f64,
+    /// Newton's damping μ and least squares' ν.
+    mu: f64,
+    nu: f64,
+    /// Whether any step needed extra damping.
+    regularised: bool,
+    status: SolveStatus,
+    /// The last step's size (‖δq‖∞, slacks included).
+    step: f64,
+    iterations: u32,
+    /// In least-squares mode (the rows conflict).
+    least_squares: bool,
+    /// Stalled iterations in a row.
+    stagnant: u32,
+}
+
+impl Iterate {
+    /// The damping in force: μ₀ + ν in least-squares mode, else μ.
+    fn damping(&self, opt: &Knobs) -> f64 {
+        if self.least_squares {
+            opt.damping + self.nu
+        } else {
+            self.mu
+        }
+    }
 }
 
 impl Placement {
@@ -97,6 +115,69 @@ impl Placement {
         q_ref: &[f64],
         targets: &[FingerTarget],
     ) -> Result<SolveInfo, PlacementError> {
+        self.begin(model, q, q_ref, targets)?;
+        let opt = self.options.clone_scalars();
+        let mut it = Iterate {
+            theta: norm2(&self.g),
+            f: self.objective(q, q_ref),
+            theta_ok: 10.0 * opt.tolerance,
+            mu: opt.damping,
+            nu: 0.0,
+            regularised: false,
+            status: SolveStatus::MaxIterations,
+            step: 0.0,
+            iterations: 0,
+            least_squares: false,
+            stagnant: 0,
+        };
+        while it.iterations < opt.max_iterations {
+            let Some(alpha) = self.accepted_step(model, q, q_ref, targets, &opt, &mut it) else {
+                break;
+            };
+            self.commit(model, q, targets);
+            let theta_prev = it.theta;
+            it.theta = norm2(&self.g);
+            it.f = self.objective(q, q_ref);
+            it.iterations += 1;
+            self.history.push(IterationRecord {
+                residual: it.theta,
+                step: it.step,
+                alpha,
+                damping: it.damping(&opt),
+            });
+            if self.judge(&opt, &mut it, alpha, theta_prev) {
+                break;
+            }
+        }
+        if it.status == SolveStatus::MaxIterations
+            && it.least_squares
+            && self.gradient_ratio() <= LS_GRADIENT
+        {
+            it.status = SolveStatus::LeastSquares;
+        }
+        // A rejected trial left its values in the evaluation: restore q's.
+        let _ = self.eval.evaluate(model, q, targets);
+        self.update_residual();
+        let damping = it.damping(&opt);
+        Ok(self.info(
+            model,
+            it.status,
+            it.iterations,
+            it.step,
+            it.regularised,
+            damping,
+        ))
+    }
+
+    /// Checks the lengths and `q_ref`, evaluates C at the start and sets
+    /// the slacks, multipliers and history for a new solve.
+    fn begin(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        q_ref: &[f64],
+        targets: &[FingerTarget],
+    ) -> Result<(), PlacementError> {
         self.bind(model)?;
         for v in [q.len(), q_ref.len()] {
             if v != self.n {
@@ -110,7 +191,6 @@ impl Placement {
         self.eval
             .evaluate(model, q, targets)
             .map_err(PlacementError::Eval)?;
-        let opt = self.options.clone_scalars();
         for (y, c) in self.y.iter_mut().zip(&self.eval.values()[self.m_eq..]) {
             *y = c.max(0.0).sqrt().max(Y_FLOOR);
         }
@@ -118,104 +198,100 @@ impl Placement {
         self.hy.fill(H_MIN);
         self.history.clear();
         self.update_residual();
-        let mut theta = norm2(&self.g);
-        let mut f = self.objective(q, q_ref);
-        let theta_ok = 10.0 * opt.tolerance;
-        let (mut mu, mut regularised) = (opt.damping, false);
-        let (mut status, mut step, mut iterations) = (SolveStatus::MaxIterations, 0.0, 0);
-        let (mut least_squares, mut stagnant, mut nu) = (false, 0, 0.0);
-        'outer: while iterations < opt.max_iterations {
-            let alpha = loop {
-                // Least-squares mode: matrix damping μ₀ + ν, pull μ₀/(μ₀ + ν).
-                let (damp, pull) = match least_squares {
-                    false => (mu, 1.0),
-                    true => (opt.damping + nu, opt.damping / (opt.damping + nu)),
-                };
-                if self.newton_step(q, q_ref, damp, pull).is_err() {
-                    mu *= 100.0;
-                    nu = nu * 100.0 + opt.damping;
-                    regularised = true;
-                } else {
-                    step = norm_inf(&self.dq).max(self.slack_step());
-                    if least_squares {
-                        let psi = (theta, f, opt.damping);
-                        if let Some(rho) = self.lm_trial(model, q, q_ref, targets, psi) {
-                            nu = lm_update(nu, rho);
-                            break 1.0;
-                        }
-                        nu = 4.0 * nu + opt.damping;
-                    } else {
-                        let merit = Merit { theta, f, theta_ok };
-                        if let Some(alpha) = self.line_search(model, q, q_ref, targets, merit) {
-                            break alpha;
-                        }
-                        mu *= 10.0;
-                    }
-                    regularised = true;
-                }
-                if mu.max(nu) > MU_MAX {
-                    status = self.stall_status(theta, opt.tolerance, step, opt.step_tolerance);
-                    break 'outer;
-                }
+        Ok(())
+    }
+
+    /// A step the merit (Newton) or the gain ratio (least squares) accepts,
+    /// as its length α, raising the damping until one is; `None` when the
+    /// damping passes `MU_MAX` (`it.status` then says why).
+    fn accepted_step(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        q_ref: &[f64],
+        targets: &[FingerTarget],
+        opt: &Knobs,
+        it: &mut Iterate,
+    ) -> Option<f64> {
+        loop {
+            // Least-squares mode: matrix damping μ₀ + ν, pull μ₀/(μ₀ + ν).
+            let (damp, pull) = match it.least_squares {
+                false => (it.mu, 1.0),
+                true => (opt.damping + it.nu, opt.damping / (opt.damping + it.nu)),
             };
-            self.commit(model, q, targets);
-            let theta_prev = theta;
-            theta = norm2(&self.g);
-            f = self.objective(q, q_ref);
-            iterations += 1;
-            self.history.push(IterationRecord {
-                residual: theta,
-                step,
-                alpha,
-                damping: if least_squares { opt.damping + nu } else { mu },
-            });
-            // Levenberg–Marquardt: a full step resets μ to its floor, which
-            // follows θ² (Yamashita–Fukushima): the damping bias μ|λ| then
-            // vanishes faster than the residual, so convergence stays
-            // quadratic even for rank-deficient but consistent rows.
-            if alpha == 1.0 && !least_squares {
-                mu = damping_floor(theta, opt.damping);
-            }
-            if theta <= opt.tolerance && step <= opt.step_tolerance && self.signs_ok() {
-                status = SolveStatus::Converged;
-                break;
-            }
-            if least_squares && alpha * step <= opt.step_tolerance {
-                status = SolveStatus::LeastSquares;
-                break;
-            }
-            // Newton contracts θ fast; a θ that stalls well above tolerance,
-            // or a residual J can no longer reduce, means the rows conflict:
-            // switch to the damped least-squares problem.
-            stagnant = if theta > theta_ok && theta > STAGNATION * theta_prev {
-                stagnant + 1
+            if self.newton_step(q, q_ref, damp, pull).is_err() {
+                it.mu *= 100.0;
+                it.nu = it.nu * 100.0 + opt.damping;
+                it.regularised = true;
             } else {
-                0
-            };
-            if !least_squares
-                && (stagnant >= STAGNANT_STEPS
-                    || (theta > LS_ENTRY * opt.tolerance
-                        && self.gradient_ratio() <= LS_ENTRY_GRADIENT))
-            {
-                least_squares = true;
-                nu = 0.0;
+                it.step = norm_inf(&self.dq).max(self.slack_step());
+                if it.least_squares {
+                    let psi = (it.theta, it.f, opt.damping);
+                    if let Some(rho) = self.lm_trial(model, q, q_ref, targets, psi) {
+                        it.nu = lm_update(it.nu, rho);
+                        return Some(1.0);
+                    }
+                    it.nu = 4.0 * it.nu + opt.damping;
+                } else {
+                    let merit = Merit {
+                        theta: it.theta,
+                        f: it.f,
+                        theta_ok: it.theta_ok,
+                    };
+                    if let Some(alpha) = self.line_search(model, q, q_ref, targets, merit) {
+                        return Some(alpha);
+                    }
+                    it.mu *= 10.0;
+                }
+                it.regularised = true;
             }
-            if theta > opt.tolerance && alpha * step <= opt.step_tolerance {
-                status = self.stall_status(theta, opt.tolerance, step, opt.step_tolerance);
-                break;
+            if it.mu.max(it.nu) > MU_MAX {
+                it.status = self.stall_status(it.theta, opt.tolerance, it.step, opt.step_tolerance);
+                return None;
             }
         }
-        if status == SolveStatus::MaxIterations
-            && least_squares
-            && self.gradient_ratio() <= LS_GRADIENT
+    }
+
+    /// After an accepted step of length `alpha` (θ was `theta_prev`):
+    /// resets the damping, switches to least squares when the rows
+    /// conflict; returns true when the solve ends (`it.status` says how).
+    fn judge(&mut self, opt: &Knobs, it: &mut Iterate, alpha: f64, theta_prev: f64) -> bool {
+        let theta = it.theta;
+        // Levenberg–Marquardt: a full step resets μ to its floor, which
+        // follows θ² (Yamashita–Fukushima): the damping bias μ|λ| then
+        // vanishes faster than the residual, so convergence stays
+        // quadratic even for rank-deficient but consistent rows.
+        if alpha == 1.0 && !it.least_squares {
+            it.mu = damping_floor(theta, opt.damping);
+        }
+        if theta <= opt.tolerance && it.step <= opt.step_tolerance && self.signs_ok() {
+            it.status = SolveStatus::Converged;
+            return true;
+        }
+        if it.least_squares && alpha * it.step <= opt.step_tolerance {
+            it.status = SolveStatus::LeastSquares;
+            return true;
+        }
+        // Newton contracts θ fast; a θ that stalls well above tolerance,
+        // or a residual J can no longer reduce, means the rows conflict:
+        // switch to the damped least-squares problem.
+        it.stagnant = if theta > it.theta_ok && theta > STAGNATION * theta_prev {
+            it.stagnant + 1
+        } else {
+            0
+        };
+        if !it.least_squares
+            && (it.stagnant >= STAGNANT_STEPS
+                || (theta > LS_ENTRY * opt.tolerance && self.gradient_ratio() <= LS_ENTRY_GRADIENT))
         {
-            status = SolveStatus::LeastSquares;
+            it.least_squares = true;
+            it.nu = 0.0;
         }
-        // A rejected trial left its values in the evaluation: restore q's.
-        let _ = self.eval.evaluate(model, q, targets);
-        self.update_residual();
-        let damping = if least_squares { opt.damping + nu } else { mu };
-        Ok(self.info(model, status, iterations, step, regularised, damping))
+        if theta > opt.tolerance && alpha * it.step <= opt.step_tolerance {
+            it.status = self.stall_status(theta, opt.tolerance, it.step, opt.step_tolerance);
+            return true;
+        }
+        false
     }
 
     /// The slack step in the rows' own units: the largest change of Y_j²
@@ -240,60 +316,6 @@ impl Placement {
             .zip(&self.w)
             .map(|((a, b), w)| w * (a - b) * (a - b))
             .sum::<f64>()
-    }
-
-    /// Tries α = 1, ½, … on the step in `dq`/`dy`; leaves the accepted trial
-    /// in `q_trial`/`y_trial` and returns α.
-    fn line_search(
-        &mut self,
-        model: &Model,
-        q: &[f64],
-        q_ref: &[f64],
-        targets: &[FingerTarget],
-        m: Merit,
-    ) -> Option<f64> {
-        let mut alpha = 1.0;
-        for _ in 0..=MAX_HALVINGS {
-            for ((t, q), d) in self.q_trial.iter_mut().zip(q).zip(&self.dq) {
-                *t = q + alpha * d;
-            }
-            for ((t, y), d) in self.y_trial.iter_mut().zip(&self.y).zip(&self.dy) {
-                *t = (y + alpha * d).abs();
-            }
-            if let Some(theta_t) = self.trial_residual(model, targets) {
-                let f_t = self.objective(&self.q_trial, q_ref);
-                if m.accepts(alpha, theta_t, f_t) {
-                    return Some(alpha);
-                }
-                // Second-order correction (the Maratos effect: a good
-                // tangential step raises θ to second order): project the
-                // trial back with the factor already at hand.
-                if self.correct_trial()
-                    && let Some(theta_c) = self.trial_residual(model, targets)
-                {
-                    let f_c = self.objective(&self.q_trial, q_ref);
-                    if m.accepts(alpha, theta_c, f_c) {
-                        return Some(alpha);
-                    }
-                }
-            }
-            alpha *= 0.5;
-        }
-        None
-    }
-
-    /// θ at (`q_trial`, `y_trial`), evaluating C there (C_q keeps q's values).
-    fn trial_residual(&mut self, model: &Model, targets: &[FingerTarget]) -> Option<f64> {
-        self.eval
-            .evaluate_values(model, &self.q_trial, targets)
-            .ok()?;
-        let c = self.eval.values();
-        let mut t2: f64 = c[..self.m_eq].iter().map(|v| v * v).sum();
-        for (c, y) in c[self.m_eq..].iter().zip(&self.y_trial) {
-            t2 += (c - y * y).powi(2);
-        }
-        let theta = t2.sqrt();
-        theta.is_finite().then_some(theta)
     }
 
     /// Moves to the accepted trial: q, Y, λ, a full evaluation, H_Y, releases.

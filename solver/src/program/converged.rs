@@ -172,6 +172,45 @@ impl Program {
         tolerance_m: f64,
         max_iterations: u32,
     ) -> Result<ConvergedTick, ProgramError> {
+        self.check_replay(before, after, targets)?;
+        self.load_tick(before, dt_s);
+        let mut r = ConvergedTick {
+            status: TickOutcome::Ok,
+            iterations: 0,
+            last_step_m: f64::INFINITY,
+            converged: false,
+            max_violation_m: f64::NAN,
+        };
+        let fail = |p: &mut Program, r: &mut ConvergedTick, status| {
+            p.outputs.fill(FingerOutput::default());
+            r.status = status;
+        };
+        if let Err(status) =
+            self.iterate_to(before, targets, dt_s, tolerance_m, max_iterations, &mut r)
+        {
+            fail(self, &mut r, status);
+            return Ok(r);
+        }
+        if let Err(e) = self.ev.evaluate(&self.model, &self.q, targets) {
+            fail(self, &mut r, TickOutcome::Eval(e));
+            return Ok(r);
+        }
+        let v = Violation::of(&self.model, &self.scaling, self.ev.values());
+        r.max_violation_m = v.max_m;
+        if let Err(status) = self.reference_forces(before, after, targets, dt_s) {
+            fail(self, &mut r, status);
+        }
+        Ok(r)
+    }
+
+    /// Refuses states and targets of another model's size, and a
+    /// non-finite q.
+    fn check_replay(
+        &self,
+        before: &TickState,
+        after: &TickState,
+        targets: &[FingerTarget],
+    ) -> Result<(), ProgramError> {
         let (n, m, bodies) = (self.q.len(), self.lambda.len(), self.feedback.masses.len());
         for (len, expected) in [
             (before.q.len(), n),
@@ -190,6 +229,14 @@ impl Program {
         if let Some(index) = before.q.iter().position(|v| !v.is_finite()) {
             return Err(ProgramError::NonFinite { index });
         }
+        Ok(())
+    }
+
+    /// Loads `before` (q, multipliers, motion and coupling history, last
+    /// targets) and sets q₀ as the tick does (inertial prediction,
+    /// objectives' pull).
+    fn load_tick(&mut self, before: &TickState, dt_s: f64) {
+        let bodies = self.feedback.masses.len();
         self.load_motion(before, &before.q_prev);
         self.load_design_flags(&before.design_off);
         self.set_static_shift(&before.static_shift);
@@ -211,33 +258,31 @@ impl Program {
         self.rest_aux();
         self.pull_objectives();
         self.step_budget_m = f64::INFINITY;
-        let mut r = ConvergedTick {
-            status: TickOutcome::Ok,
-            iterations: 0,
-            last_step_m: f64::INFINITY,
-            converged: false,
-            max_violation_m: f64::NAN,
-        };
-        let fail = |p: &mut Program, r: &mut ConvergedTick, status| {
-            p.outputs.fill(FingerOutput::default());
-            r.status = status;
-        };
+    }
+
+    /// Full projected steps, each from a fresh factor at the iterate, until
+    /// a step is below `tolerance_m`, stalls at round-off, or
+    /// `max_iterations` ran (counted in `r`); the outcome that ended it
+    /// otherwise.
+    fn iterate_to(
+        &mut self,
+        before: &TickState,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        tolerance_m: f64,
+        max_iterations: u32,
+        r: &mut ConvergedTick,
+    ) -> Result<(), TickOutcome> {
         let mut activations = 0;
         while r.iterations < max_iterations {
-            if let Err(e) = self.ev.evaluate(&self.model, &self.q, targets) {
-                fail(self, &mut r, TickOutcome::Eval(e));
-                return Ok(r);
-            }
+            self.ev
+                .evaluate(&self.model, &self.q, targets)
+                .map_err(TickOutcome::Eval)?;
             // The factor at this iterate (the mass metric stays the tick
             // start's: the motion history's newest q is still q_{k−1}).
-            if self
-                .feedback
+            self.feedback
                 .force_active(&self.scaling, &self.settings, &self.ev, &self.lambda)
-                .is_err()
-            {
-                fail(self, &mut r, TickOutcome::ForceSolve);
-                return Ok(r);
-            }
+                .map_err(|_| TickOutcome::ForceSolve)?;
             let coupling = CouplingStep {
                 dt_s,
                 stiffness_n_per_m: self.settings.coupling_stiffness_n_per_m,
@@ -260,14 +305,13 @@ impl Program {
                 &coupling,
                 &mut self.lambda,
             );
-            match step {
-                Ok(Step::Taken(size)) => {
+            match step.map_err(outcome_of)? {
+                Step::Taken(size) => {
                     r.iterations += 1;
                     let stalled = size <= ROUND_OFF_STEP_M && size > 0.5 * r.last_step_m;
                     r.last_step_m = size;
                     if !size.is_finite() {
-                        fail(self, &mut r, TickOutcome::NonFinite);
-                        return Ok(r);
+                        return Err(TickOutcome::NonFinite);
                     }
                     if size <= tolerance_m || stalled {
                         r.converged = size <= tolerance_m;
@@ -276,32 +320,24 @@ impl Program {
                 }
                 // Rows the step would violate are now forced active: the
                 // next iteration factors with them.
-                Ok(Step::Activate) if activations < 8 * super::MAX_ACTIVATIONS => {
+                Step::Activate if activations < 8 * super::MAX_ACTIVATIONS => {
                     activations += 1;
                 }
-                Ok(Step::Activate | Step::Refused) => {
-                    fail(self, &mut r, TickOutcome::ForceSolve);
-                    return Ok(r);
-                }
-                Err(e) => {
-                    let status = match e {
-                        StepError::Eval(e) => TickOutcome::Eval(e),
-                        StepError::NonFinite => TickOutcome::NonFinite,
-                        StepError::Solve => TickOutcome::ForceSolve,
-                    };
-                    fail(self, &mut r, status);
-                    return Ok(r);
-                }
+                Step::Activate | Step::Refused => return Err(TickOutcome::ForceSolve),
             }
         }
-        if let Err(e) = self.ev.evaluate(&self.model, &self.q, targets) {
-            fail(self, &mut r, TickOutcome::Eval(e));
-            return Ok(r);
-        }
-        let v = Violation::of(&self.model, &self.scaling, self.ev.values());
-        r.max_violation_m = v.max_m;
-        // Eq. 7–8 at q* with the fast loop's own velocity and acceleration
-        // estimates of this tick, and its coupling history.
+        Ok(())
+    }
+
+    /// Eq. 7–8 at q* with the fast loop's own velocity and acceleration
+    /// estimates of this tick (`after`), and its coupling history.
+    fn reference_forces(
+        &mut self,
+        before: &TickState,
+        after: &TickState,
+        targets: &[FingerTarget],
+        dt_s: f64,
+    ) -> Result<(), TickOutcome> {
         let q_star = std::mem::take(&mut self.q);
         self.load_motion(after, &q_star);
         self.q = q_star;
@@ -319,11 +355,12 @@ impl Program {
             &mut self.outputs,
         );
         if solved.is_err() {
-            fail(self, &mut r, TickOutcome::ForceSolve);
+            Err(TickOutcome::ForceSolve)
         } else if !self.outputs.iter().all(FingerOutput::is_finite) {
-            fail(self, &mut r, TickOutcome::NonFinite);
+            Err(TickOutcome::NonFinite)
+        } else {
+            Ok(())
         }
-        Ok(r)
     }
 
     /// The motion history of `s` with `q_prev` as its newest configuration.
@@ -337,6 +374,15 @@ impl Program {
         mo.aux_v.copy_from_slice(&s.aux_v);
         mo.aux_a.copy_from_slice(&s.aux_a);
         mo.ticks = s.ticks;
+    }
+}
+
+/// The tick outcome of a failed projected step.
+fn outcome_of(e: StepError) -> TickOutcome {
+    match e {
+        StepError::Eval(e) => TickOutcome::Eval(e),
+        StepError::NonFinite => TickOutcome::NonFinite,
+        StepError::Solve => TickOutcome::ForceSolve,
     }
 }
 

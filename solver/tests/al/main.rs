@@ -11,6 +11,7 @@ mod design;
 mod force;
 mod gears;
 mod limits;
+mod lockstep;
 mod matvec;
 mod multilevel;
 mod planar;

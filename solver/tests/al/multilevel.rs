@@ -12,58 +12,18 @@ use haptloop_solver::mechanisms::{
 use haptloop_solver::{
     FingerTarget, ForceSolver, Model, Program, SolverSettings, TickOutcome, UpdateRule,
 };
-use nalgebra::Vector3;
 
 use crate::common::*;
+use crate::lockstep::{Followed, follow, moved, settings};
 
-fn settings(force_solver: ForceSolver) -> SolverSettings {
-    SolverSettings {
-        step: 1.0,
-        iterations: 3,
-        force_solver,
-        ..SolverSettings::default()
-    }
-}
-
-/// Targets moved `a` metres along a fixed direction.
-fn moved(model: &Model, a: f64) -> Vec<FingerTarget> {
-    model
-        .initial_targets()
-        .into_iter()
-        .map(|t| FingerTarget::at(t.position_m + Vector3::new(0.6, -0.3, 0.2) * a))
-        .collect()
-}
-
-/// Largest finger-force difference between two programs, and the largest
-/// force (N).
-fn force_gap(a: &Program, b: &Program) -> (f64, f64) {
-    a.finger_outputs()
-        .iter()
-        .zip(b.finger_outputs())
-        .fold((0.0, 0.0), |(gap, big), (x, y)| {
-            let (fx, fy) = (x.constraint_force_n, y.constraint_force_n);
-            (gap.max((fx - fy).norm()), big.max(fy.norm()))
-        })
-}
-
-/// Runs `ticks` ticks of motion on both; returns the largest force gap,
-/// the largest force, the largest violation of the multilevel tick, and
-/// the largest force-solve iteration count.
-fn follow(model: &Arc<Model>, ticks: usize, name: &str) -> (f64, f64, f64, u32, Program) {
+/// Ticks the multilevel tick in lockstep with the Cholesky tick over
+/// `ticks` ticks of motion; returns the comparison and the multilevel
+/// program.
+fn follow_cholesky(model: &Arc<Model>, ticks: usize, name: &str) -> (Followed, Program) {
     let mut ml = Program::new(model.clone(), settings(ForceSolver::MULTILEVEL)).unwrap();
     let mut exact = Program::new(model.clone(), settings(ForceSolver::Cholesky)).unwrap();
-    let (mut worst, mut scale, mut viol, mut its) = (0.0f64, 0.0f64, 0.0f64, 0);
-    for k in 0..ticks {
-        let t = moved(model, 0.003 * (k as f64 * 0.05).sin());
-        assert_eq!(ml.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-        assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-        viol = viol.max(ml.last_report().max_violation_m);
-        its = its.max(ml.force_cg_iterations());
-        let (gap, big) = force_gap(&ml, &exact);
-        worst = worst.max(gap);
-        scale = scale.max(big);
-    }
-    (worst, scale, viol, its, ml)
+    let f = follow(name, model, (&mut ml, &mut exact), ticks, |_, _, _| {});
+    (f, ml)
 }
 
 /// On mechanisms with and without loops among the moving bodies (a chain,
@@ -87,7 +47,15 @@ fn the_multilevel_tick_follows_the_cholesky_tick() {
         }
         let model = Arc::new(model);
         let ticks = if cfg!(debug_assertions) { 12 } else { 60 };
-        let (worst, scale, viol, its, ml) = follow(&model, ticks, name);
+        let (
+            Followed {
+                worst,
+                scale,
+                viol,
+                its,
+            },
+            ml,
+        ) = follow_cholesky(&model, ticks, name);
         assert!(its >= 1, "{name}: no iteration");
         assert_eq!(ml.matvec_unconverged(), 0, "{name}");
         assert!(viol < 1e-6, "{name}: violation {viol:e}");
@@ -115,7 +83,15 @@ fn larger_meshes_coarsen_and_follow_the_cholesky_tick() {
         ("sphere toy 132", sphere_toy_sized(sr, sc).build().unwrap()),
     ] {
         let model = Arc::new(model);
-        let (worst, scale, viol, its, ml) = follow(&model, 10, name);
+        let (
+            Followed {
+                worst,
+                scale,
+                viol,
+                its,
+            },
+            ml,
+        ) = follow_cholesky(&model, 10, name);
         let st = ml.multilevel_stats().unwrap();
         assert!(st.rows.len() >= 2, "{name}: {st:?}");
         assert_eq!(ml.matvec_unconverged(), 0, "{name}");

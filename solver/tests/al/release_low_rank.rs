@@ -24,6 +24,7 @@ use haptloop_solver::{FingerTarget, SolverSettings, TickOutcome};
 
 use super::release_spare::{lift, start_of};
 use crate::common::*;
+use crate::lockstep::{Agree, agree, lockstep, same_state};
 
 #[test]
 fn the_low_rank_release_agrees_with_solving_afresh_within_round_off() {
@@ -37,26 +38,27 @@ fn the_low_rank_release_agrees_with_solving_afresh_within_round_off() {
     };
     let ticks = if cfg!(debug_assertions) { 4600 } else { 6000 };
     let (mut worst_f, mut worst_t) = (0.0f64, 0.0f64);
-    for k in 1..ticks {
-        let t = lift(&start, k);
-        let (a, b) = (fast.tick(&t, DT), fresh.tick(&t, DT));
-        assert_eq!(a.status, TickOutcome::Ok, "tick {k}");
-        assert_eq!(a.status, b.status, "tick {k}");
-        assert!(fast.q() == fresh.q(), "tick {k}: q differs");
-        assert!(fast.lambda() == fresh.lambda(), "tick {k}: λ differs");
-        let (x, y) = (fast.finger_outputs()[0], fresh.finger_outputs()[0]);
-        for (u, v, torque) in [
-            (x.force_n, y.force_n, false),
-            (x.torque_nm, y.torque_nm, true),
-            (x.constraint_force_n, y.constraint_force_n, false),
-            (x.constraint_torque_nm, y.constraint_torque_nm, true),
-        ] {
-            let rel = (u - v).norm() / v.norm().max(1.0);
-            let worst = if torque { &mut worst_t } else { &mut worst_f };
-            *worst = worst.max(rel);
-            assert!(rel <= 1e-9, "tick {k}: {u:?} against {v:?} ({rel:e})");
-        }
-    }
+    let pair = (&mut fast, &mut fresh);
+    lockstep(
+        "stewart",
+        pair,
+        1..ticks,
+        |k| lift(&start, k),
+        |k, a, b| {
+            same_state(k, a, b);
+            let (x, y) = (a.finger_outputs()[0], b.finger_outputs()[0]);
+            let forces = [
+                (x.force_n, y.force_n),
+                (x.constraint_force_n, y.constraint_force_n),
+            ];
+            let torques = [
+                (x.torque_nm, y.torque_nm),
+                (x.constraint_torque_nm, y.constraint_torque_nm),
+            ];
+            worst_f = worst_f.max(agree(k, Agree::Relative(1e-9), &forces));
+            worst_t = worst_t.max(agree(k, Agree::Relative(1e-9), &torques));
+        },
+    );
     eprintln!(
         "releases {} low-rank {} kept {}; worst relative difference force {worst_f:e}, torque {worst_t:e}",
         fast.force_releases(),

@@ -7,10 +7,11 @@
 //! every step afresh, agrees bit for bit on every tick.
 
 use haptloop_solver::mechanisms::stewart;
-use haptloop_solver::{FingerTarget, Program, SolverSettings, TickOutcome};
+use haptloop_solver::{FingerTarget, Program, SolverSettings};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::common::*;
+use crate::lockstep::{Agree, agree, lockstep, same_state};
 
 /// The finger's target `k` ticks in: 10 cm up over 4 s, then held, the
 /// platform's start orientation kept.
@@ -49,22 +50,23 @@ fn the_release_branch_with_the_spare_is_bit_identical_to_solving_afresh() {
         start_of(&fast)
     };
     let ticks = if cfg!(debug_assertions) { 4600 } else { 6000 };
-    for k in 1..ticks {
-        let t = lift(&start, k);
-        let (a, b) = (fast.tick(&t, DT), fresh.tick(&t, DT));
-        assert_eq!(a.status, TickOutcome::Ok, "tick {k}");
-        assert_eq!(a.status, b.status, "tick {k}");
-        assert!(fast.q() == fresh.q(), "tick {k}: q differs");
-        assert!(fast.lambda() == fresh.lambda(), "tick {k}: λ differs");
-        let (x, y) = (fast.finger_outputs()[0], fresh.finger_outputs()[0]);
-        assert!(
-            x.force_n == y.force_n && x.torque_nm == y.torque_nm,
-            "tick {k}: {:?} against {:?}",
-            x.force_n,
-            y.force_n
-        );
-        assert!(x.constraint_force_n == y.constraint_force_n, "tick {k}");
-    }
+    let pair = (&mut fast, &mut fresh);
+    lockstep(
+        "stewart",
+        pair,
+        1..ticks,
+        |k| lift(&start, k),
+        |k, a, b| {
+            same_state(k, a, b);
+            let (x, y) = (a.finger_outputs()[0], b.finger_outputs()[0]);
+            let outputs = [
+                (x.force_n, y.force_n),
+                (x.torque_nm, y.torque_nm),
+                (x.constraint_force_n, y.constraint_force_n),
+            ];
+            agree(k, Agree::Bits, &outputs);
+        },
+    );
     eprintln!(
         "releases {} kept {}",
         fast.force_releases(),

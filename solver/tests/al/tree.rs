@@ -7,41 +7,11 @@ use std::sync::Arc;
 use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::mechanisms::{bennett, chain_sized, four_bar, lattice_sized, sphere_toy};
 use haptloop_solver::{
-    FingerTarget, ForceSolver, Model, Program, SolverSettings, TickOutcome, UpdateRule,
+    FingerTarget, ForceSolver, Program, SolverSettings, TickOutcome, UpdateRule,
 };
-use nalgebra::Vector3;
 
 use crate::common::*;
-
-fn settings(force_solver: ForceSolver) -> SolverSettings {
-    SolverSettings {
-        step: 1.0,
-        iterations: 3,
-        force_solver,
-        ..SolverSettings::default()
-    }
-}
-
-/// Targets moved `a` metres along a fixed direction.
-fn moved(model: &Model, a: f64) -> Vec<FingerTarget> {
-    model
-        .initial_targets()
-        .into_iter()
-        .map(|t| FingerTarget::at(t.position_m + Vector3::new(0.6, -0.3, 0.2) * a))
-        .collect()
-}
-
-/// Largest finger-force difference between two programs, and the largest
-/// force (N).
-fn force_gap(a: &Program, b: &Program) -> (f64, f64) {
-    a.finger_outputs()
-        .iter()
-        .zip(b.finger_outputs())
-        .fold((0.0, 0.0), |(gap, big), (x, y)| {
-            let (fx, fy) = (x.constraint_force_n, y.constraint_force_n);
-            (gap.max((fx - fy).norm()), big.max(fy.norm()))
-        })
-}
+use crate::lockstep::{Followed, follow, force_gap, moved, settings};
 
 /// On mechanisms whose Gram matrix has no loop (a closed chain, a four-bar
 /// and Bennett's 4R close their loop through the ground, which couples no
@@ -62,18 +32,21 @@ fn without_loops_the_tree_is_exact() {
         let st = tree.tree_stats().unwrap();
         assert_eq!(st.loop_rows, 0, "{st:?}");
         assert_eq!(st.p_nnz, st.a_nnz, "{st:?}");
-        for k in 0..20 {
-            let t = moved(&model, 0.003 * (k as f64 * 0.05).sin());
-            assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-            assert_eq!(tree.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-            let its = tree.force_cg_iterations();
-            assert!(its <= 1, "{name} tick {k}: {its} iterations");
-            let (gap, big) = force_gap(&tree, &exact);
-            assert!(
-                gap <= 1e-7 * big.max(1e-3),
-                "{name} tick {k}: {gap:e} of {big:e} N"
-            );
-        }
+        follow(
+            name,
+            &model,
+            (&mut tree, &mut exact),
+            20,
+            |k, tree, exact| {
+                let its = tree.force_cg_iterations();
+                assert!(its <= 1, "{name} tick {k}: {its} iterations");
+                let (gap, big) = force_gap(tree, exact);
+                assert!(
+                    gap <= 1e-7 * big.max(1e-3),
+                    "{name} tick {k}: {gap:e} of {big:e} N"
+                );
+            },
+        );
         assert_eq!(tree.matvec_unconverged(), 0);
     }
 }
@@ -98,20 +71,15 @@ fn with_loops_the_tree_tick_follows_the_cholesky_tick() {
         let mut exact = Program::new(model.clone(), settings(ForceSolver::Cholesky)).unwrap();
         let st = tree.tree_stats().unwrap();
         assert!(st.loop_rows > 0 && st.p_nnz < st.a_nnz, "{name}: {st:?}");
-        let (mut worst, mut scale, mut viol) = (0.0f64, 0.0f64, 0.0f64);
-        let mut its_max = 0;
         // Unoptimised builds: 12 ticks (the CG solves cost 10× there).
         let ticks = if cfg!(debug_assertions) { 12 } else { 60 };
-        for k in 0..ticks {
-            let t = moved(&model, 0.003 * (k as f64 * 0.05).sin());
-            assert_eq!(tree.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-            assert_eq!(exact.tick(&t, DT).status, TickOutcome::Ok, "{name} {k}");
-            viol = viol.max(tree.last_report().max_violation_m);
-            its_max = its_max.max(tree.force_cg_iterations());
-            let (gap, big) = force_gap(&tree, &exact);
-            worst = worst.max(gap);
-            scale = scale.max(big);
-        }
+        let pair = (&mut tree, &mut exact);
+        let Followed {
+            worst,
+            scale,
+            viol,
+            its: its_max,
+        } = follow(name, &model, pair, ticks, |_, _, _| {});
         assert!(its_max > 1, "{name}: loops need iterations");
         assert_eq!(tree.matvec_unconverged(), 0, "{name}");
         assert!(viol < 1e-6, "{name}: violation {viol:e}");

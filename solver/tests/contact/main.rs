@@ -15,6 +15,9 @@ mod expansion;
 #[path = "../solver/fd.rs"]
 mod fd;
 mod friction;
+// The lockstep harness of the `al` tests, shared.
+#[path = "../al/lockstep.rs"]
+mod lockstep;
 mod moved_evaluation;
 mod moved_steps;
 mod pinch;

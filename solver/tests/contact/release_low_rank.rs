@@ -8,50 +8,38 @@
 //! Stewart test's bound; the argument is the same: round-off of a factor
 //! with cond ≈ 1e4, times cond(W)).
 
-use haptloop_solver::TickOutcome;
-
 use super::release_spare::{pushed_box, target};
+use crate::lockstep::{Agree, Restarting, agree, lockstep, same_state};
 
 #[test]
 fn contact_releases_by_the_low_rank_correction_agree_with_solving_afresh() {
     let (mut fast, mut fresh) = (pushed_box(), pushed_box());
     let ticks = if cfg!(debug_assertions) { 800 } else { 1600 };
-    // Programs are replaced as pairs come and go: their counters restart.
-    let (mut low_rank, mut last, mut worst) = (0, 0, 0.0f64);
-    for k in 0..ticks {
-        fresh.program.drop_release_spare();
-        let (a, b) = (fast.tick(&target(k)), fresh.tick(&target(k)));
-        assert_eq!(a.status, b.status, "tick {k}");
-        assert_eq!(a.status, TickOutcome::Ok, "tick {k}");
-        assert!(fast.program.q() == fresh.program.q(), "tick {k}: q");
-        assert!(
-            fast.program.lambda() == fresh.program.lambda(),
-            "tick {k}: λ"
-        );
-        let (x, y) = (
-            fast.program.finger_outputs()[0],
-            fresh.program.finger_outputs()[0],
-        );
-        for (u, v) in [
-            (x.force_n, y.force_n),
-            (x.constraint_force_n, y.constraint_force_n),
-        ] {
-            let rel = (u - v).norm() / v.norm().max(1.0);
-            worst = worst.max(rel);
-            assert!(rel <= 1e-9, "tick {k}: {u:?} against {v:?} ({rel:e})");
-        }
-        assert_eq!(
-            fast.program.force_releases(),
-            fresh.program.force_releases()
-        );
-        assert_eq!(fresh.program.force_low_rank_releases(), 0);
-        let now = fast.program.force_low_rank_releases();
-        if now < last {
-            last = 0;
-        }
-        low_rank += now - last;
-        last = now;
-    }
+    // Programs are replaced as pairs come and go: their counters restart,
+    // and each new reference program drops its spare again.
+    let (mut low_rank, mut worst) = (Restarting::default(), 0.0f64);
+    fresh.program.drop_release_spare();
+    lockstep(
+        "box",
+        (&mut fast, &mut fresh),
+        0..ticks,
+        target,
+        |k, fast, fresh| {
+            let (a, b) = (&fast.program, &fresh.program);
+            same_state(k, a, b);
+            let (x, y) = (a.finger_outputs()[0], b.finger_outputs()[0]);
+            let forces = [
+                (x.force_n, y.force_n),
+                (x.constraint_force_n, y.constraint_force_n),
+            ];
+            worst = worst.max(agree(k, Agree::Relative(1e-9), &forces));
+            assert_eq!(a.force_releases(), b.force_releases());
+            assert_eq!(b.force_low_rank_releases(), 0);
+            low_rank.add(a.force_low_rank_releases());
+            fresh.program.drop_release_spare();
+        },
+    );
+    let low_rank = low_rank.total;
     eprintln!("low-rank releases {low_rank}, worst relative force difference {worst:e}");
     assert!(
         low_rank > 10,

@@ -8,11 +8,22 @@
 
 use haptloop_solver::geometry::ContactSettings;
 use haptloop_solver::{
-    BodySpec, FingerSpec, FingerTarget, ModelBuilder, SolverSettings, TickOutcome,
+    BodySpec, FingerSpec, FingerTarget, ModelBuilder, Program, SolverSettings, TickReport,
 };
 use nalgebra::Vector3;
 
 use crate::common::{Lockstep, cuboid};
+use crate::lockstep::{Agree, Restarting, Ticked, agree, lockstep, same_state};
+
+/// A contact run ticks its program and then its contact cycle.
+impl Ticked for Lockstep {
+    fn step(&mut self, targets: &[FingerTarget]) -> TickReport {
+        self.tick(targets)
+    }
+    fn program(&self) -> &Program {
+        &self.program
+    }
+}
 
 pub(crate) fn pushed_box() -> Lockstep {
     let mut b = ModelBuilder::new();
@@ -55,47 +66,34 @@ pub(crate) fn target(k: usize) -> [FingerTarget; 1] {
 fn contact_releases_with_the_spare_are_bit_identical_to_solving_afresh() {
     let (mut fast, mut fresh) = (pushed_box(), pushed_box());
     let ticks = if cfg!(debug_assertions) { 800 } else { 1600 };
-    // Programs are replaced as pairs come and go: their counters restart.
-    let (mut releases, mut kept, mut last) = (0, 0, (0, 0));
-    for k in 0..ticks {
+    // Programs are replaced as pairs come and go: their counters restart,
+    // and each new program is told again what to drop.
+    let (mut releases, mut kept) = (Restarting::default(), Restarting::default());
+    let configure = |fast: &mut Lockstep, fresh: &mut Lockstep| {
         fresh.program.drop_release_spare();
         // The spare alone: the low-rank correction is compared within
         // round-off in `release_low_rank`.
         fast.program.drop_release_low_rank();
-        let (a, b) = (fast.tick(&target(k)), fresh.tick(&target(k)));
-        assert_eq!(a.status, b.status, "tick {k}");
-        assert_eq!(a.status, TickOutcome::Ok, "tick {k}");
-        assert!(fast.program.q() == fresh.program.q(), "tick {k}: q");
-        assert!(
-            fast.program.lambda() == fresh.program.lambda(),
-            "tick {k}: λ"
-        );
-        let (x, y) = (
-            fast.program.finger_outputs()[0],
-            fresh.program.finger_outputs()[0],
-        );
-        assert!(
-            x.force_n == y.force_n,
-            "tick {k}: {:?} {:?}",
-            x.force_n,
-            y.force_n
-        );
-        assert_eq!(
-            fast.program.force_releases(),
-            fresh.program.force_releases()
-        );
-        assert_eq!(fresh.program.force_first_solves_kept(), 0);
-        let now = (
-            fast.program.force_releases(),
-            fast.program.force_first_solves_kept(),
-        );
-        if now.0 < last.0 {
-            last = (0, 0);
-        }
-        releases += now.0 - last.0;
-        kept += now.1 - last.1;
-        last = now;
-    }
+    };
+    configure(&mut fast, &mut fresh);
+    lockstep(
+        "box",
+        (&mut fast, &mut fresh),
+        0..ticks,
+        target,
+        |k, fast, fresh| {
+            let (a, b) = (&fast.program, &fresh.program);
+            same_state(k, a, b);
+            let (x, y) = (a.finger_outputs()[0], b.finger_outputs()[0]);
+            agree(k, Agree::Bits, &[(x.force_n, y.force_n)]);
+            assert_eq!(a.force_releases(), b.force_releases());
+            assert_eq!(b.force_first_solves_kept(), 0);
+            releases.add(a.force_releases());
+            kept.add(a.force_first_solves_kept());
+            configure(fast, fresh);
+        },
+    );
+    let (releases, kept) = (releases.total, kept.total);
     eprintln!("releases {releases} kept {kept} programs {}", fast.programs);
     assert!(
         releases > 10,

@@ -100,7 +100,87 @@ struct Graph<'a> {
     soft: Vec<Vec<(usize, usize)>>,
 }
 
+impl<'a> Graph<'a> {
+    /// The joint graph of `m`: joints MuJoCo must make tree joints (forced:
+    /// universal, prismatic), those that may close a loop (soft), and the
+    /// joints `options` cuts; or why MuJoCo cannot express `m`.
+    fn of(m: &'a Mechanism, options: &TreeOptions) -> Result<(Self, Vec<usize>)> {
+        let n = m.bodies.len() + 1;
+        let mut g = Graph {
+            m,
+            forced: vec![Vec::new(); n],
+            soft: vec![Vec::new(); n],
+        };
+        let mut uf: Vec<usize> = (0..n).collect();
+        let mut closures = Vec::new();
+        for (k, j) in m.joints.iter().enumerate() {
+            let closable = matches!(
+                j.kind,
+                JointKind::Spherical | JointKind::Revolute | JointKind::Fixed
+            );
+            match j.kind {
+                JointKind::Distance | JointKind::Perpendicular | JointKind::PointOnPlane => bail!(
+                    "joint `{}`: a {} joint has no MuJoCo joint or exact equality",
+                    j.name,
+                    j.kind
+                ),
+                _ => {}
+            }
+            let (a, b) = (Graph::node(m, j.bodies[0]), Graph::node(m, j.bodies[1]));
+            if a == b {
+                continue; // between fixed bodies (or a body and itself): nothing moves
+            }
+            if options.cut.contains(&k) {
+                if !closable {
+                    bail!(
+                        "joint `{}` cannot be cut: MuJoCo closes no loop with a {} joint",
+                        j.name,
+                        j.kind
+                    );
+                }
+                closures.push(k);
+            } else if closable {
+                g.soft[a].push((b, k));
+                g.soft[b].push((a, k));
+            } else {
+                let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
+                if ra == rb {
+                    bail!(
+                        "joint `{}` ({}) closes a loop of universal and prismatic joints: MuJoCo can close a loop only at a spherical, revolute or fixed joint",
+                        j.name,
+                        j.kind
+                    );
+                }
+                uf[ra] = rb;
+                g.forced[a].push((b, k));
+                g.forced[b].push((a, k));
+            }
+        }
+        Ok((g, closures))
+    }
+}
+
 impl Graph<'_> {
+    /// The root of `start`'s component: the one `options` names if it is
+    /// there, else the node whose tree is shallowest (least total depth).
+    fn root_of(&self, start: usize, options: &TreeOptions) -> usize {
+        let component = self.grow(start).order;
+        match options
+            .root
+            .map(|b| b + 1)
+            .filter(|r| component.contains(r))
+        {
+            Some(r) => r,
+            None => *component
+                .iter()
+                .min_by_key(|&&r| {
+                    let depth = self.grow(r).depth;
+                    depth.iter().filter(|&&d| d != usize::MAX).sum::<usize>()
+                })
+                .expect("a component has a node"),
+        }
+    }
+
     /// Node of a body: 0 for the world, body + 1 otherwise.
     fn node(m: &Mechanism, body: usize) -> usize {
         if m.bodies[body].fixed {
@@ -186,57 +266,7 @@ impl Tree {
     /// have one (a joint kind it cannot express, a loop of joints that must
     /// all be tree joints, a cut joint that must be one).
     pub fn of(m: &Mechanism, options: &TreeOptions) -> Result<Tree> {
-        let n = m.bodies.len() + 1;
-        let mut g = Graph {
-            m,
-            forced: vec![Vec::new(); n],
-            soft: vec![Vec::new(); n],
-        };
-        let mut uf: Vec<usize> = (0..n).collect();
-        let mut closures = Vec::new();
-        for (k, j) in m.joints.iter().enumerate() {
-            let closable = matches!(
-                j.kind,
-                JointKind::Spherical | JointKind::Revolute | JointKind::Fixed
-            );
-            match j.kind {
-                JointKind::Distance | JointKind::Perpendicular | JointKind::PointOnPlane => bail!(
-                    "joint `{}`: a {} joint has no MuJoCo joint or exact equality",
-                    j.name,
-                    j.kind
-                ),
-                _ => {}
-            }
-            let (a, b) = (Graph::node(m, j.bodies[0]), Graph::node(m, j.bodies[1]));
-            if a == b {
-                continue; // between fixed bodies (or a body and itself): nothing moves
-            }
-            if options.cut.contains(&k) {
-                if !closable {
-                    bail!(
-                        "joint `{}` cannot be cut: MuJoCo closes no loop with a {} joint",
-                        j.name,
-                        j.kind
-                    );
-                }
-                closures.push(k);
-            } else if closable {
-                g.soft[a].push((b, k));
-                g.soft[b].push((a, k));
-            } else {
-                let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
-                if ra == rb {
-                    bail!(
-                        "joint `{}` ({}) closes a loop of universal and prismatic joints: MuJoCo can close a loop only at a spherical, revolute or fixed joint",
-                        j.name,
-                        j.kind
-                    );
-                }
-                uf[ra] = rb;
-                g.forced[a].push((b, k));
-                g.forced[b].push((a, k));
-            }
-        }
+        let (g, closures) = Graph::of(m, options)?;
         let mut tree = Tree {
             via: vec![None; m.bodies.len()],
             parent: vec![None; m.bodies.len()],
@@ -245,7 +275,7 @@ impl Tree {
             roots: Vec::new(),
             closures: Vec::new(),
         };
-        let mut reached = vec![false; n];
+        let mut reached = vec![false; m.bodies.len() + 1];
         let has_world = m.bodies.iter().any(|b| b.fixed);
         let mut pending: Vec<usize> = Vec::new();
         if has_world {
@@ -263,43 +293,41 @@ impl Tree {
             let root = if start == WORLD {
                 WORLD
             } else {
-                let component = g.grow(start).order;
-                match options
-                    .root
-                    .map(|b| b + 1)
-                    .filter(|r| component.contains(r))
-                {
-                    Some(r) => r,
-                    None => *component
-                        .iter()
-                        .min_by_key(|&&r| {
-                            let depth = g.grow(r).depth;
-                            depth.iter().filter(|&&d| d != usize::MAX).sum::<usize>()
-                        })
-                        .expect("a component has a node"),
-                }
+                g.root_of(start, options)
             };
-            let Growth { via, order, .. } = g.grow(root);
-            if root != WORLD {
-                tree.roots.push(root - 1);
-                tree.world_children.push(root - 1);
-            }
-            for v in order {
-                reached[v] = true;
-                if let Some((u, k)) = via[v] {
-                    let body = v - 1;
-                    tree.via[body] = Some(k);
-                    if u == WORLD {
-                        tree.world_children.push(body);
-                    } else {
-                        tree.parent[body] = Some(u - 1);
-                        tree.children[u - 1].push(body);
-                    }
+            tree.attach(&g, root, &mut reached);
+        }
+        tree.close(m, closures, options);
+        Ok(tree)
+    }
+
+    /// Adds the tree `g` grows from `root` (marking its nodes `reached`).
+    fn attach(&mut self, g: &Graph, root: usize, reached: &mut [bool]) {
+        let Growth { via, order, .. } = g.grow(root);
+        if root != WORLD {
+            self.roots.push(root - 1);
+            self.world_children.push(root - 1);
+        }
+        for v in order {
+            reached[v] = true;
+            if let Some((u, k)) = via[v] {
+                let body = v - 1;
+                self.via[body] = Some(k);
+                if u == WORLD {
+                    self.world_children.push(body);
+                } else {
+                    self.parent[body] = Some(u - 1);
+                    self.children[u - 1].push(body);
                 }
             }
         }
+    }
+
+    /// The loop closures: the joints `closures` cut, and every joint
+    /// between moving nodes the tree left out, in joint order.
+    fn close(&mut self, m: &Mechanism, mut closures: Vec<usize>, options: &TreeOptions) {
         let in_tree: Vec<bool> = (0..m.joints.len())
-            .map(|k| tree.via.contains(&Some(k)))
+            .map(|k| self.via.contains(&Some(k)))
             .collect();
         for (k, j) in m.joints.iter().enumerate() {
             let (a, b) = (Graph::node(m, j.bodies[0]), Graph::node(m, j.bodies[1]));
@@ -308,11 +336,10 @@ impl Tree {
             }
         }
         closures.sort_unstable();
-        tree.closures = closures
+        self.closures = closures
             .into_iter()
-            .map(|k| (k, tree.closure(m, k, options.two_connects)))
+            .map(|k| (k, self.closure(m, k, options.two_connects)))
             .collect();
-        Ok(tree)
     }
 
     /// How joint `k` (outside the tree) is closed.
