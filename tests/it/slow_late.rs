@@ -82,7 +82,13 @@ fn figures(o: &Outcome) -> (f64, u64, f64, f64, Summary) {
 fn cluttered_stays_together_while_the_slow_loop_is_late() {
     let scene = resolve("cluttered").unwrap();
     let (_, _, f0, _, _) = figures(&run(&scene, 2.0, Vec::new(), Vec::new()));
-    let late = run(&scene, 8.0, Vec::new(), stalls(0.25, 0.25, 7.75, 40));
+    let stall_periods = 40;
+    let late = run(
+        &scene,
+        8.0,
+        Vec::new(),
+        stalls(0.25, 0.25, 7.75, stall_periods),
+    );
     let (pen, backups, f, d, s) = figures(&late);
     let what = format!(
         "{backups} backups, {f} N at the motor ({f0} N without stalls), {pen} m, bodies \
@@ -90,7 +96,21 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
     );
     assert!(pen < 1e-3, "{what}");
     assert!(backups <= 10, "{what}");
-    assert!(f <= 5.0 * f0, "{what}");
+    // A backup resets the world to the last clean snapshot, which a 40 ms
+    // stall leaves up to the stall plus two slow periods old (the last look
+    // before it, the first after): the dragged box jumps back by at most
+    // the hand's travel over that time and the coupling pulls with k × that.
+    // Whether a backup meets a stall-old snapshot is decided by the last
+    // bits (0.15 N here, 0.75 N with the norm rows out of the force factor
+    // or every factor on the other kernel path; BENCHMARKS.md, issue 23),
+    // so the bound is the reset's, not a multiple of this run's: 0.97 N.
+    // Main's repeated backups pulled 4.25 N.
+    // The scene's hand: 0.36 m in 8 s; 1 kHz, a slow period of 5 ms.
+    let hand_speed_m_per_s = 0.36 / 8.0;
+    let stale_s = 1e-3 * stall_periods as f64 + 2.0 * 0.005;
+    let k = haptloop_solver::SolverSettings::default().coupling_stiffness_n_per_m;
+    let reset = k * hand_speed_m_per_s * stale_s;
+    assert!(f <= f0 + reset, "{what}: above {f0} + {reset} N");
     assert!(d.is_finite() && d < 0.5, "{what}");
     assert_eq!(s.contact.as_ref().unwrap().broken_snapshots, 0, "{what}");
 }
