@@ -12,6 +12,7 @@ mod force;
 mod gears;
 mod limits;
 mod matvec;
+mod pivoted_finger;
 mod multilevel;
 mod planar;
 mod program;
