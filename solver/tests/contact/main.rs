@@ -15,6 +15,7 @@ mod expansion;
 #[path = "../solver/fd.rs"]
 mod fd;
 mod friction;
+mod low_rank_back_off;
 mod moved_evaluation;
 mod moved_steps;
 mod pinch;
