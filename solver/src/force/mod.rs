@@ -74,12 +74,12 @@ mod tests_dense;
 mod tests_pivoted;
 
 pub use output::FingerOutput;
+pub use pivoted::{eigensolve_only, pivoted_solves};
 pub use precond::multilevel::MultilevelStats;
 pub use precond::tree::TreeStats;
-pub use pivoted::{eigensolve_only, pivoted_solves};
-pub use solve::LowRankTally;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
     FingerWrench, INEQUALITY_ACTIVE_BAND, ReferenceError, reference_finger_wrenches,
 };
+pub use solve::LowRankTally;
 pub use wrench::body_wrench;

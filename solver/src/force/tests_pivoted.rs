@@ -87,15 +87,23 @@ fn the_pivoted_solve_agrees_with_the_eigensolve_on_every_rank() {
                         assert_eq!(r2, rank, "n {n} r {r} spread {spread} rest {rest}");
                         assert_eq!(r2, r, "n {n} r {r}");
                         let size = y.iter().map(|t| t * t).sum::<f64>().sqrt();
-                        let d = x.iter().zip(&y).map(|(u, v)| (u - v) * (u - v)).sum::<f64>();
+                        let d = x
+                            .iter()
+                            .zip(&y)
+                            .map(|(u, v)| (u - v) * (u - v))
+                            .sum::<f64>();
                         let rel = d.sqrt() / size.max(1e-300);
                         let top = eig.iter().fold(0.0f64, |m, e| m.max(*e));
                         let kept = eig.iter().filter(|e| **e > 1e-9 * top);
                         let low = kept.fold(top, |m, e| m.min(*e));
-                        let first_order = n as f64 * (rest + f64::EPSILON * top) * top / (low * low);
+                        let first_order =
+                            n as f64 * (rest + f64::EPSILON * top) * top / (low * low);
                         let bound = (10.0 * first_order).max(1e-10);
                         worst = worst.max(rel / bound);
-                        assert!(rel <= bound, "n {n} r {r} spread {spread}: {rel:e} > {bound:e}");
+                        assert!(
+                            rel <= bound,
+                            "n {n} r {r} spread {spread}: {rel:e} > {bound:e}"
+                        );
                     }
                 }
             }

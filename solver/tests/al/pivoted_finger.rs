@@ -50,7 +50,10 @@ fn start_of(p: &Program) -> FingerTarget {
 /// Largest |a − b| over max(|b|, 1) of two equal-length slices.
 fn relative(a: &[f64], b: &[f64]) -> f64 {
     let size = b.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / size
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / size
 }
 
 /// The finger outputs' worst relative difference, and whether any bit
@@ -113,5 +116,8 @@ fn the_pivoted_finger_solve_agrees_with_the_eigensolve_on_every_tick() {
     let (ok, stats) = count(|| (0..200).all(|_| fast.tick(&hold, DT).status == TickOutcome::Ok));
     assert!(ok && is_installed());
     assert_eq!(stats.total(), 0, "the held ticks allocated: {stats:?}");
-    assert!(pivoted_solves() >= before + 200, "the pivoted path did not run while counted");
+    assert!(
+        pivoted_solves() >= before + 200,
+        "the pivoted path did not run while counted"
+    );
 }

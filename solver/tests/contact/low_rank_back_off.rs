@@ -79,9 +79,18 @@ fn a_refused_low_rank_release_backs_off_and_the_results_equal_refactoring() {
         assert_eq!(a.status, TickOutcome::Ok, "tick {k}");
         assert_eq!(a.status, b.status, "tick {k}");
         assert!(fast.program.q() == slow.program.q(), "tick {k}: q");
-        assert!(fast.program.lambda() == slow.program.lambda(), "tick {k}: λ");
-        let (x, y) = (fast.program.finger_outputs()[0], slow.program.finger_outputs()[0]);
-        for (u, v) in [(x.force_n, y.force_n), (x.constraint_force_n, y.constraint_force_n)] {
+        assert!(
+            fast.program.lambda() == slow.program.lambda(),
+            "tick {k}: λ"
+        );
+        let (x, y) = (
+            fast.program.finger_outputs()[0],
+            slow.program.finger_outputs()[0],
+        );
+        for (u, v) in [
+            (x.force_n, y.force_n),
+            (x.constraint_force_n, y.constraint_force_n),
+        ] {
             let rel = (u - v).norm() / v.norm().max(1.0);
             worst = worst.max(rel);
             assert!(rel <= 1e-9, "tick {k}: {u:?} against {v:?} ({rel:e})");
@@ -110,5 +119,8 @@ fn a_refused_low_rank_release_backs_off_and_the_results_equal_refactoring() {
     // The correction was tried and refused, and the back-off engaged.
     assert!(sum.refusals >= 2, "{sum:?}");
     assert!(sum.skipped >= BACK_OFF, "{sum:?}");
-    assert!(sum.attempts + sum.skipped <= releases, "{sum:?}, {releases} releases");
+    assert!(
+        sum.attempts + sum.skipped <= releases,
+        "{sum:?}, {releases} releases"
+    );
 }
