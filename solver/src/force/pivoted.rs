@@ -36,11 +36,11 @@ const MAX: usize = 6;
 const MARGIN: f64 = 1e3;
 
 /// A pivot below this × the first sends the block to the eigensolve before
-/// the factor is finished: a kept part conditioned beyond 1e5 (`sit-on-chair`'s
-/// contact grasps, kept eigenvalues 1e-7..1e-6 of the largest) would fail
-/// the kept bound after the whole factor and its r solves (measured: 1.9 %
-/// of that scene's tick), and its solution would differ from the
-/// eigensolve's by the rest over λ_r² anyway.
+/// the factor is finished: a kept part conditioned beyond about 1e5 would
+/// likely fail the kept bound only after the whole factor and its r solves
+/// (`sit-on-chair`'s grasps are refused, at a cost of about 1 % of its
+/// tick), and its solution would differ from the eigensolve's by the rest
+/// over λ_r² anyway.
 const PIVOT_RATIO: f64 = 1e-5;
 
 thread_local! {
