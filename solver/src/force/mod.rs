@@ -57,6 +57,7 @@ pub(crate) mod inertia;
 mod motion;
 mod output;
 mod pcg;
+mod pivoted;
 mod precond;
 mod rank_one;
 mod redundancy;
@@ -69,12 +70,16 @@ mod wrench;
 
 #[cfg(test)]
 mod tests_dense;
+#[cfg(test)]
+mod tests_pivoted;
 
 pub use output::FingerOutput;
+pub use pivoted::{eigensolve_only, pivoted_solves};
 pub use precond::multilevel::MultilevelStats;
 pub use precond::tree::TreeStats;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};
 pub use reference::{
     FingerWrench, INEQUALITY_ACTIVE_BAND, ReferenceError, reference_finger_wrenches,
 };
+pub use solve::LowRankTally;
 pub use wrench::body_wrench;

@@ -43,6 +43,11 @@ pub(crate) fn min_norm_solve(
     if full_rank_solve(a, b, x, v, reference) {
         return n;
     }
+    // A rank-deficient block whose rank a pivoted factor proves (Stewart
+    // against a stroke limit: 6 × 6 of rank 3).
+    if let Some(rank) = super::pivoted::pivoted_solve(a, b, x, v, reference) {
+        return rank;
+    }
     v.fill(0.0);
     for i in 0..n {
         v[i * n + i] = 1.0;

@@ -42,6 +42,7 @@ use crate::cholesky::{Cholesky, Superset};
 
 /// The release branch's second solve from the first factor.
 mod low_rank;
+pub use low_rank::LowRankTally;
 pub(crate) use low_rank::{BACK_OFF, LowRank};
 
 /// The numeric factorisation failed (a non-finite or non-positive pivot that

@@ -424,6 +424,12 @@ impl Program {
         self.feedback.low_rank_releases()
     }
 
+    /// The low-rank release's attempts, refusals and releases skipped while
+    /// backing off after a refusal (`force::solve`'s `BACK_OFF`).
+    pub fn force_low_rank_tally(&self) -> crate::force::LowRankTally {
+        self.feedback.low_rank_tally()
+    }
+
     /// Solves every release by the masked refactorisation (the spare
     /// alone): the bit-for-bit reference of the spare's test, and the
     /// comparison of the low-rank correction's. Deallocates; not for the

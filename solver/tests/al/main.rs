@@ -14,6 +14,7 @@ mod limits;
 mod lockstep;
 mod matvec;
 mod multilevel;
+mod pivoted_finger;
 mod planar;
 mod program;
 mod redundant;

@@ -18,6 +18,7 @@ mod friction;
 // The lockstep harness of the `al` tests, shared.
 #[path = "../al/lockstep.rs"]
 mod lockstep;
+mod low_rank_back_off;
 mod moved_evaluation;
 mod moved_steps;
 mod pinch;

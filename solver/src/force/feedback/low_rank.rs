@@ -12,7 +12,7 @@
 //! the two within round-off.
 
 use super::*;
-use crate::force::solve::{BACK_OFF, LowRank};
+use crate::force::solve::{BACK_OFF, LowRank, LowRankTally};
 
 impl Feedback {
     /// Gives the spare the buffers of the low-rank release when this
@@ -41,12 +41,15 @@ impl Feedback {
         // Backing off after a refusal (`BACK_OFF`).
         if lr.skip > 0 {
             lr.skip -= 1;
+            lr.tally.skipped += 1;
             return false;
         }
+        lr.tally.attempts += 1;
         lr.clear();
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             if self.scale[row] == 0.0 && sp.scale[row] != 0.0 && !lr.release(j) {
                 lr.skip = BACK_OFF;
+                lr.tally.refusals += 1;
                 return false;
             }
         }
@@ -60,6 +63,7 @@ impl Feedback {
             }
             Ok(false) => {
                 lr.skip = BACK_OFF;
+                lr.tally.refusals += 1;
                 false
             }
             // A non-finite finger solve: the first multipliers back, and
@@ -68,6 +72,7 @@ impl Feedback {
             Err(_) => {
                 self.solve.restore_low_rank(lr);
                 lr.skip = BACK_OFF;
+                lr.tally.refusals += 1;
                 false
             }
         }
@@ -79,6 +84,15 @@ impl Feedback {
             .as_ref()
             .and_then(|sp| sp.low_rank.as_ref())
             .map_or(0, |lr| lr.done)
+    }
+
+    /// What the low-rank release did with the releases that reached it
+    /// (all zero without it).
+    pub fn low_rank_tally(&self) -> LowRankTally {
+        self.spare
+            .as_ref()
+            .and_then(|sp| sp.low_rank.as_ref())
+            .map_or(LowRankTally::default(), |lr| lr.tally)
     }
 
     /// Solves every release by the masked refactorisation (the comparison

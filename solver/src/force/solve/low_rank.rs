@@ -87,6 +87,21 @@ pub(crate) struct LowRank {
     pub done: u64,
     /// Releases left to refactor without trying ([`BACK_OFF`]).
     pub skip: u32,
+    /// Releases the correction tried, refused, and skipped while backing
+    /// off (the back-off's test reads them).
+    pub tally: LowRankTally,
+}
+
+/// What the low-rank release did with the releases that reached it
+/// (`Program::force_low_rank_tally`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LowRankTally {
+    /// Releases the correction was tried on.
+    pub attempts: u64,
+    /// Attempts it refused (each starts a back-off of [`BACK_OFF`]).
+    pub refusals: u64,
+    /// Releases refactored at once while backing off.
+    pub skipped: u64,
 }
 
 impl LowRank {
@@ -104,6 +119,7 @@ impl LowRank {
             rank: 0,
             done: 0,
             skip: 0,
+            tally: LowRankTally::default(),
         }
     }
 
