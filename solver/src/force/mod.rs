@@ -55,6 +55,9 @@ pub mod friction;
 mod gram;
 pub(crate) mod inertia;
 mod motion;
+/// The acceleration filter's time constant over the velocity filter's
+/// (`reduced/` differences the motion the same way).
+pub(crate) use motion::ACCELERATION_FILTER_FRACTION;
 mod output;
 mod pcg;
 mod pivoted;

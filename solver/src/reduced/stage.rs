@@ -21,12 +21,10 @@ use super::kinematics::{Kinematics, Twist};
 use super::small::{dot, forward};
 use super::tick::JointTick;
 use super::tree::JointTree;
+use crate::force::ACCELERATION_FILTER_FRACTION;
 use crate::force::inertia::BodyMass;
 use crate::force::small::{factor_in_place, min_norm_solve};
 use crate::{BodyId, FingerOutput, FingerTarget, Model};
-
-/// `force::motion::ACCELERATION_FILTER_FRACTION` (private there).
-const ACCELERATION_FILTER_FRACTION: f64 = 0.25;
 
 /// One body's motion history (`force::motion`).
 #[derive(Debug, Clone, Copy)]
