@@ -328,10 +328,11 @@ fn three_fingers_lift_the_cylinder() {
 /// contact loop promises is the bound of that lag: every snapshot is
 /// checked exactly, so a feature without a row can close at most the
 /// pair's relative motion over one slow period before it is found and
-/// backed up; the box moves at the hand's speed and an object it pushes at
-/// most as fast (measured: 78 mm/s against the box's 45 mm/s), so the pair
-/// closes at most 2 × the hand's speed. Each such penetration is answered
-/// at once (a backup that clears it: none held).
+/// backed up. The box moves at the hand's speed; taking an object it meets
+/// to move at most as fast (an assumption, kinematic pushing has no
+/// inertia to carry it faster), the pair closes at most 2 × the hand's
+/// speed (measured in that cycle: 78 mm/s, against 90). Each such
+/// penetration is answered at once (a backup that clears it: none held).
 #[test]
 fn the_dragged_box_pushes_the_clutter_aside() {
     let scene = resolve("cluttered").unwrap();
