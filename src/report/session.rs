@@ -269,7 +269,7 @@ fn contact_lines(out: &mut String, c: &super::summary::Contact) {
         let _ = writeln!(
             out,
             "  {} cycles held a penetration beyond the tolerance without a backup: \
-             backups in a row did not clear it",
+             backups in a row did not clear it (held up to 10 × the tolerance at most)",
             c.backups_held
         );
     }

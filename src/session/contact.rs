@@ -78,8 +78,11 @@ pub struct ContactSlowStats {
     /// Cycles that found a penetration beyond the tolerance and did not
     /// back it up: two backups in a row had not cleared it (each reset
     /// came back to the same depth), so it is held and reported, and backed
-    /// up again only if it grows past twice that depth.
+    /// up again only if it grows past [`held_penetration_cap_m`].
     pub held: u64,
+    /// The deepest penetration a held cycle had, m (at most
+    /// [`held_penetration_cap_m`]).
+    pub max_held_m: f64,
     /// Most pairs tracked at once.
     pub max_tracked: u32,
     /// Largest and total time to build a program for a new structure, ns.
@@ -133,6 +136,18 @@ pub fn broken_penetration_m(c: &ContactSettings) -> f64 {
     c.contact_distance_m.max(10.0 * c.penetration_tolerance_m)
 }
 
+/// The deepest penetration the backup policy holds instead of backing it
+/// up, m: ten times the tolerance (the tolerance's leg of the broken
+/// bound), and at most half the broken bound. Fixed by the scene's contact
+/// settings: a held run's depth no longer depends on a depth sampled where
+/// a stall fell (it was twice the depth found at the second backup in a
+/// row: 2.02 mm after one stall, 0.30 mm after another; BENCHMARKS.md,
+/// issue 23, "a fixed cap on held backups"). 1 mm for the built-in contact
+/// scenes (tolerance 0.1 mm, contact distance 5 mm).
+pub fn held_penetration_cap_m(c: &ContactSettings) -> f64 {
+    (10.0 * c.penetration_tolerance_m).min(0.5 * broken_penetration_m(c))
+}
+
 /// Where a snapshot was taken: its grid slot and its
 /// [`Snapshot::contact_motion`](super::Snapshot).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,6 +173,9 @@ pub struct ContactLoop {
     backups_in_a_row: u32,
     /// The manager's backup floor, m (0: every penetration is backed up).
     floor_m: f64,
+    /// What the floor is while backups are held, m
+    /// ([`held_penetration_cap_m`]).
+    cap_m: f64,
 }
 
 impl ContactLoop {
@@ -180,6 +198,7 @@ impl ContactLoop {
             stats: ContactSlowStats::default(),
             backups_in_a_row: 0,
             floor_m: 0.0,
+            cap_m: held_penetration_cap_m(&contact),
         })
     }
 
@@ -282,7 +301,10 @@ impl ContactLoop {
         let broken = cycle.max_penetration_m > self.broken_m;
         let reset = matches!(&update, ContactUpdate::Program { reset: Some(_), .. });
         let held = !cycle.backups.is_empty() && !reset;
-        self.stats.held += u64::from(held && self.floor_m > 0.0);
+        if held && self.floor_m > 0.0 && cycle.max_penetration_m <= self.floor_m {
+            self.stats.held += 1;
+            self.stats.max_held_m = self.stats.max_held_m.max(cycle.max_penetration_m);
+        }
         self.backup_policy(&cycle, reset);
         self.stats.broken += u64::from(broken);
         match update {
@@ -337,14 +359,15 @@ impl ContactLoop {
     }
 
     /// Backups that do not clear a penetration are not repeated: after two
-    /// in a row the manager holds penetrations up to twice the depth found
-    /// (below the broken bound) until a clean cycle; a backup that happens
-    /// all the same (deeper) starts the count again.
+    /// in a row the manager holds penetrations up to the fixed cap
+    /// ([`held_penetration_cap_m`]) until a clean cycle. A deeper one is
+    /// backed up all the same (to the last clean configuration) and the
+    /// hold goes on.
     fn backup_policy(&mut self, cycle: &Cycle, reset: bool) {
         let floor = if reset {
             self.backups_in_a_row += 1;
-            if self.backups_in_a_row >= 2 && self.floor_m == 0.0 {
-                (2.0 * cycle.max_penetration_m).min(0.5 * self.broken_m)
+            if self.backups_in_a_row >= 2 {
+                self.cap_m
             } else {
                 0.0
             }

@@ -36,7 +36,7 @@ mod witness_age;
 pub use build::build;
 pub use contact::{
     At, ContactLoop, ContactSlowStats, Interpenetration, Received, WitnessFrame, WitnessInbox,
-    broken_penetration_m,
+    broken_penetration_m, held_penetration_cap_m,
 };
 pub use design::{DesignColumns, DesignStats, DesignTracker, Range4};
 pub use device_limits::DeviceLimitTicks;

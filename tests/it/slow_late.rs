@@ -94,7 +94,11 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
         "{backups} backups, {f} N at the motor ({f0} N without stalls), {pen} m, bodies \
          moved up to {d} m (main: 82, 4.25 N, 1.84e-3 m)"
     );
-    assert!(pen < 1e-3, "{what}");
+    // A backup that does not clear is held up to the fixed cap (1 mm
+    // here); the deepest penetration stays within it too (0.51 mm).
+    let cap = session::held_penetration_cap_m(&late.plan.contact);
+    assert!(pen <= cap, "{what}: above the held cap {cap} m");
+    assert!(late.slow.contact.unwrap().max_held_m <= cap, "{what}");
     assert!(backups <= 10, "{what}");
     // A backup resets the world to the last clean snapshot, which a 40 ms
     // stall leaves up to the stall plus two slow periods old (the last look
@@ -120,6 +124,18 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
 /// pulled the column back along the same path, and the same penetration
 /// came back every cycle. Main: 610 backups, 7.65 N at the motor (0.97 N
 /// without stalls), 2.5 mm penetration.
+///
+/// The bounds come from the backup policy and the scene's contact
+/// settings: a held cycle is at most the fixed cap
+/// (`held_penetration_cap_m`, 1 mm here); nothing is ever deeper than the
+/// broken bound; a stall starts at most one hold, which takes two backups
+/// in a row, and a penetration deeper than the cap while held is backed up
+/// once more and followed by one more (the reset's own cycle), so at most
+/// four backups a stall. Before the fixed cap the hold reached twice a
+/// sampled depth and a backup after a long hold went back to before it:
+/// with the norm rows out of the force factor, 20-period stalls made
+/// 146 backups and 8.5 N (BENCHMARKS.md, issue 23, "a fixed cap on held
+/// backups").
 #[test]
 fn backups_after_long_stalls_do_not_repeat_every_cycle() {
     let scene = resolve("stack").unwrap();
@@ -127,21 +143,28 @@ fn backups_after_long_stalls_do_not_repeat_every_cycle() {
     for (periods, main_backups, main_force, main_pen) in
         [(50, 610, 7.65, 2.5e-3), (20, 65, 1.46, 1.6e-3)]
     {
-        let o = run(&scene, 4.0, stalls(0.5, 0.5, 3.5, periods), Vec::new());
+        let at = stalls(0.5, 0.5, 3.5, periods);
+        let n_stalls = at.len() as u64;
+        let o = run(&scene, 4.0, at, Vec::new());
         let (pen, backups, f, d, s) = figures(&o);
         let c = s.contact.as_ref().unwrap();
+        let cap = session::held_penetration_cap_m(&o.plan.contact);
+        let held_max = o.slow.contact.unwrap().max_held_m;
         let what = format!(
-            "{periods}-period stalls: {backups} backups, {f} N, {pen} m, {d} m \
-             (main: {main_backups}, {main_force} N, {main_pen} m; without stalls {f0} N, {d0} m)"
+            "{periods}-period stalls: {backups} backups, {f} N, {pen} m (held up to {held_max} m, \
+             cap {cap} m), {d} m (main: {main_backups}, {main_force} N, {main_pen} m; without \
+             stalls {f0} N, {d0} m)"
         );
-        assert!(backups <= 100, "{what}");
+        assert!(backups <= 4 * n_stalls, "{what}");
+        assert!(c.backups_held > 0, "{what}: nothing held");
+        assert!(held_max > c.tolerance_m && held_max <= cap, "{what}");
+        assert!(pen < c.broken_penetration_m, "{what}");
+        assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
         assert!(f <= 1.2 * f0, "{what}");
-        assert!(pen <= 1.2e-3, "{what}");
         // The column slides as one without stalls; after them the top box
         // may slip off it (main froze the column where the backups began,
         // 1 cm from the start). Nothing may leave the 30 cm table.
         assert!(d.is_finite() && d < 0.15, "{what}");
-        assert!(c.backups_held > 0, "{what}: nothing held");
         assert!(!c.verdict.contains("kept"), "{what}: {}", c.verdict);
     }
 }
