@@ -77,7 +77,7 @@ mod tests_dense;
 mod tests_pivoted;
 
 pub use output::FingerOutput;
-pub use pivoted::{eigensolve_only, pivoted_solves};
+pub use pivoted::{PivotedTally, eigensolve_only, pivoted_solves, pivoted_tally};
 pub use precond::multilevel::MultilevelStats;
 pub use precond::tree::TreeStats;
 pub use redundancy::{PRETEST_RATIO, REDUNDANCY_TOLERANCE, Redundancy};

@@ -23,6 +23,20 @@
 //! by the dropped part E: about ‖E‖/λ_r relative (1e-14 · cond on the
 //! built-in mechanisms). Anything else goes to the eigensolve. Not bit for
 //! bit with it; `tests_pivoted` compares the two.
+//!
+//! Only r < n is taken (a block of full rank is the full-rank shortcut's,
+//! which runs first), so an accepted block has an eigenvalue within ‖E‖₂
+//! of zero: λ_min(S) ≤ ‖E‖₁ ≤ τ_low / `MARGIN`, τ_low = [`RANK_TOLERANCE`]
+//! · max(max S_ii, reference). The full-rank shortcut's refusal leaves
+//! ‖S⁻¹‖₁ from its factor, and λ_min(S) ≥ 1/‖S⁻¹‖₁; where that bound is
+//! above τ_low no eigenvalue can be dropped and the block is refused before
+//! any work (the precheck: exact up to the two factors' round-off, about
+//! 1e-14 of S against the `MARGIN` = 1e3 between the two bounds). The
+//! rigid grasps of `sit-on-chair` and the cluttered table (6 × 6, full
+//! rank, smallest eigenvalue 1e-6 of the largest: between the shortcut's
+//! bound and the threshold, where only the eigensolve decides) are refused
+//! there, at the cost of a scan of the diagonal (before it, a 4- to 6-step
+//! factor each, a third of sit-on-chair's with the whole certificate).
 
 use super::small::{RANK_TOLERANCE, factor_in_place, substitute};
 use std::cell::Cell;
@@ -37,24 +51,62 @@ const MARGIN: f64 = 1e3;
 
 /// A pivot below this × the first sends the block to the eigensolve before
 /// the factor is finished: a kept part conditioned beyond about 1e5 would
-/// likely fail the kept bound only after the whole factor and its r solves
-/// (`sit-on-chair`'s grasps are refused, at a cost of about 1 % of its
-/// tick), and its solution would differ from the eigensolve's by the rest
-/// over λ_r² anyway.
+/// likely fail the kept bound only after the whole factor and its r solves,
+/// and its solution would differ from the eigensolve's by the rest over
+/// λ_r² anyway. (`sit-on-chair`'s full-rank grasps, which this and the kept
+/// bound used to catch at the 5th pivot, now stop at the precheck.)
 const PIVOT_RATIO: f64 = 1e-5;
 
 thread_local! {
     /// Set by [`eigensolve_only`] for the comparisons the tests make.
     static EIGENSOLVE_ONLY: Cell<bool> = const { Cell::new(false) };
-    /// Solves served on this thread ([`pivoted_solves`]).
-    static SOLVES: Cell<u64> = const { Cell::new(0) };
+    /// This thread's counts ([`pivoted_tally`]).
+    static TALLY: Cell<PivotedTally> = const { Cell::new(PivotedTally::ZERO) };
 }
 
-/// Finger solves this thread's pivoted shortcut has served: what the tests
-/// read to prove the path ran.
+/// What the pivoted shortcut did on this thread, from its start: every
+/// block it was offered (of at most 6 × 6, the shortcut on) ends in exactly
+/// one of `prechecked`, `refused` and `served`.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PivotedTally {
+    /// Refused by the precheck (module docs), before any factor work.
+    pub prechecked: u64,
+    /// Factored (at least in part), then refused.
+    pub refused: u64,
+    /// Solved here: the eigensolve skipped.
+    pub served: u64,
+}
+
+impl PivotedTally {
+    const ZERO: Self = Self {
+        prechecked: 0,
+        refused: 0,
+        served: 0,
+    };
+}
+
+/// This thread's [`PivotedTally`]: what the tests read to prove which way
+/// the blocks went.
+#[doc(hidden)]
+pub fn pivoted_tally() -> PivotedTally {
+    TALLY.with(Cell::get)
+}
+
+/// Finger solves this thread's pivoted shortcut has served
+/// ([`PivotedTally::served`]).
 #[doc(hidden)]
 pub fn pivoted_solves() -> u64 {
-    SOLVES.with(Cell::get)
+    pivoted_tally().served
+}
+
+/// Adds one to the count `field` picks.
+fn count(field: fn(&mut PivotedTally) -> &mut u64) {
+    TALLY.with(|c| {
+        let mut t = c.get();
+        *field(&mut t) += 1;
+        c.set(t);
+    });
 }
 
 /// Runs `f` with [`min_norm_solve`](super::small::min_norm_solve)'s pivoted shortcut off on this thread
@@ -75,29 +127,59 @@ pub fn eigensolve_only<R>(f: impl FnOnce() -> R) -> R {
 
 /// x = S⁺ b for the symmetric positive semi-definite n × n `a` (row-major,
 /// left intact) when the pivoted factor proves the eigensolve's rank
-/// (module docs): `Some(rank)`; `None` (x unspecified) sends the caller to
-/// the eigensolve. `l` (n × n) is scratch.
+/// (module docs) and that rank is below n: `Some(rank)`; `None` (x
+/// unspecified) sends the caller to the eigensolve. `inv_norm`: ‖a⁻¹‖₁ as
+/// the full-rank shortcut computed it when it refused (∞ where its factor
+/// failed), for the precheck. `l` (n × n) is scratch.
 ///
 /// # Real-time
-/// No allocation; n² r + O(r³) multiply-adds.
+/// No allocation; n + 1 comparisons where the precheck refuses, else
+/// n² r + O(r³) multiply-adds.
 pub(crate) fn pivoted_solve(
     a: &[f64],
     b: &[f64],
     x: &mut [f64],
     l: &mut [f64],
     reference: f64,
+    inv_norm: f64,
 ) -> Option<usize> {
     let n = b.len();
     if n == 0 || n > MAX || EIGENSOLVE_ONLY.with(Cell::get) {
         return None;
     }
+    let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
+    let low = RANK_TOLERANCE * max_diag.max(reference);
+    // λ_min ≥ 1/‖a⁻¹‖₁ > low: three decades above any eigenvalue an
+    // accepted factor drops (NaN: no bound, go on).
+    if inv_norm * low < 1.0 {
+        count(|t| &mut t.prechecked);
+        return None;
+    }
+    let solved = factor_and_solve(a, b, x, l, reference, low);
+    if solved.is_some() {
+        count(|t| &mut t.served);
+    } else {
+        count(|t| &mut t.refused);
+    }
+    solved
+}
+
+/// [`pivoted_solve`] past its precheck: the factor, the certificate, the
+/// solve. `low`: τ_low of the module docs.
+fn factor_and_solve(
+    a: &[f64],
+    b: &[f64],
+    x: &mut [f64],
+    l: &mut [f64],
+    reference: f64,
+    low: f64,
+) -> Option<usize> {
+    let n = b.len();
     let l = &mut l[..n * n];
     l.copy_from_slice(&a[..n * n]);
-    let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
     let norm = (0..n)
         .map(|c| (0..n).map(|r| a[r * n + c].abs()).sum::<f64>())
         .fold(0.0, f64::max);
-    let low = RANK_TOLERANCE * max_diag.max(reference);
     let high = MARGIN * RANK_TOLERANCE * norm.max(reference);
     let mut perm = [0usize; MAX];
     for (i, p) in perm.iter_mut().enumerate() {
@@ -113,7 +195,6 @@ pub(crate) fn pivoted_solve(
     }
     x.fill(0.0);
     if r == 0 {
-        SOLVES.with(|c| c.set(c.get() + 1));
         return Some(0);
     }
     let mut g = [0.0; MAX * MAX];
@@ -150,14 +231,12 @@ pub(crate) fn pivoted_solve(
     for i in 0..n {
         x[perm[i]] = (0..=i.min(r - 1)).map(|k| l[i * n + k] * e[k]).sum();
     }
-    let finite = x.iter().all(|t| t.is_finite());
-    SOLVES.with(|c| c.set(c.get() + u64::from(finite)));
-    finite.then_some(r)
+    x.iter().all(|t| t.is_finite()).then_some(r)
 }
 
 /// Outer-product Cholesky of the symmetric n × n `l` (row-major, both
 /// triangles) with the largest remaining diagonal as pivot, stopping when
-/// it is at most `stop` (or not a number): returns r. L's r columns end in
+/// it is at most `stop` (or not a number): returns r < n. L's r columns end in
 /// `l`'s lower triangle (rows in pivot order, `perm[i]` the original index
 /// of row i), the remainder in its trailing (n − r) × (n − r) block.
 ///
@@ -166,7 +245,8 @@ pub(crate) fn pivoted_solve(
 /// by d), so λ_min(LᵀL) ≤ n d and the kept bound cannot be proved (an
 /// eigenvalue between the two bounds: the eigensolve decides, and the
 /// factor's rest is not worth finishing); also when d is below
-/// [`PIVOT_RATIO`] × the first pivot.
+/// [`PIVOT_RATIO`] × the first pivot, and at the n-th pivot above `stop`
+/// (full rank: not taken here).
 fn factor_pivoted(
     l: &mut [f64],
     n: usize,
@@ -186,7 +266,7 @@ fn factor_pivoted(
         if d.partial_cmp(&stop) != Some(Ordering::Greater) {
             return Some(r);
         }
-        if n as f64 * d <= kept || d < PIVOT_RATIO * first {
+        if n as f64 * d <= kept || d < PIVOT_RATIO * first || r + 1 == n {
             return None;
         }
         if r == 0 {
@@ -214,7 +294,7 @@ fn factor_pivoted(
             }
         }
     }
-    Some(n)
+    None
 }
 
 /// ‖E‖₁ of the trailing (n − r) × (n − r) remainder of [`factor_pivoted`]

@@ -40,12 +40,16 @@ pub(crate) fn min_norm_solve(
     if super::rank_one::rank_one_solve(a, b, x, reference) {
         return 1;
     }
-    if full_rank_solve(a, b, x, v, reference) {
-        return n;
-    }
+    // Refused, it leaves ‖A⁻¹‖₁ as its factor computed it (∞ without one).
+    let inv_norm = match full_rank_solve(a, b, x, v, reference) {
+        Ok(()) => return n,
+        Err(inv_norm) => inv_norm,
+    };
     // A rank-deficient block whose rank a pivoted factor proves (Stewart
-    // against a stroke limit: 6 × 6 of rank 3).
-    if let Some(rank) = super::pivoted::pivoted_solve(a, b, x, v, reference) {
+    // against a stroke limit: 6 × 6 of rank 3); that ‖A⁻¹‖₁ rules it out
+    // before any work where no eigenvalue can be dropped (sit-on-chair's
+    // and the cluttered table's grasps: full rank, ill-conditioned).
+    if let Some(rank) = super::pivoted::pivoted_solve(a, b, x, v, reference, inv_norm) {
         return rank;
     }
     v.fill(0.0);
@@ -185,20 +189,27 @@ fn sweeps<const N: usize>(a: &mut [f64], v: &mut [f64], scale: f64) {
 /// rank threshold, A⁺ = A⁻¹ and x = A⁻¹ b. The proof: λ_min ≥ 1/‖A⁻¹‖₁ and
 /// λ_max ≤ ‖A‖₁ (symmetric A), so 1/‖A⁻¹‖₁ > 1000 · [`RANK_TOLERANCE`] ·
 /// max(‖A‖₁, `reference`) leaves no eigenvalue the eigensolve would drop,
-/// with three decades to spare. `a` is left intact; false (x unspecified)
+/// with three decades to spare. `a` is left intact; `Err` (x unspecified)
 /// sends the caller to the eigensolve (a rank-deficient or nearly singular
-/// A: a 1-DOF mechanism's finger). A rigid grasp of a 6-DOF platform takes
+/// A: a 1-DOF mechanism's finger) with ‖A⁻¹‖₁ as computed from the factor,
+/// or ∞ where the factor failed (a pivot not positive: no bound). A rigid grasp of a 6-DOF platform takes
 /// this path: one 6 × 6 Cholesky and 7 triangular solve pairs instead of up
 /// to 30 Jacobi sweeps.
 ///
 /// # Real-time
 /// No allocation; O(n³).
-fn full_rank_solve(a: &[f64], b: &[f64], x: &mut [f64], v: &mut [f64], reference: f64) -> bool {
+pub(super) fn full_rank_solve(
+    a: &[f64],
+    b: &[f64],
+    x: &mut [f64],
+    v: &mut [f64],
+    reference: f64,
+) -> Result<(), f64> {
     let n = b.len();
     // The finger blocks' sizes, known at compile time: the same operations
     // in the same order without bounds checks (`fixed_size`).
     match n {
-        0 => return false,
+        0 => return Err(f64::INFINITY),
         3 => return super::small_fixed::full_rank_solve::<3>(a, b, x, v, reference),
         6 => return super::small_fixed::full_rank_solve::<6>(a, b, x, v, reference),
         _ => {}
@@ -213,14 +224,14 @@ pub(super) fn full_rank_solve_generic(
     x: &mut [f64],
     v: &mut [f64],
     reference: f64,
-) -> bool {
+) -> Result<(), f64> {
     let n = b.len();
     v[..n * n].copy_from_slice(&a[..n * n]);
     let norm = (0..n)
         .map(|c| (0..n).map(|r| a[r * n + c].abs()).sum::<f64>())
         .fold(0.0, f64::max);
     if !factor_in_place(v, n) {
-        return false;
+        return Err(f64::INFINITY);
     }
     // ‖A⁻¹‖₁: the largest column sum of |A⁻¹ e_c|.
     let mut inv_norm = 0.0f64;
@@ -231,11 +242,14 @@ pub(super) fn full_rank_solve_generic(
         inv_norm = inv_norm.max(x.iter().map(|t| t.abs()).sum());
     }
     if !(inv_norm.is_finite() && inv_norm * 1e3 * RANK_TOLERANCE * norm.max(reference) < 1.0) {
-        return false;
+        return Err(inv_norm);
     }
     x.copy_from_slice(b);
     substitute(v, x);
-    x.iter().all(|t| t.is_finite())
+    x.iter()
+        .all(|t| t.is_finite())
+        .then_some(())
+        .ok_or(inv_norm)
 }
 
 /// Lower Cholesky factor of the n × n row-major `a` in place (lower
@@ -411,7 +425,7 @@ mod tests {
         let b = [1.0, -2.0, 0.5, 0.25, 3.0, -1.0];
         let a0 = with_eigenvalues([2.0, 1.0, 0.5, 3.0, 0.1, 1.5]);
         let (mut x, mut v) = ([0.0; 6], [0.0; 36]);
-        assert!(full_rank_solve(&a0, &b, &mut x, &mut v, 0.0));
+        assert!(full_rank_solve(&a0, &b, &mut x, &mut v, 0.0).is_ok());
         let mut a = a0;
         assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 0.0), 6);
         for i in 0..6 {
@@ -421,17 +435,17 @@ mod tests {
         // An eigenvalue 1e-8 below the largest: kept by the eigensolve, but
         // too close to the threshold for the shortcut.
         let near = with_eigenvalues([2.0, 1.0, 0.5, 3.0, 3e-8, 1.5]);
-        assert!(!full_rank_solve(&near, &b, &mut x, &mut v, 0.0));
+        assert!(full_rank_solve(&near, &b, &mut x, &mut v, 0.0).is_err());
         let mut a = near;
         assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 0.0), 6);
         // Below the threshold: dropped, rank 5.
         let singular = with_eigenvalues([2.0, 1.0, 0.5, 3.0, 1e-12, 1.5]);
-        assert!(!full_rank_solve(&singular, &b, &mut x, &mut v, 0.0));
+        assert!(full_rank_solve(&singular, &b, &mut x, &mut v, 0.0).is_err());
         let mut a = singular;
         assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 0.0), 5);
         // A large reference scale makes every eigenvalue small: rank 0.
         let mut a = a0;
-        assert!(!full_rank_solve(&a0, &b, &mut x, &mut v, 1e12));
+        assert!(full_rank_solve(&a0, &b, &mut x, &mut v, 1e12).is_err());
         assert_eq!(min_norm_solve(&mut a, &b, &mut x, &mut v, 1e12), 0);
     }
 

@@ -20,7 +20,7 @@ use crate::common::*;
 use crate::lockstep::{Agree, agree};
 use crate::release_spare::{lift, start_of};
 use haptloop_rt::alloc::{count, is_installed};
-use haptloop_solver::force::{eigensolve_only, pivoted_solves};
+use haptloop_solver::force::{eigensolve_only, pivoted_solves, pivoted_tally};
 use haptloop_solver::mechanisms::stewart;
 use haptloop_solver::{FingerTarget, Program, SolverSettings, TickOutcome};
 
@@ -58,7 +58,7 @@ fn the_pivoted_finger_solve_agrees_with_the_eigensolve_on_every_tick() {
         start_of(&fast)
     };
     let ticks = if cfg!(debug_assertions) { 4600 } else { 6000 };
-    let solves = pivoted_solves();
+    let (solves, tally) = (pivoted_solves(), pivoted_tally());
     let (mut worst_f, mut worst_q, mut differing) = (0.0f64, 0.0f64, 0);
     for k in 1..ticks {
         let t = lift(&start, k);
@@ -74,10 +74,19 @@ fn the_pivoted_finger_solve_agrees_with_the_eigensolve_on_every_tick() {
         differing += usize::from(differs);
     }
     let served = pivoted_solves() - solves;
-    eprintln!(
-        "pivoted finger: {served} pivoted solves; {differing} of {ticks} ticks' finger \
-         outputs differ in bits; worst relative difference finger {worst_f:e}, q and λ {worst_q:e}"
+    let now = pivoted_tally();
+    let (prechecked, refused) = (
+        now.prechecked - tally.prechecked,
+        now.refused - tally.refused,
     );
+    eprintln!(
+        "pivoted finger: {served} pivoted solves, {refused} refused, {prechecked} prechecked; \
+         {differing} of {ticks} ticks' finger outputs differ in bits; worst relative \
+         difference finger {worst_f:e}, q and λ {worst_q:e}"
+    );
+    // Rank 3 against the stops: the precheck (for blocks with no eigenvalue
+    // to drop) never refuses one.
+    assert_eq!(prechecked, 0, "{prechecked} prechecked");
     // The stops hold from about 3 s: the pivoted path served the held ticks
     // (one solve a held tick at least), and only `fast`'s (the thread's
     // count does not move under `eigensolve_only`).

@@ -22,6 +22,7 @@ mod low_rank_back_off;
 mod moved_evaluation;
 mod moved_steps;
 mod pinch;
+mod pivoted_precheck;
 mod recycle;
 mod release_low_rank;
 mod release_spare;
