@@ -20,9 +20,11 @@ use faer::sparse::SymbolicSparseColMat;
 use nalgebra::{Matrix4, Vector3, Vector4};
 
 use super::inertia::BodyMass;
-use crate::constraint::Geometry;
+use crate::Jacobian;
 use crate::rotation::BodyFrame;
-use crate::{Jacobian, Model};
+
+/// The pattern and destinations, built once (`Gram::with_norms`).
+mod pattern;
 
 /// Where a row of C goes in the solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,209 +144,13 @@ impl Gram {
     /// The pattern of `model`'s A from its Jacobian pattern, without the rows
     /// `excluded` marks (empty: none). Allocates.
     #[cfg(test)]
-    pub fn new(model: &Model, jac: &Jacobian, masses: &[BodyMass], excluded: &[bool]) -> Self {
-        Self::with_norms(model, jac, masses, excluded, true)
-    }
-
-    /// [`new`](Self::new), the quaternion-norm rows taken out of their
-    /// bodies' cliques where their coupling is zero in exact arithmetic
-    /// (`decouple_norms`) or left in (false: the coupled pattern, for the
-    /// comparison tests). Allocates.
-    pub fn with_norms(
-        model: &Model,
+    pub fn new(
+        model: &crate::Model,
         jac: &Jacobian,
         masses: &[BodyMass],
         excluded: &[bool],
-        decouple_norms: bool,
     ) -> Self {
-        let (mut slot, mut finger_rows, mut j_rows) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, row) in model.rows().iter().enumerate() {
-            if excluded.get(i).copied().unwrap_or(false) {
-                slot.push(Slot::Out);
-            } else if model.constraints()[row.constraint.index()].finger.is_some() {
-                slot.push(Slot::F(finger_rows.len()));
-                finger_rows.push(i);
-            } else {
-                slot.push(Slot::J(j_rows.len()));
-                j_rows.push(i);
-            }
-        }
-        let n_j = j_rows.len();
-        let m_f = finger_rows.len();
-        let (row_ptr, col_idx) = (jac.row_ptr(), jac.col_idx());
-        let (col_ptr, col_rows, col_val) = (jac.col_ptr(), jac.col_rows(), jac.col_value_index());
-        let mut entries = Vec::new();
-        let mut bodies = Vec::new();
-        let mut pairs = Vec::new(); // (body, a, b, kind) before destinations are known
-        let mut lower = Vec::new();
-        let geometry = |row: usize| &model.geometry[model.rows()[row].constraint.index()];
-        // Rows of the coupled pattern left out (J then F indices): each a
-        // decoupled norm row with a row on its body.
-        let mut dropped = Vec::new();
-        let index = |row: usize| match slot[row] {
-            Slot::J(j) => j,
-            Slot::F(f) => n_j + f,
-            Slot::Out => unreachable!("excluded rows have no entries"),
-        };
-        for (mass, m) in masses.iter().enumerate() {
-            let (o, first, first_pair) = (m.offset, entries.len(), pairs.len());
-            for k in col_ptr[o + 3]..col_ptr[o + 4] {
-                let (row, p3) = (col_rows[k], col_val[k]);
-                if slot[row] == Slot::Out {
-                    continue;
-                }
-                let has_r = p3 >= row_ptr[row] + 3 && col_idx[p3 - 3] == o;
-                let (pos, width) = if has_r { (p3 - 3, 7) } else { (p3, 4) };
-                entries.push(Entry { row, pos, width });
-            }
-            let mut norm = None;
-            let body = &entries[first..];
-            let is_norm = |e: &Entry| matches!(geometry(e.row), Geometry::QuatNorm(_));
-            if decouple_norms
-                && body.iter().filter(|e| is_norm(e)).count() == 1
-                && body
-                    .iter()
-                    .all(|e| is_norm(e) || geometry(e.row).scale_free_in_e())
-            {
-                let at = first + body.iter().position(is_norm).expect("one norm row");
-                let e = entries.remove(at);
-                if let Slot::J(j) = slot[e.row] {
-                    dropped.extend(entries[first..].iter().map(|o| (j, index(o.row))));
-                    norm = Some(NormRow {
-                        row: e.row,
-                        pos: e.pos,
-                        dest: 0,
-                    });
-                } else {
-                    entries.insert(at, e);
-                }
-            }
-            let n = entries.len() - first;
-            for a in 0..n {
-                for b in 0..=a {
-                    let (ra, rb) = (entries[first + a].row, entries[first + b].row);
-                    if let (Slot::J(x), Slot::J(y)) = (slot[ra], slot[rb]) {
-                        lower.push((x.max(y), x.min(y)));
-                    }
-                    pairs.push((a as u32, b as u32, ra, rb));
-                }
-            }
-            bodies.push(BodyRows {
-                mass,
-                entries: first..entries.len(),
-                products: first_pair..pairs.len(),
-                norm,
-            });
-        }
-        // Rows sharing an auxiliary block couple through its metric.
-        let mut aux_pairs = Vec::new();
-        for (k, blk) in model.layout().aux_blocks().iter().enumerate() {
-            let o = blk.offset;
-            let entries: Vec<(usize, usize)> = (col_ptr[o]..col_ptr[o + 1])
-                .map(|p| (col_rows[p], col_val[p]))
-                .filter(|&(row, _)| slot[row] != Slot::Out)
-                .collect();
-            for a in 0..entries.len() {
-                for b in 0..=a {
-                    let (ra, rb) = (entries[a].0, entries[b].0);
-                    if let (Slot::J(x), Slot::J(y)) = (slot[ra], slot[rb]) {
-                        lower.push((x.max(y), x.min(y)));
-                    }
-                }
-            }
-            aux_pairs.push((k, entries));
-        }
-        lower.extend((0..n_j).map(|j| (j, j)));
-        lower.sort_unstable_by_key(|&(r, c)| (c, r));
-        lower.dedup();
-        let mut cp = vec![0usize; n_j + 1];
-        for &(_, c) in &lower {
-            cp[c + 1] += 1;
-        }
-        for c in 0..n_j {
-            cp[c + 1] += cp[c];
-        }
-        let ri: Vec<usize> = lower.iter().map(|&(r, _)| r).collect();
-        let nnz = ri.len();
-        let find = |r: usize, c: usize| cp[c] + ri[cp[c]..cp[c + 1]].binary_search(&r).unwrap();
-        let diag: Vec<usize> = (0..n_j).map(|j| find(j, j)).collect();
-        for b in &mut bodies {
-            if let Some(n) = &mut b.norm
-                && let Slot::J(j) = slot[n.row]
-            {
-                n.dest = diag[j] as u32;
-            }
-        }
-        let products = pairs
-            .iter()
-            .map(|&(_, _, ra, rb)| {
-                let dest = match (slot[ra], slot[rb]) {
-                    (Slot::J(x), Slot::J(y)) => find(x.max(y), x.min(y)),
-                    (Slot::F(f), Slot::J(j)) | (Slot::J(j), Slot::F(f)) => nnz + f * n_j + j,
-                    (Slot::F(x), Slot::F(y)) => nnz + m_f * n_j + x.max(y) * m_f + x.min(y),
-                    (Slot::Out, _) | (_, Slot::Out) => {
-                        unreachable!("excluded rows have no entries")
-                    }
-                };
-                dest as u32
-            })
-            .collect();
-        let dest = |ra: usize, rb: usize| -> u32 {
-            (match (slot[ra], slot[rb]) {
-                (Slot::J(x), Slot::J(y)) => find(x.max(y), x.min(y)),
-                (Slot::F(f), Slot::J(j)) | (Slot::J(j), Slot::F(f)) => nnz + f * n_j + j,
-                (Slot::F(x), Slot::F(y)) => nnz + m_f * n_j + x.max(y) * m_f + x.min(y),
-                (Slot::Out, _) | (_, Slot::Out) => unreachable!("excluded rows have no entries"),
-            }) as u32
-        };
-        let aux: Vec<AuxRows> = aux_pairs
-            .into_iter()
-            .map(|(block, entries)| {
-                let mut products = Vec::new();
-                for a in 0..entries.len() {
-                    for b in 0..=a {
-                        products.push(dest(entries[a].0, entries[b].0));
-                    }
-                }
-                AuxRows {
-                    block,
-                    entries,
-                    products,
-                }
-            })
-            .collect();
-        let aux_blocks = model.layout().aux_blocks().to_vec();
-        let aux_cu = vec![
-            0.0;
-            aux.iter()
-                .map(|a| 2 * aux_blocks[a.block].width * a.entries.len())
-                .max()
-                .unwrap_or(0)
-        ];
-        let max_entries = bodies.iter().map(|b| b.entries.len()).max().unwrap_or(0);
-        let pattern = SymbolicSparseColMat::new_checked(n_j, n_j, cp, None, ri);
-        Self {
-            slot,
-            finger_rows,
-            j_rows,
-            n_j,
-            m_f,
-            pattern,
-            diag,
-            bodies,
-            entries,
-            products,
-            dropped,
-            values: vec![0.0; nnz + m_f * n_j + m_f * m_f],
-            cu: vec![0.0; 14 * max_entries],
-            live: vec![false; max_entries],
-            decoupled: vec![false; n_j],
-            minv_e: vec![Matrix4::zeros(); masses.len()],
-            minv_key: vec![None; masses.len()],
-            aux_blocks,
-            aux,
-            aux_cu,
-        }
+        Self::with_norms(model, jac, masses, excluded, true)
     }
 
     /// Number of stored values of A_JJ's lower triangle.
