@@ -250,11 +250,17 @@ impl Feedback {
         let pulled = self.release_pulling(s, known);
         let slipped = self.judge_friction(model, s, settings, q, ev, targets);
         if !(pulled || slipped) {
-            return self.outputs(s, settings, q, ev, targets, out);
+            self.max_pull_n = self.contact_pull(s);
+            self.pair_normal_forces(s);
+            self.joint_torques(q, ev);
+            return self.wrenches(s, settings, q, ev, targets, out);
         }
         self.releases += 1;
         self.solve_released(ev, settings)?;
-        self.outputs(s, settings, q, ev, targets, out)?;
+        self.max_pull_n = self.contact_pull(s);
+        self.pair_normal_forces(s);
+        self.joint_torques(q, ev);
+        self.wrenches(s, settings, q, ev, targets, out)?;
         if settings.update == UpdateRule::Projected {
             // The projected update steps with this factor and must keep the
             // kinematic active set: whether a limit stops the motion the user
@@ -395,24 +401,6 @@ impl Feedback {
             }
         }
         released
-    }
-
-    /// The outputs of the last solve: the largest contact pull, the pairs'
-    /// normal forces, the joint torques and every finger's wrench.
-    #[inline]
-    fn outputs(
-        &mut self,
-        s: &Scaling,
-        settings: &SolverSettings,
-        q: &[f64],
-        ev: &Evaluation,
-        targets: &[FingerTarget],
-        out: &mut [FingerOutput],
-    ) -> Result<(), FactorError> {
-        self.max_pull_n = self.contact_pull(s);
-        self.pair_normal_forces(s);
-        self.joint_torques(q, ev);
-        self.wrenches(s, settings, q, ev, targets, out)
     }
 
     /// The named joints' motor torques with the factor of the last solve
