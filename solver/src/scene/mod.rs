@@ -12,17 +12,14 @@
 //! numbers, degenerate axes, fingers on fixed bodies, label-order cycles and
 //! the rest from the checks here and in the model builder.
 
-mod build_error;
 mod compile;
 mod compile_semantic;
-mod decl;
 mod design_flags;
 mod error;
 mod flags;
 mod gear;
 pub mod limits;
 pub mod magnitudes;
-mod model_specs;
 mod no_effect;
 mod placed;
 mod polygon;
@@ -32,9 +29,8 @@ pub mod spec;
 mod validate;
 mod write;
 
-pub use compile::{CompiledScene, SceneSettings};
+pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
 pub use compile_semantic::HoldDecl;
-pub use decl::{DeviceDecl, FingerDecl, HandDecl, HandPath};
 pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_switches};
 pub use error::SceneError;
 pub use flags::Flagged;

@@ -70,7 +70,7 @@ impl Checker<'_> {
         let Some(shape) = &b.shape else {
             return Ok(());
         };
-        let Ok((full, radius_m)) = super::model_specs::shape(shape.get_ref()).parry_shape() else {
+        let Ok((full, radius_m)) = super::compile::shape(shape.get_ref()).parry_shape() else {
             return Ok(()); // the shape's own error is reported where it is
         };
         let pts: Vec<Vector3<f64>> = a
