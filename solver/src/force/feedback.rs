@@ -20,6 +20,8 @@ use crate::{Evaluation, FingerTarget, Model, SolverSettings, UpdateRule};
 
 /// The small accessors and re-factorisations around `compute`.
 mod access;
+/// The construction (`Feedback::new`).
+mod build;
 /// The release branch's second solve by a low-rank correction.
 mod low_rank;
 mod norms;
@@ -166,156 +168,6 @@ pub(crate) fn contact_forces_known(settings: &SolverSettings) -> bool {
 }
 
 impl Feedback {
-    /// Pattern, symbolic factor and buffers for `model` (whose Jacobian
-    /// pattern `ev` holds). Allocates.
-    pub fn new(
-        model: &Model,
-        ev: &Evaluation,
-        settings: &SolverSettings,
-        excluded: &[bool],
-    ) -> Result<Self, faer::sparse::FaerError> {
-        let jac = ev.jacobian();
-        let masses = BodyMass::of_model(model);
-        let n_bodies = masses.len();
-        let decouple = settings.norm_rows_out && settings.force_solver == ForceSolver::Cholesky;
-        let gram = Gram::with_norms(model, jac, &masses, excluded, decouple);
-        let (cg, matvec) = match settings.force_solver {
-            ForceSolver::Cholesky => (None, None),
-            ForceSolver::ConjugateGradient { max_iterations } => (Some(max_iterations), None),
-            ForceSolver::Matvec { max_iterations }
-            | ForceSolver::Tree { max_iterations }
-            | ForceSolver::Multilevel { max_iterations } => (None, Some(max_iterations)),
-        };
-        let mut solve = MultiplierSolve::new(&gram, cg, matvec, &contact_groups(model, &gram))?;
-        if let ForceSolver::Tree { max_iterations } = settings.force_solver {
-            let group: Vec<usize> = (gram.j_rows.iter())
-                .map(|&r| model.rows()[r].constraint.index())
-                .collect();
-            let tree = super::precond::tree::TreePrecond::new(&gram, &group, 1 + gram.m_f)?;
-            solve.set_tree(
-                super::precond::Precond::Tree(Box::new(tree)),
-                max_iterations,
-            );
-        }
-        if let ForceSolver::Multilevel { max_iterations } = settings.force_solver {
-            solve.set_tree(
-                super::precond::multilevel::for_model(model, &gram),
-                max_iterations,
-            );
-        }
-        let coupled = if decouple {
-            norms::CoupledPattern::new(
-                model,
-                jac,
-                &masses,
-                excluded,
-                &gram,
-                &solve,
-                crate::cholesky::DENSE_MAX,
-            )?
-        } else {
-            None
-        };
-        // The spare keeps a second factor of this pattern; with the norm
-        // rows out an assembly may swap in the coupled pattern (`norms`),
-        // which it does not follow: no spare then.
-        let spare = match coupled {
-            Some(_) => None,
-            None => spare::Spare::for_model(model, settings, &gram, &solve),
-        };
-        let torques = super::torque::JointTorques::new(model, gram.n_j);
-        let m_f = gram.m_f;
-        let friction = super::friction::pairs_of(model);
-        let fingers = model
-            .fingers()
-            .iter()
-            .map(|f| {
-                let rows = model.constraints()[f.constraint.index()].rows.clone();
-                let offset = model.layout().body_offset(f.body).unwrap_or(0);
-                let mut pos = [0; 6];
-                for (k, r) in rows.clone().enumerate() {
-                    let span = jac.row_ptr()[r]..jac.row_ptr()[r + 1];
-                    pos[k] = span
-                        .clone()
-                        .find(|&p| jac.col_idx()[p] == offset)
-                        .unwrap_or(span.start);
-                }
-                let proxy = settings.dynamics
-                    && settings.update == UpdateRule::Projected
-                    && f.tip.is_some();
-                let flex = match model.geometry[f.constraint.index()].anchors()[0] {
-                    crate::constraint::block::Param3::Flex(i) => {
-                        Some(model.flex_anchors[i as usize])
-                    }
-                    _ => None,
-                };
-                FingerRows {
-                    proxy,
-                    rigid: rows.len() == 6,
-                    rows,
-                    pos,
-                    offset,
-                    point: f.point_m,
-                    flex,
-                }
-            })
-            .collect::<Vec<_>>();
-        let tau = settings.velocity_filter.as_secs_f64();
-        let mut feedback = Self {
-            motion: Motion::new(
-                model.q0(),
-                masses.len(),
-                model.n_coords() - model.layout().aux_coords(),
-                tau,
-            ),
-            masses,
-            gram,
-            solve,
-            coupled,
-            prev_error: vec![Vector3::zeros(); fingers.len()],
-            releases: 0,
-            stick: vec![false; model.n_rows()],
-            forced: vec![false; model.n_rows()],
-            carry_forced: false,
-            normal_force_n: vec![0.0; friction.len()],
-            compliant: model
-                .rows()
-                .iter()
-                .map(|r| {
-                    matches!(
-                        model.constraints()[r.constraint.index()].kind,
-                        crate::ConstraintKind::Contact | crate::ConstraintKind::ContactFriction
-                    )
-                })
-                .collect(),
-            friction,
-            slips: 0,
-            coupling: vec![(Vector3::zeros(), Vector3::zeros()); fingers.len()],
-            known: vec![None; m_f],
-            max_pull_n: 0.0,
-            generation: 0,
-            torques,
-            flex_offsets: model
-                .flexible
-                .iter()
-                .map(|f| model.layout().body_offset(f.body).unwrap_or(0))
-                .collect(),
-            applied: vec![(Vector3::zeros(), Vector3::zeros()); n_bodies],
-            fingers,
-            b: vec![0.0; model.n_coords()],
-            contact_raw: vec![0.0; model.n_coords()],
-            row_known_f: vec![0.0; model.n_rows()],
-            row_known: vec![0.0; model.n_rows()],
-            y: vec![0.0; model.n_coords()],
-            cy: vec![0.0; model.n_rows()],
-            scale: vec![0.0; model.n_rows()],
-            spare,
-            first_kept: 0,
-        };
-        feedback.enable_low_rank(settings);
-        Ok(feedback)
-    }
-
     /// Equality rows dependent on earlier rows of the same body pair at q0
     /// (`ev` evaluated there): to leave out of A before it is built (pass them
     /// to [`Feedback::new`] as excluded). Allocates.
@@ -378,6 +230,56 @@ impl Feedback {
         if advance {
             self.motion.advance(&self.masses, q, dt_s);
         }
+        self.right_hand_side(model, q)?;
+        self.couplings(s, settings, q, targets, dt_s)?;
+        self.activate(s, ev.values(), lambda);
+        // Inertial motion: the contact and friction forces are the steps'
+        // own, known (`take_contact_forces`); their rows stay in A and take
+        // only what the filtered balance leaves over, of either sign.
+        let known = contact_forces_known(settings);
+        if known {
+            for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
+                *b += f;
+            }
+        }
+        self.solve_multipliers(ev, settings)?;
+        // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
+        // sign). If the solve made one pull, release those rows and solve
+        // again: the bound keeps the tick's cost fixed. A sticking pair that
+        // leaves the Coulomb cone slips (its rows released) the same way.
+        let pulled = self.release_pulling(s, known);
+        let slipped = self.judge_friction(model, s, settings, q, ev, targets);
+        if !(pulled || slipped) {
+            self.max_pull_n = self.contact_pull(s);
+            self.pair_normal_forces(s);
+            self.joint_torques(q, ev);
+            return self.wrenches(s, settings, q, ev, targets, out);
+        }
+        self.releases += 1;
+        self.solve_released(ev, settings)?;
+        self.max_pull_n = self.contact_pull(s);
+        self.pair_normal_forces(s);
+        self.joint_torques(q, ev);
+        self.wrenches(s, settings, q, ev, targets, out)?;
+        if settings.update == UpdateRule::Projected {
+            // The projected update steps with this factor and must keep the
+            // kinematic active set: whether a limit stops the motion the user
+            // asks for is its business, not the instantaneous inertial load's
+            // (a stop that just halted a rebound "pulls" for a tick). The
+            // first solve comes back from the spare when the active set is
+            // its own again; otherwise a third factorisation.
+            self.activate(s, ev.values(), lambda);
+            if !self.restore_first() {
+                self.solve_multipliers(ev, settings)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// b = Q_e + Q_v − M q̈ per moving body at `q` (plus the forces known
+    /// in advance, `applied`) and each flexible body's elastic force.
+    #[inline]
+    fn right_hand_side(&mut self, model: &Model, q: &[f64]) -> Result<(), FactorError> {
         let g = model.gravity_m_s2();
         for (k, m) in self.masses.iter().enumerate() {
             let f = frame(q, m.offset).ok_or(FactorError)?;
@@ -414,21 +316,14 @@ impl Feedback {
                 &mut self.b[c..c + w],
             );
         }
-        self.couplings(s, settings, q, targets, dt_s)?;
-        self.activate(s, ev.values(), lambda);
-        // Inertial motion: the contact and friction forces are the steps'
-        // own, known (`take_contact_forces`); their rows stay in A and take
-        // only what the filtered balance leaves over, of either sign.
-        let known = contact_forces_known(settings);
-        if known {
-            for (b, f) in self.b.iter_mut().zip(&self.motion.contact_a) {
-                *b += f;
-            }
-        }
-        self.solve_multipliers(ev, settings)?;
-        // An active inequality may only push (physical λ ≤ 0 in Eq. 6's
-        // sign). If the solve made one pull, release those rows and solve
-        // again: the bound keeps the tick's cost fixed.
+        Ok(())
+    }
+
+    /// Releases (scale 0) the active inequality rows, and the contact rows
+    /// unless their forces are `known`, that the last solve made pull;
+    /// whether any was.
+    #[inline]
+    fn release_pulling(&mut self, s: &Scaling, known: bool) -> bool {
         let mut released = false;
         for (j, &row) in self.gram.j_rows.iter().enumerate() {
             let releasable = match s.role[row] {
@@ -442,9 +337,24 @@ impl Feedback {
                 released = true;
             }
         }
-        // Coulomb: a sticking pair whose friction load exceeds μ times the
-        // user's grip slips this tick. (Inertial motion judges the cone on
-        // the step's own forces instead: `program::inertial`.)
+        released
+    }
+
+    /// Coulomb: a sticking pair whose friction load exceeds μ times the
+    /// user's grip slips this tick (its rows released); whether any did.
+    /// (Inertial motion judges the cone on the step's own forces instead:
+    /// `program::inertial`.)
+    #[inline]
+    fn judge_friction(
+        &mut self,
+        model: &Model,
+        s: &Scaling,
+        settings: &SolverSettings,
+        q: &[f64],
+        ev: &Evaluation,
+        targets: &[FingerTarget],
+    ) -> bool {
+        let mut released = false;
         let judged = if settings.dynamics {
             0
         } else {
@@ -457,7 +367,7 @@ impl Feedback {
             }
             let mut lt2 = 0.0;
             for &row in &p.rows {
-                if let super::gram::Slot::J(j) = self.gram.slot[row] {
+                if let Slot::J(j) = self.gram.slot[row] {
                     lt2 += (s.ell[row] * self.solve.joint_multiplier(j)).powi(2);
                 }
             }
@@ -467,9 +377,7 @@ impl Feedback {
                 (p.normal_rows[0]..p.normal_rows[1])
                     .filter(|&row| self.scale[row] != 0.0)
                     .filter_map(|row| match self.gram.slot[row] {
-                        super::gram::Slot::J(j) => {
-                            Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0))
-                        }
+                        Slot::J(j) => Some((-s.ell[row] * self.solve.joint_multiplier(j)).max(0.0)),
                         _ => None,
                     })
                     .sum()
@@ -492,31 +400,7 @@ impl Feedback {
                 released = true;
             }
         }
-        if !released {
-            self.max_pull_n = self.contact_pull(s);
-            self.pair_normal_forces(s);
-            self.joint_torques(q, ev);
-            return self.wrenches(s, settings, q, ev, targets, out);
-        }
-        self.releases += 1;
-        self.solve_released(ev, settings)?;
-        self.max_pull_n = self.contact_pull(s);
-        self.pair_normal_forces(s);
-        self.joint_torques(q, ev);
-        self.wrenches(s, settings, q, ev, targets, out)?;
-        if settings.update == UpdateRule::Projected {
-            // The projected update steps with this factor and must keep the
-            // kinematic active set: whether a limit stops the motion the user
-            // asks for is its business, not the instantaneous inertial load's
-            // (a stop that just halted a rebound "pulls" for a tick). The
-            // first solve comes back from the spare when the active set is
-            // its own again; otherwise a third factorisation.
-            self.activate(s, ev.values(), lambda);
-            if !self.restore_first() {
-                self.solve_multipliers(ev, settings)?;
-            }
-        }
-        Ok(())
+        released
     }
 
     /// The named joints' motor torques with the factor of the last solve

@@ -7,7 +7,7 @@
 //! change features without a new model. A new model (and program) is needed
 //! only when the set of pairs changes.
 
-use super::build::Assembler;
+use super::assembler::Assembler;
 use super::error::{BuildError, Owner};
 use super::{Model, next_model_id};
 use crate::constraint::block::{Pair, Param3};

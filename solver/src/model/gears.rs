@@ -5,7 +5,7 @@
 
 use std::fmt;
 
-use super::build::Assembler;
+use super::assembler::Assembler;
 use super::compiler::Compiler;
 use super::error::{BuildError, Owner};
 use crate::BodyId;

@@ -5,7 +5,7 @@
 
 use nalgebra::Vector3;
 
-use super::build::Assembler;
+use super::assembler::Assembler;
 use super::error::{BuildError, Owner};
 use super::{Model, next_model_id};
 use crate::BodyId;

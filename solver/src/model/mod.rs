@@ -4,7 +4,9 @@
 //! model with extra point–plane inequalities for a new active set,
 //! [`Model::with_semantic`] one with satisfied surface constraints and holds.
 
+mod assembler;
 mod auxiliary;
+mod body;
 mod build;
 mod compiler;
 mod contact;
@@ -17,6 +19,8 @@ mod spec;
 mod surface;
 
 pub use auxiliary::{AuxBlock, AuxOwner, Rest};
+/// The check every compiled value goes through (objectives use it too).
+pub(crate) use body::finite;
 pub use build::ModelBuilder;
 pub use contact::{ContactLayout, ContactPair};
 pub use error::{BuildError, Owner};

@@ -9,7 +9,7 @@
 //! whose witness slots take the head of the table while the surface rows'
 //! parameters stay at its tail.
 
-use super::build::Assembler;
+use super::assembler::Assembler;
 use super::error::{BuildError, Owner};
 use super::{Model, next_model_id};
 use crate::constraint::block::{Pair, Param3};

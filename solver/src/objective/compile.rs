@@ -14,7 +14,7 @@ use super::workspace::{Link, Workspace};
 use super::{Objective, Objectives, Term};
 use crate::constraint::Geometry;
 use crate::constraint::block::Param3;
-use crate::model::{BuildError, Owner};
+use crate::model::{BuildError, Owner, finite};
 use crate::{BodyId, ConstraintKind, Model};
 
 /// The name objective `k` of `specs` goes by: its `name`, else its kind,
@@ -118,19 +118,6 @@ fn global(
         _ => {}
     }
     Ok(())
-}
-
-/// Fails with `NonFinite` naming `field` unless every value of `v` is
-/// finite.
-fn finite(owner: &dyn Fn() -> Owner, field: &'static str, v: &[f64]) -> Result<(), BuildError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(BuildError::NonFinite {
-            owner: owner(),
-            field,
-        })
-    }
 }
 
 /// The term of an objective of the problem's sum; `None` for `finger` and
@@ -241,16 +228,7 @@ fn avoided(
     owner: &dyn Fn() -> Owner,
     bad: Bad,
 ) -> Result<(Avoiding, Obstacle), BuildError> {
-    let finite = |field: &'static str, v: &[f64]| {
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(BuildError::NonFinite {
-                owner: owner(),
-                field,
-            })
-        }
-    };
+    let finite = |field: &'static str, v: &[f64]| finite(owner, field, v);
     let body = |n: &str| {
         model.body_id(n).ok_or_else(|| BuildError::UnknownBody {
             owner: owner(),
