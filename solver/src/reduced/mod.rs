@@ -27,6 +27,7 @@
 mod core;
 mod kinematics;
 mod mask;
+mod resync;
 mod rows;
 mod small;
 mod stage;
@@ -44,6 +45,7 @@ mod tick_tests;
 
 pub use core::{JointSpace, PINV_RATIO, PIVOT_RATIO, ZERO_ROW};
 pub use kinematics::{Kinematics, displace};
+pub use resync::{History, MotionOut};
 pub use tick::JointTick;
 pub use tree::JointTree;
 
@@ -56,6 +58,9 @@ pub enum ReducedError {
     /// A body's quaternion is degenerate at q.
     #[error("body {0} has a degenerate quaternion")]
     Degenerate(usize),
+    /// A loop or finger row wrote an entry with no joint-space form.
+    #[error("a row's Jacobian entry has no joint-space form")]
+    RawEntry,
     /// A matrix that should be positive definite is not.
     #[error("{0} is not positive definite")]
     NotPositive(&'static str),

@@ -28,13 +28,13 @@ use crate::{BodyId, FingerOutput, FingerTarget, Model};
 
 /// One body's motion history (`force::motion`).
 #[derive(Debug, Clone, Copy)]
-struct History {
-    e: UnitQuaternion<f64>,
-    r: Vector3<f64>,
-    v: Vector3<f64>,
-    w: Vector3<f64>,
-    a: Vector3<f64>,
-    alpha: Vector3<f64>,
+pub(super) struct History {
+    pub e: UnitQuaternion<f64>,
+    pub r: Vector3<f64>,
+    pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
+    pub a: Vector3<f64>,
+    pub alpha: Vector3<f64>,
 }
 
 /// Factors and buffers of the force stage.
@@ -60,11 +60,11 @@ pub(crate) struct Stage {
     /// Per body (model order).
     mass: Vec<Option<BodyMass>>,
     /// Moving bodies (index, first column) with their history.
-    bodies: Vec<(usize, usize, History)>,
-    ticks: u32,
+    pub(super) bodies: Vec<(usize, usize, History)>,
+    pub(super) ticks: u32,
     /// Per finger: its first kept row, row count, the body's end.
     fingers: Vec<(usize, usize, usize)>,
-    prev_error: Vec<Vector3<f64>>,
+    pub(super) prev_error: Vec<Vector3<f64>>,
 }
 
 impl Stage {
@@ -293,7 +293,7 @@ impl Stage {
 }
 
 /// Position and unit orientation of the body at column `o` of q.
-fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
+pub(super) fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
     let e = nalgebra::Quaternion::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
     (
         Vector3::new(q[o], q[o + 1], q[o + 2]),
@@ -308,6 +308,18 @@ impl JointTick {
         &mut self,
         targets: &[FingerTarget],
         dt_s: f64,
+        advance: bool,
+    ) -> Result<(), ReducedError> {
+        self.evaluate_end(targets, advance)?;
+        self.force_end(targets, dt_s, advance)
+    }
+
+    /// The end of a tick's evaluation: forward kinematics at θ
+    /// (`advance`), the loop and finger rows' values and J_r S there, the
+    /// loop violation.
+    pub(crate) fn evaluate_end(
+        &mut self,
+        targets: &[FingerTarget],
         advance: bool,
     ) -> Result<(), ReducedError> {
         if advance {
@@ -329,9 +341,21 @@ impl JointTick {
             &mut self.grads,
         );
         if !ok {
-            return Err(ReducedError::Unsupported("a raw Jacobian entry".into()));
+            return Err(ReducedError::RawEntry);
         }
         self.max_violation = self.violation();
+        Ok(())
+    }
+
+    /// The force stage after [`evaluate_end`](Self::evaluate_end): the
+    /// factors and (`advance`: the motion history advanced) the finger
+    /// outputs; the chord point moves to q.
+    pub(crate) fn force_end(
+        &mut self,
+        targets: &[FingerTarget],
+        dt_s: f64,
+        advance: bool,
+    ) -> Result<(), ReducedError> {
         let tree = &self.space.tree;
         self.stage
             .factor(tree, &self.kin, &self.jr, self.n_loop, &self.k_inv)?;

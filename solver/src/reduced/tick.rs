@@ -215,8 +215,10 @@ impl JointTick {
         self.end_of_tick(targets, dt_s, true)
     }
 
-    /// The tick's steps from q_s; returns the number applied.
-    fn update(&mut self, targets: &[FingerTarget]) -> Result<u32, ReducedError> {
+    /// The tick's steps from q_s; returns the number applied. q and the
+    /// frames are those of the last step's start (the step's result is
+    /// posed by [`evaluate_end`](Self::evaluate_end)).
+    pub(crate) fn update(&mut self, targets: &[FingerTarget]) -> Result<u32, ReducedError> {
         self.theta.fill(0.0);
         let step = self.settings.step;
         let mut allowed = f64::INFINITY;
