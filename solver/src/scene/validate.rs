@@ -304,6 +304,17 @@ impl Checker<'_> {
                 format!("rate_hz {} is outside 100–20000 Hz", r.get_ref()),
             ));
         }
+        if let Some(c) = &v.coordinates
+            && crate::Coordinates::parse(c.get_ref()).is_none()
+        {
+            return Err(self.err(
+                c.span(),
+                format!(
+                    "coordinates \"{}\" is not one of \"augmented\", \"joint\", \"auto\"",
+                    c.get_ref()
+                ),
+            ));
+        }
         if let Some(i) = &v.iterations
             && !(1..=10_000).contains(i.get_ref())
         {
