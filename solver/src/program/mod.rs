@@ -64,6 +64,7 @@ mod design_flags;
 mod handover;
 mod inertial;
 mod joint;
+mod joint_report;
 mod objective;
 #[cfg(test)]
 mod probe;

@@ -84,6 +84,13 @@ impl JointTick {
         same
     }
 
+    /// The model rows each tick evaluates (every row of the loop-closing
+    /// and finger constraints); the others keep their value at the last
+    /// resync. Allocates.
+    pub fn evaluated_rows(&self) -> Vec<usize> {
+        self.set.evaluated().collect()
+    }
+
     /// Every model row's last value: the loop and finger rows' at the last
     /// tick's end, the others' (tree joints, norms) at the last resync.
     pub fn values(&self) -> &[f64] {
