@@ -275,7 +275,8 @@ pub(crate) fn displace_with(
 #[inline]
 pub(crate) fn exp_rotation(phi: Vector3<f64>) -> UnitQuaternion<f64> {
     let x2 = 0.25 * phi.norm_squared();
-    if !(x2 < 1e-2) {
+    // NaN-safe: a NaN x2 takes the library's path.
+    if x2.partial_cmp(&1e-2) != Some(std::cmp::Ordering::Less) {
         return UnitQuaternion::from_scaled_axis(phi);
     }
     let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
