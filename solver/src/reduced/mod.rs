@@ -25,6 +25,7 @@
 //! anchors or inequality rows are refused.
 
 mod core;
+mod end;
 mod kinematics;
 mod mask;
 mod resync;

@@ -294,16 +294,8 @@ impl Checker<'_> {
         Ok(())
     }
 
-    fn solver(&self, s: &SceneFile) -> Check {
-        let v = &s.solver;
-        if let Some(r) = &v.rate_hz
-            && !(100..=20_000).contains(r.get_ref())
-        {
-            return Err(self.err(
-                r.span(),
-                format!("rate_hz {} is outside 100–20000 Hz", r.get_ref()),
-            ));
-        }
+    /// `[solver] coordinates`: one of the spellings of `Coordinates`.
+    fn coordinates(&self, v: &super::spec::SolverSection) -> Check {
         if let Some(c) = &v.coordinates
             && crate::Coordinates::parse(c.get_ref()).is_none()
         {
@@ -315,6 +307,20 @@ impl Checker<'_> {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    fn solver(&self, s: &SceneFile) -> Check {
+        let v = &s.solver;
+        if let Some(r) = &v.rate_hz
+            && !(100..=20_000).contains(r.get_ref())
+        {
+            return Err(self.err(
+                r.span(),
+                format!("rate_hz {} is outside 100–20000 Hz", r.get_ref()),
+            ));
+        }
+        self.coordinates(v)?;
         if let Some(i) = &v.iterations
             && !(1..=10_000).contains(i.get_ref())
         {

@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::{
-    BodySpec, Coordinates, EvalError, FingerSpec, FingerTarget, JointKind as K, JointSpec, Model,
-    ModelBuilder, Program, ProgramError, RowUnit, Sense, SolverSettings, TickOutcome,
+    Coordinates, EvalError, FingerTarget, Model, Program, RowUnit, Sense, SolverSettings,
+    TickOutcome,
 };
 use nalgebra::Vector3;
 
@@ -17,7 +17,7 @@ const DT: Duration = Duration::from_millis(1);
 
 /// The scene's model and its `[solver]` step and iterations over the
 /// defaults, with `coordinates`.
-fn scene(name: &str, coordinates: Coordinates) -> (Arc<Model>, SolverSettings) {
+pub fn scene(name: &str, coordinates: Coordinates) -> (Arc<Model>, SolverSettings) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenes")
         .join(format!("{name}.toml"));
@@ -319,68 +319,4 @@ fn the_joint_program_allocates_nothing() {
         assert!(ok, "{name}: a tick failed");
         assert_eq!(stats.total(), 0, "{name}: allocations {stats:?}");
     }
-}
-
-/// A pendulum on a hinge with limits (inequality rows), one point finger.
-fn limited_pendulum() -> Model {
-    let mut b = ModelBuilder::new();
-    b.body(BodySpec::fixed("ground"));
-    b.body(BodySpec::new("arm").at([0.1, 0.0, 0.0]));
-    b.joint(
-        JointSpec::new(K::Revolute, "ground", "arm")
-            .anchors([0.0; 3], [-0.1, 0.0, 0.0])
-            .axes([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
-            .limits(-0.5, 1.0),
-    );
-    b.finger(FingerSpec::point("index", "arm", [0.1, 0.0, 0.0]));
-    b.build().unwrap()
-}
-
-/// `Auto` runs the augmented tick where the joint tick does not apply and
-/// says why (inequality rows; contact rows), and the joint tick where it
-/// does; `Joint` on the same models fails construction naming the reason.
-#[test]
-fn auto_chooses_and_joint_refuses_with_the_reason() {
-    let auto = |m: Arc<Model>, s: SolverSettings| {
-        Program::new(
-            m,
-            SolverSettings {
-                coordinates: Coordinates::Auto,
-                ..s
-            },
-        )
-        .unwrap()
-    };
-    let joint = |m: Arc<Model>, s: SolverSettings| {
-        Program::new(
-            m,
-            SolverSettings {
-                coordinates: Coordinates::Joint,
-                ..s
-            },
-        )
-    };
-    let pendulum = Arc::new(limited_pendulum());
-    let p = auto(pendulum.clone(), SolverSettings::default());
-    let c = p.coordinates();
-    println!("pendulum with limits: {c}");
-    assert!(!c.joint && c.asked == Coordinates::Auto);
-    assert!(c.why.contains("inequality rows"), "{c}");
-    let e = joint(pendulum, SolverSettings::default()).unwrap_err();
-    assert!(
-        matches!(&e, ProgramError::Coordinates(w) if w.contains("inequality rows")),
-        "{e}"
-    );
-    assert!(e.to_string().contains("augmented"), "{e}");
-
-    let (m, s) = scene("pendulum-wall", Coordinates::Augmented);
-    let c = auto(m.clone(), s).coordinates().clone();
-    println!("pendulum-wall: {c}");
-    assert!(!c.joint && c.why.contains("contact"), "{c}");
-    assert!(matches!(joint(m, s), Err(ProgramError::Coordinates(_))));
-
-    let (m, s) = scene("four-bar", Coordinates::Augmented);
-    let c = auto(m, s).coordinates().clone();
-    println!("four-bar: {c}");
-    assert!(c.joint, "{c}");
 }
