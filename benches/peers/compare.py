@@ -318,7 +318,14 @@ def main() -> int:
         default=[],
         help="an extra argument for `haptloop bench` (repeatable), e.g. --haptloop-arg=--iterations=2",
     )
+    ap.add_argument(
+        "--coordinates",
+        choices=["augmented", "joint", "auto"],
+        help="the fast loop's coordinates (`haptloop bench --coordinates`); default: the scene's",
+    )
     args = ap.parse_args()
+    if args.coordinates:
+        args.haptloop_arg = [*args.haptloop_arg, "--coordinates", args.coordinates]
     if not HAPTLOOP.exists():
         print(f"{HAPTLOOP} missing: build it with `cargo build --release`", file=sys.stderr)
         return 1
@@ -367,6 +374,7 @@ def main() -> int:
         f"\nhaptloop bench (tick without device) vs MuJoCo {mujoco.__version__} mj_step, "
         f"{args.ticks} ticks × {args.rounds} rounds, interleaved; medians over rounds of per-tick medians "
         f"(an empty timed call into MuJoCo costs {overhead:.0f} ns, included)"
+        + "".join(f"; {s}: {ours[s][0].get('coordinates', '?')}" for s in ours)
     )
     print(
         "| scene | MuJoCo nv / closure rows / rows in all | haptloop µs/tick | MuJoCo µs/step | ratio | ratio by round "

@@ -110,7 +110,9 @@ pub mod rotation;
 pub mod scene;
 pub mod semantic;
 
-pub use al::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
+pub use al::{
+    Coordinates, ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule,
+};
 pub use constraint::{ConstraintInfo, ConstraintKind, RowInfo, RowUnit, Sense};
 pub use evaluate::{EvalError, Evaluation, FingerTarget};
 pub use force::{
@@ -135,6 +137,7 @@ pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };
 pub use program::{
-    AssemblyReport, ConvergedTick, Divergence, DivergenceLimits, FactorRefresher, FingerOutput,
-    Program, ProgramError, RefreshedFactor, TickOutcome, TickReport, TickState,
+    AssemblyReport, ConvergedTick, CoordinatesChoice, Divergence, DivergenceLimits,
+    FactorRefresher, FingerOutput, Program, ProgramError, RefreshedFactor, TickOutcome, TickReport,
+    TickState,
 };

@@ -45,6 +45,10 @@ pub struct BenchArgs {
     /// `gradient`. Default: the scene's, else `projected`.
     #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
     pub update: Option<haptloop_solver::UpdateRule>,
+    /// The fast loop's coordinates, as for `run`: `augmented`, `joint` or
+    /// `auto`. Default: the scene's, else `augmented`.
+    #[arg(long, value_name = "COORDS", value_parser = values::coordinates)]
+    pub coordinates: Option<haptloop_solver::Coordinates>,
     /// Constraint gain K of the fast update (finite, > 0), as for `run`.
     /// Default: the scene's, else the solver's.
     #[arg(long, value_parser = values::positive)]
@@ -101,6 +105,8 @@ struct BenchJson {
     force_solver: String,
     /// The update rule, `projected` or `gradient`.
     update: &'static str,
+    /// The coordinates the tick ran in, and why (`Program::coordinates`).
+    coordinates: String,
     /// Constraint gain K.
     gain: f64,
     /// The velocity filter's time constant, ms.
@@ -143,6 +149,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         iterations: args.iterations,
         force_solver: args.force_solver,
         update: args.update,
+        coordinates: args.coordinates,
         gain: args.gain,
         velocity_filter: args
             .velocity_filter_ms
@@ -163,6 +170,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         iterations: s.iterations,
         force_solver: plan_solver.label(),
         update: crate::report::sweep::rule(update),
+        coordinates: outcome.coordinates.clone(),
         gain,
         velocity_filter_ms,
         tick_ns: s.stages_ns.tick.into(),
@@ -207,6 +215,7 @@ fn render(b: &BenchJson, stages: &Stages) -> String {
         b.velocity_filter_ms,
         b.force_solver
     );
+    let _ = writeln!(out, "  coordinates: {}", b.coordinates);
     let _ = writeln!(
         out,
         "\n  {:<18} {:>9} {:>9} {:>9} {:>10}   (µs, monotonic clock)",

@@ -75,6 +75,7 @@ pub fn run(args: &RunArgs, stop: &StopFlag) -> Result<ExitCode> {
         .collect();
     if !super::signals::aborting() {
         super::emit(&text::render(&summary, &fingers));
+        eprintln!("haptloop: fast-loop coordinates: {}", outcome.coordinates);
     }
     if let Some(dir) = run_dir {
         write_files(dir.path(), &scene, &outcome, &summary)?;
@@ -114,6 +115,7 @@ fn session_options(args: &RunArgs, live: Option<session::LiveHook>) -> SessionOp
         iterations: args.iterations,
         update: args.update,
         force_solver: args.force_solver,
+        coordinates: args.coordinates,
         gain: args.gain,
         velocity_filter: args
             .velocity_filter_ms

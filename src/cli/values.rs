@@ -95,6 +95,13 @@ pub fn update_rule(s: &str) -> Result<haptloop_solver::UpdateRule, String> {
     }
 }
 
+/// The fast loop's coordinates: `augmented`, `joint` or `auto`.
+pub fn coordinates(s: &str) -> Result<haptloop_solver::Coordinates, String> {
+    haptloop_solver::Coordinates::parse(s.trim()).ok_or_else(|| {
+        format!("unknown coordinates `{s}` (expected `augmented`, `joint` or `auto`)")
+    })
+}
+
 /// The Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
 /// default) or `matvec` (the matvec-only tick: conjugate gradients
 /// preconditioned by a factor the slow loop refreshes, each solve to its

@@ -126,6 +126,9 @@ pub struct SessionOutcome {
     pub wall_clock_s: f64,
     /// Every body's pose, the contacts and the violation over the run.
     pub track: BodyTrack,
+    /// Which coordinates the fast loop's tick ran in, and why
+    /// (`Program::coordinates`).
+    pub coordinates: String,
     /// Translational joint rows of the model (0: a scene of free bodies,
     /// whose joint violation cannot be measured).
     pub joint_rows: usize,
@@ -318,6 +321,7 @@ fn finish<C: Clock>(
         wall_clock_s: (MonotonicClock::new().now() - wall_start).0 as f64 / 1e9,
         track,
         joint_rows: joint_length_rows(&scene.compiled.model),
+        coordinates: fast.program().coordinates().to_string(),
         design: fast.design_stats(),
         semantic,
         virtual_devices,

@@ -40,6 +40,8 @@ pub struct SessionOptions {
     pub force_solver: Option<ForceSolver>,
     /// Constraint gain K override.
     pub gain: Option<f64>,
+    /// The fast loop's coordinates override (`--coordinates`).
+    pub coordinates: Option<haptloop_solver::Coordinates>,
     /// Velocity low-pass time constant override (zero: off).
     pub velocity_filter: Option<Duration>,
     /// Mock clock, as fast as possible, bit-identical across runs.
@@ -82,6 +84,7 @@ impl Default for SessionOptions {
             update: None,
             force_solver: None,
             gain: None,
+            coordinates: None,
             velocity_filter: None,
             deterministic: false,
             assemble: true,
@@ -270,6 +273,9 @@ fn solver_settings(scene: &Scene, options: &SessionOptions) -> Result<SolverSett
     }
     if let Some(h) = s.step {
         solver.step = h;
+    }
+    if let Some(c) = options.coordinates.or(s.coordinates) {
+        solver.coordinates = c;
     }
     if let Some(k2) = s.multiplier_gain {
         solver.multiplier_gain = k2;

@@ -233,6 +233,9 @@ pub fn pair(
         update: UpdateRule::Projected,
         gain: REFERENCE_GAIN.max(fast.gain),
         force_solver: haptloop_solver::ForceSolver::Cholesky,
+        // The replay is the augmented program's; the fast program's saved
+        // states carry its joint tick's motion history (`save_state`).
+        coordinates: haptloop_solver::Coordinates::Augmented,
         ..*fast
     };
     let reference = Program::with_objectives(

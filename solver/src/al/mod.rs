@@ -53,4 +53,6 @@ pub(crate) mod scaling;
 mod settings;
 pub(crate) mod update;
 
-pub use settings::{ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule};
+pub use settings::{
+    Coordinates, ForceSolver, InvalidSetting, RedundancyCheck, SolverSettings, UpdateRule,
+};

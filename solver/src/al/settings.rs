@@ -127,6 +127,50 @@ impl ForceSolver {
     };
 }
 
+/// The coordinates the fast loop's tick iterates in (scene key `[solver]
+/// coordinates`, `haptloop run --coordinates`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Coordinates {
+    /// Every body's seven coordinates, every joint a set of rows: the
+    /// projected (or Eq. 1–3) update and the sparse Eq. 7 solve. Covers
+    /// every model.
+    #[default]
+    Augmented,
+    /// The joint tick (`reduced::JointTick`): the projected update on the
+    /// spanning tree's joint coordinates with forward kinematics, only the
+    /// loop-closing and finger rows evaluated, Eq. 7 in joint coordinates.
+    /// Quasi-static mechanisms of revolute, universal, spherical and
+    /// prismatic joints with point fingers only: `Program::new` fails,
+    /// naming why, on any other model or setting.
+    Joint,
+    /// `Joint` where the joint tick accepts the model and settings, else
+    /// `Augmented`; [`Program::coordinates`](crate::Program::coordinates)
+    /// says which ran and why.
+    Auto,
+}
+
+impl Coordinates {
+    /// How scenes and the command line spell it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Coordinates::Augmented => "augmented",
+            Coordinates::Joint => "joint",
+            Coordinates::Auto => "auto",
+        }
+    }
+
+    /// The inverse of [`label`](Self::label).
+    pub fn parse(s: &str) -> Option<Self> {
+        [
+            Coordinates::Augmented,
+            Coordinates::Joint,
+            Coordinates::Auto,
+        ]
+        .into_iter()
+        .find(|c| c.label() == s)
+    }
+}
+
 /// Whether and how [`Program::new`](crate::Program::new) looks for redundant
 /// (linearly dependent) equality rows, which it then leaves out of the
 /// projected step and the Eq. 7 force solve (see the `redundancy` module of
@@ -300,6 +344,8 @@ pub struct SolverSettings {
     /// backups); see BENCHMARKS.md, "the quaternion-norm rows out of the
     /// force factor".
     pub norm_rows_out: bool,
+    /// The tick's coordinates (see [`Coordinates`]). Default `Augmented`.
+    pub coordinates: Coordinates,
 }
 
 impl Default for SolverSettings {
@@ -323,6 +369,7 @@ impl Default for SolverSettings {
             dynamics: false,
             redundancy: RedundancyCheck::Auto,
             norm_rows_out: false,
+            coordinates: Coordinates::Augmented,
         }
     }
 }

@@ -63,17 +63,17 @@ pub const ROUND_OFF_STEP_M: f64 = 1e-9;
 pub struct TickState {
     q: Vec<f64>,
     lambda: Vec<f64>,
-    q_prev: Vec<f64>,
-    v: Vec<Vector3<f64>>,
-    w: Vec<Vector3<f64>>,
-    a: Vec<Vector3<f64>>,
-    alpha: Vec<Vector3<f64>>,
+    pub(super) q_prev: Vec<f64>,
+    pub(super) v: Vec<Vector3<f64>>,
+    pub(super) w: Vec<Vector3<f64>>,
+    pub(super) a: Vec<Vector3<f64>>,
+    pub(super) alpha: Vec<Vector3<f64>>,
     aux_v: Vec<f64>,
     aux_a: Vec<f64>,
     /// The objectives' pull on flexible deformations (`program::objective`).
     static_shift: Vec<f64>,
-    ticks: u32,
-    prev_error: Vec<Vector3<f64>>,
+    pub(super) ticks: u32,
+    pub(super) prev_error: Vec<Vector3<f64>>,
     last_targets: Vec<FingerTarget>,
     last_dt_s: f64,
     /// Per design column: switched off.
@@ -148,6 +148,7 @@ impl Program {
         out.last_dt_s = self.last_dt_s;
         copy(&mut out.design_off, self.design_off_flags());
         out.vel.copy_from(&self.inertial.vel);
+        self.joint_history(out);
     }
 
     /// Replays the tick that went from `before` to `after` (states saved

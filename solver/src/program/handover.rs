@@ -96,7 +96,9 @@ impl Program {
     /// # Real-time
     /// No allocation; one evaluation and one force solve.
     pub fn refresh_factor(&mut self) -> bool {
-        matches!(self.refresh(), TickOutcome::Ok)
+        let ok = matches!(self.refresh(), TickOutcome::Ok);
+        self.joint_resync(crate::reduced::History::Keep);
+        ok
     }
 
     /// Bounds the motion of the next ticks by the age of the witness data

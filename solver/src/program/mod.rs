@@ -63,6 +63,8 @@ mod converged;
 mod design_flags;
 mod handover;
 mod inertial;
+mod joint;
+mod joint_report;
 mod objective;
 #[cfg(test)]
 mod probe;
@@ -80,6 +82,7 @@ mod tests_waste;
 mod tick;
 
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
+pub use joint::CoordinatesChoice;
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use refresh::{FactorRefresher, RefreshedFactor};
 pub use semantic::SNAP_RISE_S;
@@ -193,6 +196,10 @@ pub struct Program {
     chord_refreshes: u64,
     /// In-tick activations run a whole multiplier solve (`activation`).
     full_activation: bool,
+    /// The tick in joint coordinates (`joint`), if the settings chose it.
+    joint: Option<Box<joint::JointPath>>,
+    /// Which coordinates the tick runs in, and why.
+    choice: CoordinatesChoice,
 }
 
 impl Program {
@@ -244,6 +251,7 @@ impl Program {
                 "the multiplier solve failed at the initial configuration".into(),
             ));
         }
+        p.choose_coordinates()?;
         Ok(p)
     }
 
@@ -321,6 +329,12 @@ impl Program {
             prepared: false,
             chord_refreshes: 0,
             full_activation: false,
+            joint: None,
+            choice: CoordinatesChoice {
+                asked: settings.coordinates,
+                joint: false,
+                why: String::new(),
+            },
             feedback,
             ev,
             h,

@@ -174,6 +174,13 @@ pub enum ProgramError {
     /// The settings do not cover a part of this model.
     #[error("{0}")]
     Unsupported(&'static str),
+    /// `coordinates = "joint"` on a model or settings the joint tick does
+    /// not cover (what, in the message).
+    #[error(
+        "`coordinates = \"joint\"`: the joint tick does not cover {0}; use \"augmented\" \
+         or \"auto\""
+    )]
+    Coordinates(String),
 }
 
 /// Largest |v| of the given outputs' tracking errors.

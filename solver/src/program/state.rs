@@ -3,6 +3,7 @@
 
 use super::{FingerOutput, Program, ProgramError};
 use crate::BodyId;
+use crate::reduced::History;
 
 impl Program {
     /// Replaces q (e.g. with a Newton-KKT placement result). The motion history
@@ -33,6 +34,7 @@ impl Program {
         // status of the next tick.
         let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
+        self.joint_resync(History::Rest);
         Ok(())
     }
 
@@ -71,6 +73,7 @@ impl Program {
         }
         self.anchor_rolling();
         let _ = self.refresh();
+        self.joint_resync(History::Shift);
         Ok(())
     }
 
@@ -186,6 +189,7 @@ impl Program {
         }
         self.measure_objectives();
         self.report = old.report;
+        self.joint_adopt(old);
     }
 
     /// Friction contacts that survive a hand-over (same fingertip, same

@@ -8,6 +8,7 @@ use super::stages::{Ordered, SolverStage, StageMarks};
 use super::{AssemblyReport, Divergence, FingerOutput, Program, TickOutcome, TickReport};
 use crate::al::projected::{CouplingStep, Step, StepError};
 use crate::al::update::Violation;
+use crate::reduced::History;
 use crate::{FingerTarget, UpdateRule};
 
 /// A projected step more than this × the previous step of the same tick
@@ -25,7 +26,7 @@ pub const MAX_ACTIVATIONS: u32 = 3;
 
 /// `x ≤ limit`, false for NaN.
 #[inline]
-fn within(x: f64, limit: f64) -> bool {
+pub(super) fn within(x: f64, limit: f64) -> bool {
     matches!(
         x.partial_cmp(&limit),
         Some(Ordering::Less | Ordering::Equal)
@@ -35,7 +36,7 @@ fn within(x: f64, limit: f64) -> bool {
 /// maxᵢ |xᵢ − rᵢ| wᵢ, or NaN if a term is NaN or infinite: four
 /// independent lanes of `max` and of Σ v·0 (NaN iff some v is not finite,
 /// as `fused::all_finite`), so the loop vectorises.
-fn max_scaled_change(x: &[f64], r: &[f64], w: &[f64]) -> f64 {
+pub(super) fn max_scaled_change(x: &[f64], r: &[f64], w: &[f64]) -> f64 {
     let (mut top, mut bad) = ([0.0f64; 4], [0.0f64; 4]);
     let (xc, rc, wc) = (x.chunks_exact(4), r.chunks_exact(4), w.chunks_exact(4));
     let (xt, rt, wt) = (xc.remainder(), rc.remainder(), wc.remainder());
@@ -122,7 +123,9 @@ impl Program {
         let n = self.settings.iterations;
         let dt_s = dt.as_secs_f64();
         let mut marks = Ordered::new(marks);
-        self.report = if dt_s > 0.0 {
+        self.report = if self.joint.is_some() {
+            self.joint_tick(targets, dt_s, &mut marks)
+        } else if dt_s > 0.0 {
             self.run_tick(targets, dt_s, n, &mut marks)
         } else {
             self.failed(TickOutcome::ZeroDt, 0)
@@ -150,7 +153,10 @@ impl Program {
         self.saved_lambda.copy_from_slice(&self.lambda);
         let status = match self.iterations(targets, iterations) {
             Ok(_) => match self.diverged_state() {
-                None => return TickOutcome::Ok,
+                None => {
+                    self.joint_resync(History::Keep);
+                    return TickOutcome::Ok;
+                }
                 Some(d) => TickOutcome::Diverged(d),
             },
             Err((status, _)) => status,
@@ -526,6 +532,7 @@ impl Program {
         self.reset_velocities();
         let _ = self.refresh();
         self.outputs.fill(FingerOutput::default());
+        self.joint_resync(History::Rest);
         r.max_tracking_error_m = self.tracking_errors(targets);
         r
     }

@@ -1,7 +1,8 @@
-//! **Experimental, measurement-only**: the Eq. 7 force core in joint (tree)
-//! coordinates, to measure what a smaller system would buy against the
-//! augmented one the fast loop solves (issue 23). Nothing here is wired
-//! into the fast loop; `Program` never calls it.
+//! The quasi-static tick in joint (tree) coordinates (issue 23): what
+//! `Program` runs with `SolverSettings::coordinates` = `Joint` (or `Auto`
+//! on a model it accepts; `program/joint.rs` wires it in: resync, failure
+//! paths, report), and the Eq. 7 force core there, measured against the
+//! augmented one.
 //!
 //! - `tree`: a breadth-first spanning tree of the joint graph rooted at the
 //!   ground; tree joints give the joint coordinates, the other joints'
@@ -15,8 +16,7 @@
 //! - `tick` (with `rows`, `stage`, `small`): a whole quasi-static tick in
 //!   joint coordinates — the projected update on θ with forward kinematics,
 //!   only the loop and finger rows evaluated, and Eq. 7 — on plain loops
-//!   over preallocated slices; its module docs say what wiring it into
-//!   `Program` would still need.
+//!   over preallocated slices; `resync` moves it to a q it did not tick to.
 //! - `probe` (tests, ignored): times the augmented force stage against this
 //!   one at the same q; `tick_probe` times the whole ticks.
 //!
@@ -25,8 +25,10 @@
 //! anchors or inequality rows are refused.
 
 mod core;
+mod end;
 mod kinematics;
 mod mask;
+mod resync;
 mod rows;
 mod small;
 mod stage;
@@ -44,6 +46,7 @@ mod tick_tests;
 
 pub use core::{JointSpace, PINV_RATIO, PIVOT_RATIO, ZERO_ROW};
 pub use kinematics::{Kinematics, displace};
+pub use resync::{History, MotionOut};
 pub use tick::JointTick;
 pub use tree::JointTree;
 
@@ -56,6 +59,9 @@ pub enum ReducedError {
     /// A body's quaternion is degenerate at q.
     #[error("body {0} has a degenerate quaternion")]
     Degenerate(usize),
+    /// A loop or finger row wrote an entry with no joint-space form.
+    #[error("a row's Jacobian entry has no joint-space form")]
+    RawEntry,
     /// A matrix that should be positive definite is not.
     #[error("{0} is not positive definite")]
     NotPositive(&'static str),

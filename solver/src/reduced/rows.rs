@@ -116,6 +116,11 @@ impl RowSet {
         Self { list, slot }
     }
 
+    /// Every row of the evaluated constraints (model rows).
+    pub fn evaluated(&self) -> impl Iterator<Item = usize> + '_ {
+        self.list.iter().flat_map(|e| e.row0..e.row0 + e.rows)
+    }
+
     /// Values of the evaluated constraints at `frames` (bodies, then the
     /// world) into `values` (model rows). No allocation.
     pub fn values(

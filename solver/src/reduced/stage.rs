@@ -28,13 +28,13 @@ use crate::{BodyId, FingerOutput, FingerTarget, Model};
 
 /// One body's motion history (`force::motion`).
 #[derive(Debug, Clone, Copy)]
-struct History {
-    e: UnitQuaternion<f64>,
-    r: Vector3<f64>,
-    v: Vector3<f64>,
-    w: Vector3<f64>,
-    a: Vector3<f64>,
-    alpha: Vector3<f64>,
+pub(super) struct History {
+    pub e: UnitQuaternion<f64>,
+    pub r: Vector3<f64>,
+    pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
+    pub a: Vector3<f64>,
+    pub alpha: Vector3<f64>,
 }
 
 /// Factors and buffers of the force stage.
@@ -60,11 +60,11 @@ pub(crate) struct Stage {
     /// Per body (model order).
     mass: Vec<Option<BodyMass>>,
     /// Moving bodies (index, first column) with their history.
-    bodies: Vec<(usize, usize, History)>,
-    ticks: u32,
+    pub(super) bodies: Vec<(usize, usize, History)>,
+    pub(super) ticks: u32,
     /// Per finger: its first kept row, row count, the body's end.
     fingers: Vec<(usize, usize, usize)>,
-    prev_error: Vec<Vector3<f64>>,
+    pub(super) prev_error: Vec<Vector3<f64>>,
 }
 
 impl Stage {
@@ -166,7 +166,7 @@ impl Stage {
     }
 
     /// Factors H, W, W_LL, Σ_F and Σ_F + 1/(K m̄) from D J_r S (`jr`).
-    fn factor(
+    pub(super) fn factor(
         &mut self,
         tree: &JointTree,
         kin: &Kinematics,
@@ -226,7 +226,7 @@ impl Stage {
     /// Advances the motion history to `frames` (as `Motion::advance`) and
     /// forms τ = Sᵀ b.
     #[allow(clippy::too_many_arguments)]
-    fn load(
+    pub(super) fn load(
         &mut self,
         model: &Model,
         tree: &JointTree,
@@ -268,7 +268,7 @@ impl Stage {
     }
 
     /// λ̃_F for τ (after [`Self::factor`] and [`Self::load`]).
-    fn finger_solve(&mut self, n: usize, nl: usize) {
+    pub(super) fn finger_solve(&mut self, n: usize, nl: usize) {
         let m = self.g.len();
         let mf = m - nl;
         forward(&self.h, &mut self.tau);
@@ -293,7 +293,7 @@ impl Stage {
 }
 
 /// Position and unit orientation of the body at column `o` of q.
-fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
+pub(super) fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
     let e = nalgebra::Quaternion::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
     (
         Vector3::new(q[o], q[o + 1], q[o + 2]),
@@ -302,52 +302,8 @@ fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
 }
 
 impl JointTick {
-    /// Forward kinematics at θ (`advance`), J_r S there, the factors and
-    /// the finger outputs; the chord point moves to the result.
-    pub(crate) fn end_of_tick(
-        &mut self,
-        targets: &[FingerTarget],
-        dt_s: f64,
-        advance: bool,
-    ) -> Result<(), ReducedError> {
-        if advance {
-            self.pose()?;
-        }
-        let nb = self.model.bodies().len();
-        self.kin.frames[..nb].copy_from_slice(&self.frames[..nb]);
-        self.kin.set_twists(&self.space.tree);
-        let ok = self.set.jacobian(
-            &self.model,
-            &self.space.tree,
-            &self.q,
-            &self.frames,
-            &self.kin.twists,
-            targets,
-            &self.scale,
-            &mut self.values,
-            &mut self.jr,
-            &mut self.grads,
-        );
-        if !ok {
-            return Err(ReducedError::Unsupported("a raw Jacobian entry".into()));
-        }
-        self.max_violation = self.violation();
-        let tree = &self.space.tree;
-        self.stage
-            .factor(tree, &self.kin, &self.jr, self.n_loop, &self.k_inv)?;
-        if advance {
-            let tau_s = self.settings.velocity_filter.as_secs_f64();
-            let (model, kin, q) = (&self.model, &self.kin, &self.q);
-            self.stage.load(model, tree, kin, q, dt_s, tau_s);
-            self.stage.finger_solve(tree.dofs, self.n_loop);
-            self.outputs_at(targets, dt_s);
-        }
-        self.q_s.copy_from_slice(&self.q);
-        Ok(())
-    }
-
     /// The finger outputs from λ̃_F and the coupling (`Feedback::wrenches`).
-    fn outputs_at(&mut self, targets: &[FingerTarget], dt_s: f64) {
+    pub(super) fn outputs_at(&mut self, targets: &[FingerTarget], dt_s: f64) {
         let st = &mut self.stage;
         let k = self.settings.coupling_stiffness_n_per_m;
         let c = self.settings.coupling_damping_n_s_per_m;

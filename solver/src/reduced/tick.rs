@@ -1,4 +1,5 @@
-//! A whole quasi-static tick in joint coordinates (measurement only): the
+//! A whole quasi-static tick in joint coordinates (`Program`'s tick with
+//! `coordinates = Joint`, `program/joint.rs`): the
 //! projected update's problem solved on the tree's joint coordinates θ,
 //! then Eq. 7's finger force in joint coordinates (`stage`).
 //!
@@ -23,21 +24,16 @@
 //! the force stage's L_L (W_LL's factor), Z = L_L⁻¹ W_LF and the Cholesky
 //! of Σ_F + 1/(K m̄), formed once a tick instead of once a step.
 //!
-//! Differences from `Program::tick` on the same model: the chord guard
-//! measures a step by its largest joint coordinate change (rotations times
-//! L) instead of the augmented metric; ½ θᵀHθ replaces ½ dᵀ M̃ d (equal to
-//! second order in the tick's motion); no divergence limits, no failed-tick
-//! restore, no report beyond the violation; proxies (contact fingers),
-//! inequality rows, contact, design columns and inertial motion are
-//! refused at construction.
-//!
-//! **Wiring** it into `Program` would still need: a fallback to the
-//! augmented tick (models it refuses, a singular pose where the tree's
-//! coordinates or the loop block lose rank), the failure paths (restore,
-//! `TickOutcome`s, the divergence limits), the tick report (violations of
-//! every row at some cadence: the tree rows' round-off drift is never
-//! measured here), the torque outputs, `set_q`/`assemble`/hand-over, and
-//! the slow loop's access to q, which here lives only at the tick's end.
+//! Differences from the augmented `Program::tick` on the same model: the
+//! chord guard measures a step by its largest joint coordinate change
+//! (rotations times L) instead of the augmented metric; ½ θᵀHθ replaces
+//! ½ dᵀ M̃ d (equal to second order in the tick's motion); no multipliers;
+//! proxies (contact fingers), inequality rows, contact, design columns and
+//! inertial motion are refused at construction. `Program` adds the
+//! divergence limits, the failed-tick restore, the report over every row
+//! and the resync wherever q moves outside a tick (`program/joint.rs`).
+//! Not done: a fallback to the augmented tick at a singular pose where the
+//! tree's coordinates or the loop block lose rank (the tick fails there).
 
 use std::sync::Arc;
 
@@ -215,8 +211,10 @@ impl JointTick {
         self.end_of_tick(targets, dt_s, true)
     }
 
-    /// The tick's steps from q_s; returns the number applied.
-    fn update(&mut self, targets: &[FingerTarget]) -> Result<u32, ReducedError> {
+    /// The tick's steps from q_s; returns the number applied. q and the
+    /// frames are those of the last step's start (the step's result is
+    /// posed by [`evaluate_end`](Self::evaluate_end)).
+    pub(crate) fn update(&mut self, targets: &[FingerTarget]) -> Result<u32, ReducedError> {
         self.theta.fill(0.0);
         let step = self.settings.step;
         let mut allowed = f64::INFINITY;

@@ -59,6 +59,8 @@ pub struct SceneSettings {
     pub penetration_tolerance: Option<f64>,
     /// Pre-emptive witness guards (`contact_guards`).
     pub contact_guards: Option<bool>,
+    /// The fast loop's coordinates (validated).
+    pub coordinates: Option<crate::Coordinates>,
 }
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
@@ -197,6 +199,7 @@ fn settings(s: &SolverSection) -> SceneSettings {
         dynamics: s.dynamics.as_ref().map(|x| *x.get_ref()),
         penetration_tolerance: f(&s.penetration_tolerance),
         contact_guards: s.contact_guards.as_ref().map(|x| *x.get_ref()),
+        coordinates: (s.coordinates.as_ref()).and_then(|c| crate::Coordinates::parse(c.get_ref())),
     }
 }
 

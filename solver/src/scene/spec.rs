@@ -177,6 +177,9 @@ pub struct SolverSection {
     /// Extra: pre-emptive witness guards on nearby vertices and edges
     /// (default on; off leaves penetrations to the backup and §3.2.1).
     pub contact_guards: Option<Spanned<bool>>,
+    /// Extra: the fast loop's coordinates, `"augmented"` (default),
+    /// `"joint"` or `"auto"` (`SolverSettings::coordinates`).
+    pub coordinates: Option<Spanned<String>>,
 }
 
 /// `[[body]]`.

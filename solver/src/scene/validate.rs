@@ -294,6 +294,22 @@ impl Checker<'_> {
         Ok(())
     }
 
+    /// `[solver] coordinates`: one of the spellings of `Coordinates`.
+    fn coordinates(&self, v: &super::spec::SolverSection) -> Check {
+        if let Some(c) = &v.coordinates
+            && crate::Coordinates::parse(c.get_ref()).is_none()
+        {
+            return Err(self.err(
+                c.span(),
+                format!(
+                    "coordinates \"{}\" is not one of \"augmented\", \"joint\", \"auto\"",
+                    c.get_ref()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn solver(&self, s: &SceneFile) -> Check {
         let v = &s.solver;
         if let Some(r) = &v.rate_hz
@@ -304,6 +320,7 @@ impl Checker<'_> {
                 format!("rate_hz {} is outside 100–20000 Hz", r.get_ref()),
             ));
         }
+        self.coordinates(v)?;
         if let Some(i) = &v.iterations
             && !(1..=10_000).contains(i.get_ref())
         {

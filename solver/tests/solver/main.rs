@@ -10,6 +10,8 @@ mod common;
 mod design;
 mod fd;
 mod jacobian_fd;
+mod joint_choice;
+mod joint_coordinates;
 mod mechanisms;
 mod model;
 mod pattern;

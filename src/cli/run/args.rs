@@ -45,6 +45,14 @@ pub struct RunArgs {
     /// (Jacobi-preconditioned, gradient update only).
     #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
     pub force_solver: Option<haptloop_solver::ForceSolver>,
+    /// The fast loop's coordinates: `augmented` (every body's seven
+    /// coordinates, every joint a set of rows; the default), `joint` (the
+    /// tick in joint coordinates: quasi-static mechanisms with point
+    /// fingers, no contact, limits or torque outputs; refused with the
+    /// reason otherwise) or `auto` (joint where it applies). Default: the
+    /// scene's `[solver] coordinates`, else `augmented`.
+    #[arg(long, value_name = "COORDS", value_parser = values::coordinates)]
+    pub coordinates: Option<haptloop_solver::Coordinates>,
     /// Constraint gain K of the fast update (finite, > 0). Default: the
     /// scene's, else the solver's.
     #[arg(long, value_parser = values::positive)]
@@ -163,6 +171,7 @@ impl Default for RunArgs {
             iterations: None,
             update: None,
             force_solver: None,
+            coordinates: None,
             gain: None,
             velocity_filter_ms: None,
             deterministic: false,
