@@ -53,7 +53,7 @@ impl BodyFrame {
 
     /// Frame of a body with origin `r` and Euler parameters `e = [w, x, y, z]`.
     /// `None` when |e|² is below [`MIN_QUATERNION_NORM_SQUARED`] or not finite.
-    #[inline]
+    #[inline(always)]
     pub fn new(r: Vector3<f64>, e: [f64; 4]) -> Option<Self> {
         let [w, x, y, z] = e;
         let s = w * w + x * x + y * y + z * z;

@@ -102,7 +102,7 @@ impl BodyMass {
     /// b = Q_e + Q_v − M q̈ of this body (7 values: r then e) from world-frame
     /// linear acceleration `a`, angular velocity `w` and angular acceleration
     /// `alpha` of its centre of mass, with gravity `g`.
-    #[inline]
+    #[inline(always)]
     pub fn generalized_force(
         &self,
         f: &BodyFrame,
