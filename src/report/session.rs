@@ -71,6 +71,13 @@ fn header_lines(out: &mut String, s: &Summary) {
             ""
         }
     );
+    if !s.coordinates.is_empty() {
+        let _ = writeln!(
+            out,
+            "fast-loop coordinates: {}; joint ticks run as augmented ticks: {}",
+            s.coordinates, s.joint_fallbacks
+        );
+    }
     if let Some(g) = &s.granted {
         let _ = writeln!(out, "{}", granted_lines(g));
     }

@@ -43,6 +43,14 @@ pub struct Summary {
     pub deterministic: bool,
     /// AL iterations per tick.
     pub iterations: u32,
+    /// Which coordinates the fast loop's tick ran in, and why
+    /// (`Program::coordinates`).
+    #[serde(default)]
+    pub coordinates: String,
+    /// Joint ticks of the final program that failed and ran as augmented
+    /// ticks instead.
+    #[serde(default)]
+    pub joint_fallbacks: u64,
     /// Ticks run.
     pub ticks: u64,
     /// Missed deadlines (late + overrun + skipped).
@@ -145,6 +153,8 @@ impl Summary {
             rate_hz: o.plan.rate_hz,
             deterministic: o.plan.deterministic,
             iterations: o.plan.solver.iterations,
+            coordinates: o.coordinates.clone(),
+            joint_fallbacks: o.joint_fallbacks,
             ticks: o.report.ticks,
             missed: o.report.misses.total(),
             misses: o.report.misses,

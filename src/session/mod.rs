@@ -129,6 +129,9 @@ pub struct SessionOutcome {
     /// Which coordinates the fast loop's tick ran in, and why
     /// (`Program::coordinates`).
     pub coordinates: String,
+    /// Joint ticks of the final program that failed and ran as augmented
+    /// ticks (`Program::joint_fallbacks`).
+    pub joint_fallbacks: u64,
     /// Translational joint rows of the model (0: a scene of free bodies,
     /// whose joint violation cannot be measured).
     pub joint_rows: usize,
@@ -322,6 +325,7 @@ fn finish<C: Clock>(
         track,
         joint_rows: joint_length_rows(&scene.compiled.model),
         coordinates: fast.program().coordinates().to_string(),
+        joint_fallbacks: fast.program().joint_fallbacks(),
         design: fast.design_stats(),
         semantic,
         virtual_devices,

@@ -115,3 +115,38 @@ fn sampling_every_tick_allocates_nothing() {
         assert_eq!((r.captured, r.compared, r.overwritten), (1100, 1, 1099));
     }
 }
+
+/// The summary and the text report say which coordinates the fast loop ran
+/// in (`Program::coordinates`) and how many joint ticks fell back to the
+/// augmented tick: the default says augmented; `coordinates = joint` on the
+/// four-bar says joint, none fallen back over 0.2 s of the hand's motion.
+#[test]
+fn the_summary_says_which_coordinates_ran() {
+    let default = summary("four-bar", every_10_ms(0.2));
+    assert!(
+        default
+            .coordinates
+            .starts_with("augmented (asked: augmented"),
+        "{}",
+        default.coordinates
+    );
+    let joint = summary(
+        "four-bar",
+        SessionOptions {
+            coordinates: Some(haptloop_solver::Coordinates::Joint),
+            ..every_10_ms(0.2)
+        },
+    );
+    assert!(
+        joint.coordinates.starts_with("joint (asked: joint"),
+        "{}",
+        joint.coordinates
+    );
+    assert_eq!(joint.joint_fallbacks, 0);
+    let text = haptloop::report::session::render(&joint, &[]);
+    let line = format!(
+        "fast-loop coordinates: {}; joint ticks run as augmented ticks: 0",
+        joint.coordinates
+    );
+    assert!(text.contains(&line), "{text}");
+}

@@ -9,9 +9,11 @@
 //! successful tick, so the slow loop and the reports read
 //! [`Program::q`], [`Program::finger_outputs`] and
 //! [`Program::last_report`] as before), the targets, the report, the
-//! divergence limits and the failure paths: on any error q is not moved,
-//! every finger output is zero, the joint tick's motion history restarts at
-//! rest at q and the status says why, as in the augmented tick. Wherever q
+//! divergence limits and the failure paths: bad input (bad targets, a zero
+//! time step) fails the tick — q is not moved, every finger output is zero,
+//! the joint tick's motion history restarts at rest at q and the status says
+//! why, as in the augmented tick; any other failure runs the augmented tick
+//! for the same call (`joint_fallback`). Wherever q
 //! changes outside a tick (`set_q`, `shift_q`, `assemble`, `iterate`,
 //! `adopt_state`, `refresh_factor`) the joint tick is moved there without
 //! allocating (`JointTick::resync`).
@@ -67,6 +69,9 @@ pub(super) struct JointPath {
     evaluated: Vec<bool>,
     /// The report's statistics over the other rows, at the last resync.
     fixed: RowStats,
+    /// A test's injected failure of the next joint tick
+    /// (`Program::fail_next_joint_tick`).
+    pub(super) inject: Option<super::joint_fallback::Injected>,
 }
 
 impl fmt::Debug for JointPath {
@@ -184,6 +189,7 @@ impl Program {
                     rows,
                     evaluated,
                     fixed: RowStats::default(),
+                    inject: None,
                 }));
                 self.joint_resync(History::Rest);
                 Ok(())
@@ -242,6 +248,9 @@ impl Program {
         self.joint = Some(j);
         match done {
             Ok(r) => r,
+            Err((status, _)) if super::joint_fallback::falls_back(&status) => {
+                self.joint_fallback(targets, dt_s, marks)
+            }
             Err((status, k)) => self.joint_failed(status, k),
         }
     }
@@ -261,6 +270,9 @@ impl Program {
         }
         if j.stale {
             return Err((TickOutcome::NonFinite, 0));
+        }
+        if j.inject.is_some() {
+            return Err((TickOutcome::ForceSolve, 0));
         }
         let t = &mut j.tick;
         let (fixed, rows) = (j.fixed, &j.rows);
@@ -305,7 +317,7 @@ impl Program {
 
     /// A failed joint tick (q was not moved): outputs zero, the joint tick back
     /// at q with its motion history at rest.
-    fn joint_failed(&mut self, status: TickOutcome, iterations: u32) -> TickReport {
+    pub(super) fn joint_failed(&mut self, status: TickOutcome, iterations: u32) -> TickReport {
         self.outputs.fill(FingerOutput::default());
         self.joint_resync(History::Rest);
         TickReport {

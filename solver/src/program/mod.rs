@@ -64,6 +64,7 @@ mod design_flags;
 mod handover;
 mod inertial;
 mod joint;
+mod joint_fallback;
 mod joint_report;
 mod objective;
 #[cfg(test)]
@@ -200,6 +201,9 @@ pub struct Program {
     joint: Option<Box<joint::JointPath>>,
     /// Which coordinates the tick runs in, and why.
     choice: CoordinatesChoice,
+    /// Joint ticks that failed and were run as augmented ticks
+    /// (`joint_fallback`).
+    joint_fallbacks: u64,
 }
 
 impl Program {
@@ -335,6 +339,7 @@ impl Program {
                 joint: false,
                 why: String::new(),
             },
+            joint_fallbacks: 0,
             feedback,
             ev,
             h,

@@ -307,7 +307,7 @@ impl Program {
         }
     }
 
-    fn run_tick<M: StageMarks>(
+    pub(super) fn run_tick<M: StageMarks>(
         &mut self,
         targets: &[FingerTarget],
         dt_s: f64,
@@ -443,7 +443,7 @@ impl Program {
     }
 
     /// Restores the state of the start of the call and zeroes the outputs.
-    fn failed(&mut self, status: TickOutcome, iterations: u32) -> TickReport {
+    pub(super) fn failed(&mut self, status: TickOutcome, iterations: u32) -> TickReport {
         self.q.copy_from_slice(&self.q_ref);
         self.lambda.copy_from_slice(&self.saved_lambda);
         self.feedback.motion.reset(&self.q);

@@ -39,7 +39,7 @@ pub fn scene(name: &str, coordinates: Coordinates) -> (Arc<Model>, SolverSetting
 }
 
 /// Both programs of a scene from its q0.
-fn pair(name: &str) -> (Program, Program) {
+pub fn pair(name: &str) -> (Program, Program) {
     let (model, s) = scene(name, Coordinates::Augmented);
     let aug = Program::new(model.clone(), s).unwrap();
     let joint = Program::new(
@@ -56,7 +56,7 @@ fn pair(name: &str) -> (Program, Program) {
 }
 
 /// The hand on a circle of `radius` in the xy plane, 500 ticks a turn.
-fn hand(t0: &[FingerTarget], k: usize, radius: f64) -> Vec<FingerTarget> {
+pub fn hand(t0: &[FingerTarget], k: usize, radius: f64) -> Vec<FingerTarget> {
     let a = 2.0 * std::f64::consts::PI * k as f64 / 500.0;
     let mut t = t0.to_vec();
     for (t, t0) in t.iter_mut().zip(t0) {
@@ -70,7 +70,7 @@ fn radius(name: &str) -> f64 {
 }
 
 /// Largest |r_a − r_b| over the moving bodies, metres.
-fn body_gap(model: &Model, a: &[f64], b: &[f64]) -> f64 {
+pub fn body_gap(model: &Model, a: &[f64], b: &[f64]) -> f64 {
     model
         .layout()
         .moving_bodies()
@@ -292,7 +292,8 @@ fn set_q_and_shift_q_resync_the_joint_tick() {
 }
 
 /// `Program::tick`, `set_q` and `shift_q` in joint coordinates allocate
-/// nothing (counting global allocator), 200 ticks on each mechanism.
+/// nothing (counting global allocator), 200 ticks on each mechanism, two
+/// of them falling back to the augmented tick (one of whose fallback fails).
 #[test]
 fn the_joint_program_allocates_nothing() {
     assert!(is_installed());
@@ -313,10 +314,19 @@ fn the_joint_program_allocates_nothing() {
                     ok &= joint.set_q(&q0).is_ok() && joint.shift_q(&dq).is_ok();
                     ok &= joint.tick(&bad, DT).status != TickOutcome::Ok;
                 }
+                // The next tick falls back to the augmented tick (which
+                // succeeds), then one whose fallback fails too.
+                if k == 150 || k == 160 {
+                    ok &= joint.fail_next_joint_tick(k == 160);
+                }
+                if k == 160 {
+                    ok &= joint.tick(t, DT).status == TickOutcome::ForceSolve;
+                }
             }
             ok
         });
         assert!(ok, "{name}: a tick failed");
         assert_eq!(stats.total(), 0, "{name}: allocations {stats:?}");
+        assert_eq!(joint.joint_fallbacks(), 2, "{name}: fallback ticks");
     }
 }

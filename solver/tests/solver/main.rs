@@ -12,6 +12,7 @@ mod fd;
 mod jacobian_fd;
 mod joint_choice;
 mod joint_coordinates;
+mod joint_fallback;
 mod mechanisms;
 mod model;
 mod pattern;
