@@ -245,17 +245,16 @@ pub(crate) fn displace_with(
                 Rigid::rotation_about(&p, exp_rotation(phi))
             }
             _ => {
-                // A rotation about a through p has v = p × a, so p's
-                // component off a is a × v (a unit). A universal turns
-                // about its parent end's axis after its child end's (the
-                // parent's axis outermost): the child's axis, turned by
-                // both, stays perpendicular to the parent's.
-                // A universal's two axes meet only at its anchor: a×v of
-                // one is on that axis, not on the other (the rotation
-                // about it would move the anchor).
+                // A universal turns about its parent end's axis after its
+                // child end's (the parent's axis outermost): the child's
+                // axis, turned by both, stays perpendicular to the
+                // parent's. Its two axes meet only at its anchor, the
+                // pivot. A revolute's pivot is any point of its axis: a
+                // rotation about a through p has v = p × a, so p's
+                // component off a is a × v (a unit).
                 let mut q = UnitQuaternion::identity();
-                for k in outer_first(j) {
-                    q *= exp_rotation(t[k].w * th[k]);
+                for i in outer_first(j) {
+                    q *= exp_rotation(t[i].w * th[i]);
                 }
                 let p = if t.len() == 2 {
                     kin.frames[j.child.index()].point(&j.anchors[j.child_end])
