@@ -137,7 +137,7 @@ pub use placement::{
     Placement, PlacementCache, PlacementError, PlacementOptions, SolveInfo, SolveStatus,
 };
 pub use program::{
-    AssemblyReport, ConvergedTick, CoordinatesChoice, Divergence, DivergenceLimits,
+    AssemblyReport, ConvergedTick, CoordinatesChoice, CostEstimate, Divergence, DivergenceLimits,
     FactorRefresher, FingerOutput, Program, ProgramError, RefreshedFactor, TickOutcome, TickReport,
     TickState,
 };

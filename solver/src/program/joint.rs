@@ -1,6 +1,8 @@
 //! The tick in joint coordinates (`SolverSettings::coordinates`): a
 //! [`Program`] whose settings choose `Joint` (or `Auto`, on a model the
-//! joint tick accepts) ticks with [`JointTick`] instead of its augmented
+//! joint tick accepts where its cost model, `joint_cost`, estimates the
+//! joint tick cheaper than the augmented one; `Joint` runs it regardless)
+//! ticks with [`JointTick`] instead of its augmented
 //! update and force stage (`reduced`: the projected update on the spanning
 //! tree's joint coordinates with forward kinematics, only the loop-closing
 //! and finger rows evaluated, Eq. 7 in joint coordinates).
@@ -29,6 +31,7 @@
 
 use std::fmt;
 
+use super::joint_cost::{CostEstimate, augmented_madds, joint_madds};
 use super::joint_report::RowStats;
 use super::report::max_tracking;
 use super::stages::{Ordered, SolverStage, StageMarks};
@@ -41,7 +44,7 @@ use crate::{Coordinates, FingerId, FingerTarget, ForceSolver, UpdateRule};
 
 /// Which coordinates a program's tick runs in, and why
 /// ([`Program::coordinates`]).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CoordinatesChoice {
     /// What the settings asked for.
     pub asked: Coordinates,
@@ -49,6 +52,9 @@ pub struct CoordinatesChoice {
     pub joint: bool,
     /// Why: what the joint tick refused, or what it took.
     pub why: String,
+    /// Both ticks' estimated cost, when the joint tick could be built
+    /// (`Auto` runs joint only where it is estimated cheaper).
+    pub estimate: Option<CostEstimate>,
 }
 
 impl fmt::Display for CoordinatesChoice {
@@ -154,6 +160,7 @@ impl Program {
             asked,
             joint: false,
             why: "the default".into(),
+            estimate: None,
         };
         if asked == Coordinates::Augmented {
             return Ok(());
@@ -170,11 +177,18 @@ impl Program {
         };
         match built {
             Ok(tick) => {
+                let est = self.estimate(&tick);
+                self.choice.estimate = Some(est);
+                if asked == Coordinates::Auto && !est.joint_cheaper() {
+                    self.choice.why = est.describe();
+                    return Ok(());
+                }
                 self.choice.joint = true;
                 self.choice.why = format!(
-                    "{} joint coordinates, {} loop rows kept",
+                    "{} joint coordinates, {} loop rows kept; {}",
                     tick.dofs(),
-                    tick.n_loop
+                    tick.n_loop,
+                    est.describe()
                 );
                 let mut evaluated = vec![false; self.model.n_rows()];
                 let all = tick.evaluated_rows();
@@ -199,6 +213,22 @@ impl Program {
                 self.choice.why = format!("the joint tick refused: {why}");
                 Ok(())
             }
+        }
+    }
+
+    /// Both ticks' estimated arithmetic (`joint_cost`): the joint tick's
+    /// from its tree and rows, the augmented tick's from its Eq. 7 factor's
+    /// stored values and the Jacobian's.
+    fn estimate(&self, tick: &JointTick) -> CostEstimate {
+        let it = self.settings.iterations;
+        CostEstimate {
+            joint_madds: joint_madds(tick, it),
+            augmented_madds: augmented_madds(
+                self.force_factor_nnz(),
+                self.model.n_rows(),
+                self.ev.jacobian().nnz(),
+                it,
+            ),
         }
     }
 

@@ -64,6 +64,7 @@ mod design_flags;
 mod handover;
 mod inertial;
 mod joint;
+mod joint_cost;
 mod joint_fallback;
 mod joint_report;
 mod objective;
@@ -84,6 +85,7 @@ mod tick;
 
 pub use converged::{ConvergedTick, ROUND_OFF_STEP_M, TickState};
 pub use joint::CoordinatesChoice;
+pub use joint_cost::CostEstimate;
 pub use objective::OBJECTIVE_STEP_LIMIT_M;
 pub use refresh::{FactorRefresher, RefreshedFactor};
 pub use semantic::SNAP_RISE_S;
@@ -338,6 +340,7 @@ impl Program {
                 asked: settings.coordinates,
                 joint: false,
                 why: String::new(),
+                estimate: None,
             },
             joint_fallbacks: 0,
             feedback,

@@ -202,8 +202,10 @@ impl Rigid {
 /// Forward kinematics relative to `q_base`: every tree joint moved by
 /// `dtheta` from its pose at `q_base` (the twists of `kin`, which must be
 /// at `q_base`), written to `out`. Revolute and prismatic coordinates are
-/// exact angles and lengths; a universal turns about its first axis after
-/// its second, a spherical by the rotation vector of its three coordinates.
+/// exact angles and lengths; a universal turns about its child end's axis,
+/// then about its parent end's (the parent's axis stays fixed in the
+/// parent, the child's in the child: the joint's rows hold exactly), a
+/// spherical by the rotation vector of its three coordinates.
 /// Allocates its scratch; [`displace_with`] does not.
 pub fn displace(
     model: &Model,
@@ -243,13 +245,22 @@ pub(crate) fn displace_with(
                 Rigid::rotation_about(&p, exp_rotation(phi))
             }
             _ => {
-                // A rotation about a through p has v = p × a, so p's
+                // A universal turns about its parent end's axis after its
+                // child end's (the parent's axis outermost): the child's
+                // axis, turned by both, stays perpendicular to the
+                // parent's. Its two axes meet only at its anchor, the
+                // pivot. A revolute's pivot is any point of its axis: a
+                // rotation about a through p has v = p × a, so p's
                 // component off a is a × v (a unit).
                 let mut q = UnitQuaternion::identity();
-                for (tw, &x) in t.iter().zip(th) {
-                    q *= exp_rotation(tw.w * x);
+                for i in outer_first(j) {
+                    q *= exp_rotation(t[i].w * th[i]);
                 }
-                let p = t[0].w.cross(&t[0].v);
+                let p = if t.len() == 2 {
+                    kin.frames[j.child.index()].point(&j.anchors[j.child_end])
+                } else {
+                    t[0].w.cross(&t[0].v)
+                };
                 Rigid::rotation_about(&p, q)
             }
         };
@@ -264,6 +275,17 @@ pub(crate) fn displace_with(
         out[o..o + 3].copy_from_slice(r2.as_slice());
         out[o + 3..o + 7].copy_from_slice(&[e2.w, e2.i, e2.j, e2.k]);
     }
+}
+
+/// The order of a revolute's or universal's coordinates in its rotation's
+/// product, outermost first: the parent end's axis, then the child end's (a
+/// universal whose child is end i turns about `axes[1]` first, `axes[0]`
+/// second). A revolute has one.
+#[inline]
+fn outer_first(j: &TreeJoint) -> impl Iterator<Item = usize> {
+    let n = j.freedom.dofs();
+    let flip = n == 2 && j.child_end == 0;
+    (0..n).map(move |k| if flip { n - 1 - k } else { k })
 }
 
 /// The rotation by the rotation vector `phi`, as

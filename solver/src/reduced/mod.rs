@@ -36,6 +36,8 @@ mod tick;
 mod tree;
 
 #[cfg(test)]
+mod fk_tests;
+#[cfg(test)]
 mod probe;
 #[cfg(test)]
 mod tests;

@@ -247,6 +247,22 @@ impl JointTree {
         self.joints.len()
     }
 
+    /// Over every joint coordinate, the joint coordinates on its path to
+    /// the ground (its own joint's included): their sum (the entries of H
+    /// and of a body's projection the tick touches) and their largest (the
+    /// deepest path). The joint tick's cost model reads them.
+    pub(crate) fn path_dofs(&self) -> (usize, usize) {
+        let mut above = vec![0usize; self.joints.len()];
+        let (mut sum, mut deepest) = (0, 0);
+        for (k, j) in self.joints.iter().enumerate() {
+            let own = j.freedom.dofs();
+            above[k] = own + j.parent_joint.map_or(0, |p| above[p]);
+            sum += own * above[k];
+            deepest = deepest.max(above[k]);
+        }
+        (sum, deepest)
+    }
+
     /// The tree joints from `body` up to the ground (the body's own first).
     pub(crate) fn path(&self, body: BodyId) -> impl Iterator<Item = &TreeJoint> + '_ {
         let mut next = self.joint_of_body.get(body.index()).copied().flatten();
