@@ -87,7 +87,6 @@ impl fmt::Debug for JointPath {
 /// before it is built.
 fn refusal(p: &Program) -> Option<String> {
     let (m, s) = (&*p.model, &p.settings);
-    let point = |f: &crate::Finger| m.constraints()[f.constraint.index()].rows.len() == 3;
     let why = if s.update == UpdateRule::Gradient {
         "the gradient update (Eq. 1–3): the joint tick takes projected steps".into()
     } else if s.force_solver != ForceSolver::Cholesky {
@@ -108,8 +107,6 @@ fn refusal(p: &Program) -> Option<String> {
         "flexible bodies, surfaces or rolling rows".into()
     } else if p.semantic.is_some() {
         "semantic rows (snaps, carried groups)".into()
-    } else if !m.fingers().iter().all(point) {
-        "rigid (six-row) fingers".into()
     } else {
         return None;
     };

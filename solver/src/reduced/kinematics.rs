@@ -242,6 +242,13 @@ pub(crate) fn displace_with(
                 let p = kin.frames[j.child.index()].point(&j.anchors[j.child_end]);
                 Rigid::rotation_about(&p, exp_rotation(phi))
             }
+            // Both axes pass through the joint's point, not (in general)
+            // through the foot of the first axis' line from the origin.
+            Freedom::Universal { .. } => {
+                let p = kin.frames[j.child.index()].point(&j.anchors[j.child_end]);
+                let q = exp_rotation(t[0].w * th[0]) * exp_rotation(t[1].w * th[1]);
+                Rigid::rotation_about(&p, q)
+            }
             _ => {
                 // A rotation about a through p has v = p × a, so p's
                 // component off a is a × v (a unit).

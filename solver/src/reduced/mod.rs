@@ -26,6 +26,7 @@
 
 mod core;
 mod end;
+mod finger6;
 mod kinematics;
 mod mask;
 mod resync;

@@ -326,13 +326,20 @@ impl JointTick {
             };
             st.prev_error[i] = err;
             let coupling = err * k + rate * c;
+            let coupling_torque = super::finger6::coupling_torque(
+                rows,
+                &self.q,
+                self.model.layout().body_offset(fi.body),
+                &targets[i],
+                self.settings.coupling_angular_stiffness_nm_per_rad,
+            );
             self.outputs[i] = FingerOutput {
                 force_n: force + coupling,
-                torque_nm: torque,
+                torque_nm: torque + coupling_torque,
                 constraint_force_n: force,
                 constraint_torque_nm: torque,
                 coupling_force_n: coupling,
-                coupling_torque_nm: Vector3::zeros(),
+                coupling_torque_nm: coupling_torque,
                 attachment_m: p,
                 target_m: targets[i].position_m,
                 tracking_error_m: err.norm(),

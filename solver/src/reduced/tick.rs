@@ -109,7 +109,7 @@ impl JointTick {
     /// history at rest. Allocates.
     ///
     /// # Errors
-    /// What [`JointSpace::new`] refuses; inertial motion, rigid or contact
+    /// What [`JointSpace::new`] refuses; inertial motion, contact
     /// fingers; a degenerate q.
     pub fn new(
         model: Arc<Model>,

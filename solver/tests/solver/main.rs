@@ -13,6 +13,7 @@ mod jacobian_fd;
 mod joint_choice;
 mod joint_coordinates;
 mod joint_fallback;
+mod joint_stewart;
 mod mechanisms;
 mod model;
 mod pattern;

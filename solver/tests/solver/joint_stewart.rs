@@ -1,0 +1,171 @@
+//! The Stewart platform in joint coordinates: its rigid (six-row) grasp
+//! and its stroke limits, each against the augmented program ticking the
+//! same targets (the pattern of `joint_coordinates`), and zero allocation.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use haptloop_rt::alloc::{count, is_installed};
+use haptloop_solver::{Coordinates, FingerTarget, Model, Program, SolverSettings, TickOutcome};
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::joint_coordinates::body_gap;
+
+const DT: Duration = Duration::from_millis(1);
+
+/// The scene `name` (its `[solver]` step and iterations), with every
+/// `limits = …` line dropped when `free`.
+pub fn scene(name: &str, free: bool) -> (Arc<Model>, SolverSettings) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(format!("{name}.toml"));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text: String = text
+        .lines()
+        .filter(|l| !(free && l.trim_start().starts_with("limits")))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let compiled = haptloop_solver::scene::parse(&format!("{name}.toml"), &text, None)
+        .unwrap()
+        .compile()
+        .unwrap();
+    let mut settings = SolverSettings::default();
+    if let Some(v) = compiled.settings.step {
+        settings.step = v;
+    }
+    if let Some(v) = compiled.settings.iterations {
+        settings.iterations = v;
+    }
+    (Arc::new(compiled.model), settings)
+}
+
+/// The augmented and the joint program of a scene from its q0, with
+/// `iterations` steps a tick if given.
+pub fn pair(name: &str, free: bool, iterations: Option<u32>) -> (Program, Program) {
+    let (model, mut s) = scene(name, free);
+    s.iterations = iterations.unwrap_or(s.iterations);
+    let aug = Program::new(model.clone(), s).unwrap();
+    let joint = Program::new(
+        model,
+        SolverSettings {
+            coordinates: Coordinates::Joint,
+            ..s
+        },
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert!(!aug.coordinates().joint);
+    assert!(joint.coordinates().joint, "{name}: {}", joint.coordinates());
+    (aug, joint)
+}
+
+/// A 2 mm hand circle, 500 ticks a turn, the grasp turned up to 0.05 rad
+/// about a wandering axis.
+fn wobble(t0: &[FingerTarget], k: usize) -> Vec<FingerTarget> {
+    let a = 2.0 * std::f64::consts::PI * k as f64 / 500.0;
+    let mut t = t0.to_vec();
+    for (t, t0) in t.iter_mut().zip(t0) {
+        t.position_m = t0.position_m + Vector3::new(a.cos() - 1.0, a.sin(), 0.0) * 0.002;
+        let axis = Vector3::new(a.sin(), (2.0 * a).cos(), 0.5);
+        t.orientation =
+            UnitQuaternion::from_scaled_axis(axis.normalize() * 0.05 * a.sin()) * t0.orientation;
+    }
+    t
+}
+
+/// Largest |force| and |torque| differences of the two programs' finger
+/// outputs, and the largest |force|, |torque| of the augmented one's.
+fn output_gaps(a: &Program, b: &Program) -> [f64; 4] {
+    let mut g = [0.0f64; 4];
+    for (x, y) in a.finger_outputs().iter().zip(b.finger_outputs()) {
+        g[0] = g[0].max((x.force_n - y.force_n).norm());
+        g[1] = g[1].max((x.torque_nm - y.torque_nm).norm());
+        g[2] = g[2].max(x.force_n.norm());
+        g[3] = g[3].max(x.torque_nm.norm());
+    }
+    g
+}
+
+/// The rigid grasp: 400 ticks of the wobbling grasp on Stewart without its
+/// stroke limits (gravity is off in the scene), both programs from q0, each
+/// finger output's force and torque against the augmented program's: with
+/// the scene's one step a tick (the two chords differ at second order)
+/// bodies within 1 µm, force and torque within 1e-3 of the largest; with
+/// four steps (both converged: the same rows, scale and output) within
+/// 1e-5 of the largest.
+#[test]
+fn the_rigid_grasp_follows_the_augmented_program() {
+    for (steps, bound) in [(None, 1e-3), (Some(4), 1e-5)] {
+        let name = "stewart";
+        let (mut aug, mut joint) = pair(name, true, steps);
+        let model = aug.model_arc().clone();
+        let t0 = model.initial_targets();
+        let (mut dr, mut worst) = (0.0f64, [0.0f64; 4]);
+        for k in 0..400 {
+            let t = wobble(&t0, k);
+            let (ra, rj) = (aug.tick(&t, DT), joint.tick(&t, DT));
+            assert_eq!(ra.status, TickOutcome::Ok, "{name} tick {k}");
+            assert_eq!(rj.status, TickOutcome::Ok, "{name} tick {k}");
+            dr = dr.max(body_gap(&model, aug.q(), joint.q()));
+            for (w, g) in worst.iter_mut().zip(output_gaps(&aug, &joint)) {
+                *w = w.max(g);
+            }
+        }
+        let [df, dt, fmax, tmax] = worst;
+        println!(
+            "{name}, {steps:?} steps: |Δr| {dr:.2e} m, |ΔF| {df:.2e} of {fmax:.2e} N, \
+             |Δτ| {dt:.2e} of {tmax:.2e} N m"
+        );
+        assert_eq!(
+            joint.joint_fallbacks(),
+            0,
+            "{name}: every tick a joint tick"
+        );
+        assert!(
+            fmax > 1e-3 && tmax > 1e-5,
+            "{name}: the load is not trivially zero"
+        );
+        assert!(dr < 1e-6, "{name}: |Δr| {dr:.2e} m");
+        assert!(df < bound * fmax, "{name}: |ΔF| {df:.2e} N");
+        assert!(dt < bound * tmax, "{name}: |Δτ| {dt:.2e} N m");
+        assert!(
+            body_gap(&model, model.q0(), joint.q()) > 1e-4,
+            "{name}: it moved"
+        );
+        let drift = tree_rows_at(&model, joint.q(), &wobble(&t0, 399));
+        println!("{name}: the tree joints' rows at the joint program's q {drift:.2e}");
+        assert!(
+            drift < 1e-12,
+            "{name}: forward kinematics broke a tree joint"
+        );
+    }
+}
+
+/// The largest |C| of the tree joints' rows at q (a fresh evaluation):
+/// forward kinematics keeps them (the universal joints' rotation about their
+/// own point, not the foot of the first axis).
+fn tree_rows_at(model: &Model, q: &[f64], t: &[FingerTarget]) -> f64 {
+    let tree = haptloop_solver::reduced::JointTree::new(model).unwrap();
+    let mut ev = model.evaluation();
+    ev.evaluate(model, q, t).unwrap();
+    tree.tree_rows()
+        .iter()
+        .map(|&r| ev.values()[r].abs())
+        .fold(0.0, f64::max)
+}
+
+/// 300 ticks of the rigid grasp in joint coordinates: no allocator call.
+#[test]
+fn the_rigid_grasp_allocates_nothing() {
+    assert!(is_installed());
+    let (_, mut joint) = pair("stewart", true, None);
+    let t0 = joint.model().initial_targets();
+    let targets: Vec<Vec<FingerTarget>> = (0..300).map(|k| wobble(&t0, k)).collect();
+    let (ok, stats) = count(|| {
+        targets
+            .iter()
+            .all(|t| joint.tick(t, DT).status == TickOutcome::Ok)
+    });
+    assert!(ok, "a tick failed");
+    assert_eq!(stats.total(), 0, "allocations {stats:?}");
+    assert_eq!(joint.joint_fallbacks(), 0);
+}
