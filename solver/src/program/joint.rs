@@ -199,6 +199,12 @@ impl Program {
         }
     }
 
+    /// Ticks on which the joint tick's Eq. 7 released a limit that would
+    /// have pulled.
+    pub(super) fn joint_releases(&self) -> u64 {
+        self.joint.as_ref().map_or(0, |j| j.tick.limit_releases())
+    }
+
     /// Which coordinates the tick runs in, and why.
     pub fn coordinates(&self) -> &CoordinatesChoice {
         &self.choice
@@ -307,6 +313,7 @@ impl Program {
             rms_violation_m: v.rms_m,
             max_tracking_error_m: max_tracking(&self.outputs),
             max_penetration_m: v.max_penetration_m.max(0.0),
+            activations: t.limit_activations(),
             status: TickOutcome::Ok,
             ..TickReport::default()
         })

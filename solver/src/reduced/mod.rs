@@ -28,6 +28,7 @@ mod core;
 mod end;
 mod finger6;
 mod kinematics;
+mod limits;
 mod mask;
 mod resync;
 mod rows;

@@ -52,8 +52,8 @@ pub(crate) struct Stage {
     pub sk: Vec<f64>,
     work: Vec<f64>,
     eig: Vec<f64>,
-    g: Vec<f64>,
-    tau: Vec<f64>,
+    pub(crate) g: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
     pub lambda_f: Vec<f64>,
     reference: f64,
     ic: Vec<Matrix6<f64>>,
@@ -62,7 +62,8 @@ pub(crate) struct Stage {
     /// Moving bodies (index, first column) with their history.
     pub(super) bodies: Vec<(usize, usize, History)>,
     pub(super) ticks: u32,
-    /// Per finger: its first kept row, row count, the body's end.
+    /// Per finger: its first row in the finger block, row count, the
+    /// body's end.
     fingers: Vec<(usize, usize, usize)>,
     pub(super) prev_error: Vec<Vector3<f64>>,
 }
@@ -93,7 +94,7 @@ impl Stage {
             mass[b.index()] = Some(bm);
         }
         let mut fingers = Vec::new();
-        let mut next = nl;
+        let mut next = 0;
         for f in model.fingers() {
             let c = f.constraint.index();
             let rows = model.constraints()[c].rows.len();
@@ -181,7 +182,8 @@ impl Stage {
         if !factor_in_place(&mut self.h, n) {
             return Err(ReducedError::NotPositive("H"));
         }
-        self.yt.copy_from_slice(jr);
+        // Fewer rows than the buffers hold while limits are inactive.
+        self.yt[..jr.len()].copy_from_slice(jr);
         for i in 0..m {
             forward(&self.h, &mut self.yt[i * n..(i + 1) * n]);
         }
@@ -269,13 +271,13 @@ impl Stage {
 
     /// λ̃_F for τ (after [`Self::factor`] and [`Self::load`]).
     pub(super) fn finger_solve(&mut self, n: usize, nl: usize) {
-        let m = self.g.len();
-        let mf = m - nl;
+        let mf = self.lambda_f.len();
+        let m = nl + mf;
         forward(&self.h, &mut self.tau);
         for i in 0..m {
             self.g[i] = dot(&self.yt[i * n..(i + 1) * n], &self.tau);
         }
-        let (gl, gf) = self.g.split_at_mut(nl);
+        let (gl, gf) = self.g[..m].split_at_mut(nl);
         forward(&self.wll, gl);
         for (f, v) in gf.iter_mut().enumerate() {
             *v -= dot(&self.z[f * nl..(f + 1) * nl], gl);
@@ -309,6 +311,7 @@ impl JointTick {
         let c = self.settings.coupling_damping_n_s_per_m;
         for (i, fi) in self.model.fingers().iter().enumerate() {
             let (first, rows, end) = st.fingers[i];
+            let first = self.n_loop + first;
             let fr = &self.frames[fi.body.index()];
             let (mut force, mut torque) = (Vector3::zeros(), Vector3::zeros());
             for row in first..first + rows {

@@ -169,3 +169,119 @@ fn the_rigid_grasp_allocates_nothing() {
     assert_eq!(stats.total(), 0, "allocations {stats:?}");
     assert_eq!(joint.joint_fallbacks(), 0);
 }
+
+/// The scene's lift (5 cm up) at 25 µm a tick, held 200 ticks, then 1 cm
+/// back down.
+fn lift(t0: &[FingerTarget], k: usize) -> Vec<FingerTarget> {
+    let up = 2000.0;
+    let z = if k < 2200 {
+        (k as f64 / up).min(1.0)
+    } else {
+        1.0 - (k - 2200) as f64 / up
+    } * 0.05;
+    let mut t = t0.to_vec();
+    for (t, t0) in t.iter_mut().zip(t0) {
+        t.position_m = t0.position_m + Vector3::new(0.0, 0.0, z);
+    }
+    t
+}
+
+/// The smallest limit-row value at q (a fresh evaluation): < 0 past a stop.
+fn limit_gap(model: &Model, q: &[f64], t: &[FingerTarget]) -> f64 {
+    let mut ev = model.evaluation();
+    ev.evaluate(model, q, t).unwrap();
+    model
+        .inequality_rows()
+        .map(|r| ev.values()[r])
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Height of the platform (the finger's body).
+fn height(model: &Model, q: &[f64]) -> f64 {
+    let o = model.layout().body_offset(model.fingers()[0].body).unwrap();
+    q[o + 2]
+}
+
+/// Through the stops: the scene's lift until the stroke limits stop the
+/// platform, held there, then back down, both programs from q0. The stop
+/// engages on the same tick (a limit row within 1 µm of its bound, and the
+/// first in-tick activation), the platform's height stays within 1 µm and
+/// the felt force within 1e-3 of the largest; the stop never pulls: on the
+/// way down the platform leaves it on the same tick as the augmented
+/// program's and then follows the hand (tracking error below 0.1 mm).
+#[test]
+fn the_stroke_limits_stop_the_platform_as_the_augmented_program() {
+    let name = "stewart";
+    let (mut aug, mut joint) = pair(name, false, None);
+    let model = aug.model_arc().clone();
+    let t0 = model.initial_targets();
+    let (mut engage, mut activate, mut leave) = ([None; 2], [None; 2], [None; 2]);
+    let (mut dz, mut df, mut fmax, mut track, mut low) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for k in 0..2800 {
+        let t = lift(&t0, k);
+        let (ra, rj) = (aug.tick(&t, DT), joint.tick(&t, DT));
+        assert_eq!(ra.status, TickOutcome::Ok, "{name} tick {k}");
+        assert_eq!(rj.status, TickOutcome::Ok, "{name} tick {k}");
+        for (s, (p, r)) in [(&aug, ra), (&joint, rj)].into_iter().enumerate() {
+            let gap = limit_gap(&model, p.q(), &t);
+            if gap < 1e-6 && engage[s].is_none() {
+                engage[s] = Some(k);
+            }
+            if r.activations > 0 && activate[s].is_none() {
+                activate[s] = Some(k);
+            }
+            if k > 2200 && gap > 1e-6 && leave[s].is_none() {
+                leave[s] = Some(k);
+            }
+            low = low.min(gap);
+        }
+        dz = dz.max((height(&model, aug.q()) - height(&model, joint.q())).abs());
+        let [d, _, f, _] = output_gaps(&aug, &joint);
+        (df, fmax) = (df.max(d), fmax.max(f));
+        if leave[1].is_some_and(|l| k > l + 2) {
+            track = track.max(rj.max_tracking_error_m);
+        }
+    }
+    println!(
+        "{name}: stop engaged at {engage:?}, first activation {activate:?}, left at {leave:?}; \
+         |Δz| {dz:.2e} m, |ΔF| {df:.2e} of {fmax:.2e} N, lowest limit value {low:.2e}, \
+         tracking once off the stop {track:.2e} m, releases {} / {}",
+        aug.force_releases(),
+        joint.force_releases()
+    );
+    assert!(
+        engage[0].is_some() && activate[0].is_some(),
+        "the stop was reached"
+    );
+    assert_eq!(engage[0], engage[1], "the stop engages on the same tick");
+    assert_eq!(activate[0], activate[1], "the same first activation");
+    assert!(
+        leave[0].is_some() && leave[0] == leave[1],
+        "the stop releases on the same tick"
+    );
+    assert_eq!(joint.joint_fallbacks(), 0, "every tick a joint tick");
+    assert_eq!(aug.force_releases(), joint.force_releases(), "releases");
+    assert!(dz < 1e-6, "|Δz| {dz:.2e} m");
+    assert!(df < 1e-3 * fmax, "|ΔF| {df:.2e} N of {fmax:.2e}");
+    assert!(
+        track < 1e-4,
+        "the platform follows the hand down: {track:.2e} m"
+    );
+}
+
+/// Through the stops and back: no allocator call.
+#[test]
+fn the_stroke_limits_allocate_nothing() {
+    assert!(is_installed());
+    let (_, mut joint) = pair("stewart", false, None);
+    let t0 = joint.model().initial_targets();
+    let targets: Vec<Vec<FingerTarget>> = (0..2800).map(|k| lift(&t0, k)).collect();
+    let (ok, stats) = count(|| {
+        targets
+            .iter()
+            .all(|t| joint.tick(t, DT).status == TickOutcome::Ok)
+    });
+    assert!(ok, "a tick failed");
+    assert_eq!(stats.total(), 0, "allocations {stats:?}");
+    assert_eq!(joint.joint_fallbacks(), 0);
+}
