@@ -24,6 +24,7 @@
 use super::ReducedError;
 use super::rows::RowSet;
 use super::small::backward;
+use super::stage::Stage;
 use super::tick::JointTick;
 use super::tree::JointTree;
 use crate::al::projected::ACTIVATE_TOLERANCE_M;
@@ -65,6 +66,10 @@ pub(crate) struct Limits {
     releases: u64,
     tau: Vec<f64>,
     lam: Vec<f64>,
+    /// The steps' factors kept aside during a release (with limits only).
+    spare: Option<Box<Stage>>,
+    /// The released rows' kept-row positions.
+    gone: Vec<usize>,
 }
 
 /// Whether the limit `l` is on the tree joint with constraint geometry `g`.
@@ -87,6 +92,7 @@ impl Limits {
         tree: &JointTree,
         ell: &[f64],
         base: usize,
+        spare: impl FnOnce(usize) -> Stage,
     ) -> Result<Self, ReducedError> {
         for &r in &tree.limit_rows {
             let k = model.rows()[r].constraint.index();
@@ -123,6 +129,8 @@ impl Limits {
             releases: 0,
             tau: vec![0.0; n],
             lam: vec![0.0; base + m],
+            spare: (m > 0).then(|| Box::new(spare(m))),
+            gone: Vec::with_capacity(m),
             rows,
         })
     }
@@ -306,20 +314,31 @@ impl JointTick {
         self.stage.finger_solve(n, self.n_loop);
         self.loop_multipliers();
         let l = &mut self.limits;
-        let mut released = false;
+        l.gone.clear();
         for (j, &i) in l.order.iter().enumerate() {
             if l.lam[l.base + j] > 0.0 {
                 l.active[i] = false;
-                released = true;
+                l.gone.push(l.base + j);
             }
         }
-        if !released {
+        if l.gone.is_empty() {
             return Ok(());
         }
         l.released = true;
         l.releases += 1;
-        self.arrange_limits();
-        self.factor_stage()?;
+        let (m, nl) = (self.rows.len(), self.n_loop);
+        match l.spare.as_mut() {
+            Some(spare) => {
+                // Y and W of the kept rows are those of the steps' factors.
+                self.stage.copy_factors(spare);
+                self.stage.drop_loop_rows(n, m, nl, &l.gone)?;
+                self.arrange_limits();
+            }
+            None => {
+                self.arrange_limits();
+                self.factor_stage()?;
+            }
+        }
         self.stage.tau.copy_from_slice(&self.limits.tau);
         self.stage.finger_solve(n, self.n_loop);
         Ok(())
@@ -341,17 +360,23 @@ impl JointTick {
     }
 
     /// After a release: the next tick's steps keep the kinematic active
-    /// set, so its factors are formed again.
+    /// set, whose factors were kept aside.
     ///
     /// # Errors
-    /// A factor that is not positive definite.
+    /// A factor that is not positive definite (without a spare).
     pub(crate) fn restore_limits(&mut self) -> Result<(), ReducedError> {
         if !self.limits.released {
             return Ok(());
         }
         self.decide_limits();
         self.arrange_limits();
-        self.factor_stage()
+        match self.limits.spare.as_ref() {
+            Some(spare) => {
+                spare.copy_factors(&mut self.stage);
+                Ok(())
+            }
+            None => self.factor_stage(),
+        }
     }
 
     /// Limit rows in the factors.

@@ -292,6 +292,67 @@ impl Stage {
             self.reference,
         );
     }
+
+    /// Copies the factors (not the motion history) into `to`, a stage of
+    /// the same sizes (`limits`: the steps' factors kept aside while Eq. 7
+    /// is solved without a released limit). No allocation.
+    pub(super) fn copy_factors(&self, to: &mut Stage) {
+        to.h.copy_from_slice(&self.h);
+        to.yt.copy_from_slice(&self.yt);
+        to.w.copy_from_slice(&self.w);
+        to.wll.copy_from_slice(&self.wll);
+        to.z.copy_from_slice(&self.z);
+        to.sig.copy_from_slice(&self.sig);
+        to.sk.copy_from_slice(&self.sk);
+        to.reference = self.reference;
+    }
+
+    /// The factors for Eq. 7 without the loop rows `gone` (kept-row
+    /// positions, ascending, all < `nl`; `limits`: released limits), from
+    /// the current ones for m rows: their rows of Y and rows and columns of
+    /// W dropped, W_LL, Z and Σ_F formed again (H's factor is unchanged;
+    /// Σ_F + 1/(K m̄), for the steps, is not formed). No allocation.
+    pub(super) fn drop_loop_rows(
+        &mut self,
+        n: usize,
+        m: usize,
+        nl: usize,
+        gone: &[usize],
+    ) -> Result<(), ReducedError> {
+        let kept = |i: &usize| !gone.contains(i);
+        let (m2, nl2) = (m - gone.len(), nl - gone.len());
+        for (to, from) in (0..m).filter(kept).enumerate() {
+            self.yt.copy_within(from * n..(from + 1) * n, to * n);
+        }
+        let mut to = 0;
+        for a in (0..m).filter(kept) {
+            for b in (0..m).filter(kept) {
+                self.w[to] = self.w[a * m + b];
+                to += 1;
+            }
+        }
+        let (m, nl, mf) = (m2, nl2, m2 - nl2);
+        for a in 0..nl {
+            self.wll[a * nl..(a + 1) * nl].copy_from_slice(&self.w[a * m..a * m + nl]);
+        }
+        if !factor_in_place(&mut self.wll, nl) {
+            return Err(ReducedError::NotPositive("W_LL"));
+        }
+        for f in 0..mf {
+            let zf = &mut self.z[f * nl..(f + 1) * nl];
+            for (a, z) in zf.iter_mut().enumerate() {
+                *z = self.w[a * m + nl + f];
+            }
+            forward(&self.wll, zf);
+        }
+        for f in 0..mf {
+            for g in 0..mf {
+                let zz = dot(&self.z[f * nl..(f + 1) * nl], &self.z[g * nl..(g + 1) * nl]);
+                self.sig[f * mf + g] = self.w[(nl + f) * m + nl + g] - zz;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Position and unit orientation of the body at column `o` of q.

@@ -146,8 +146,11 @@ impl JointTick {
                 dof_len[j.dof] = 1.0;
             }
         }
-        let limits = Limits::new(&model, &space.tree, &scaling.ell, n_loop)?;
-        let (n, m) = (space.tree.dofs(), rows.len() + limits.len());
+        let (n, m0) = (space.tree.dofs(), rows.len());
+        let limits = Limits::new(&model, &space.tree, &scaling.ell, n_loop, |k| {
+            Stage::new(&model, &space.tree, n, m0 + k, n_loop + k, q)
+        })?;
+        let m = m0 + limits.len();
         let mut rows = rows;
         rows.reserve_exact(limits.len());
         let mut scale = scale;
