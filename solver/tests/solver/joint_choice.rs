@@ -11,7 +11,7 @@ use haptloop_solver::{
 use super::joint_coordinates::scene;
 
 /// A pendulum on a hinge with limits (a tree joint), one point finger.
-fn limited_pendulum() -> Model {
+pub fn limited_pendulum() -> Model {
     let mut b = ModelBuilder::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("arm").at([0.1, 0.0, 0.0]));
