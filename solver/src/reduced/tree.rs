@@ -31,6 +31,8 @@ pub(crate) enum Freedom {
     Spherical,
     /// One translation along `axis` (body frame of end i).
     Prismatic { axis: Vector3<f64> },
+    /// None: a weld (the child moves with its parent).
+    Fixed,
 }
 
 impl Freedom {
@@ -40,6 +42,7 @@ impl Freedom {
             Self::Revolute { .. } | Self::Prismatic { .. } => 1,
             Self::Universal { .. } => 2,
             Self::Spherical => 3,
+            Self::Fixed => 0,
         }
     }
 }
@@ -112,6 +115,7 @@ fn joint_data(g: &Geometry) -> Option<(Freedom, [Param3; 2])> {
         Geometry::Universal(j) => (Freedom::Universal { axes: j.axes }, j.pair.anchor),
         Geometry::Spherical(j) => (Freedom::Spherical, j.pair.anchor),
         Geometry::Prismatic(j) => (Freedom::Prismatic { axis: j.axes.h_i }, j.pair.anchor),
+        Geometry::Weld(j) => (Freedom::Fixed, j.pair.anchor),
         _ => return None,
     })
 }
