@@ -27,9 +27,11 @@
 //! Differences from the augmented `Program::tick` on the same model: the
 //! chord guard measures a step by its largest joint coordinate change
 //! (rotations times L) instead of the augmented metric; ½ θᵀHθ replaces
-//! ½ dᵀ M̃ d (equal to second order in the tick's motion); no multipliers;
-//! proxies (contact fingers), inequality rows, contact, design columns and
-//! inertial motion are refused at construction. `Program` adds the
+//! ½ dᵀ M̃ d (equal to second order in the tick's motion); no multipliers
+//! but the limits' ν (`limits`: revolute and prismatic limits on tree
+//! joints, with the augmented tick's active set); proxies (contact
+//! fingers), other inequality rows, contact, design columns and inertial
+//! motion are refused at construction. `Program` adds the
 //! divergence limits, the failed-tick restore, the report over every row
 //! and the resync wherever q moves outside a tick (`program/joint.rs`).
 //! Not done: a fallback to the augmented tick at a singular pose where the
