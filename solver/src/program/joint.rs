@@ -93,7 +93,6 @@ impl fmt::Debug for JointPath {
 /// before it is built.
 fn refusal(p: &Program) -> Option<String> {
     let (m, s) = (&*p.model, &p.settings);
-    let point = |f: &crate::Finger| m.constraints()[f.constraint.index()].rows.len() == 3;
     let why = if s.update == UpdateRule::Gradient {
         "the gradient update (Eq. 1–3): the joint tick takes projected steps".into()
     } else if s.force_solver != ForceSolver::Cholesky {
@@ -114,8 +113,6 @@ fn refusal(p: &Program) -> Option<String> {
         "flexible bodies, surfaces or rolling rows".into()
     } else if p.semantic.is_some() {
         "semantic rows (snaps, carried groups)".into()
-    } else if !m.fingers().iter().all(point) {
-        "rigid (six-row) fingers".into()
     } else {
         return None;
     };
@@ -232,6 +229,12 @@ impl Program {
         }
     }
 
+    /// Ticks on which the joint tick's Eq. 7 released a limit that would
+    /// have pulled.
+    pub(super) fn joint_releases(&self) -> u64 {
+        self.joint.as_ref().map_or(0, |j| j.tick.limit_releases())
+    }
+
     /// Which coordinates the tick runs in, and why.
     pub fn coordinates(&self) -> &CoordinatesChoice {
         &self.choice
@@ -340,6 +343,7 @@ impl Program {
             rms_violation_m: v.rms_m,
             max_tracking_error_m: max_tracking(&self.outputs),
             max_penetration_m: v.max_penetration_m.max(0.0),
+            activations: t.limit_activations(),
             status: TickOutcome::Ok,
             ..TickReport::default()
         })

@@ -426,9 +426,10 @@ impl Program {
     }
 
     /// Ticks on which the force solve released an active inequality that
-    /// would have pulled and solved again (the release-and-re-solve branch).
+    /// would have pulled and solved again (the release-and-re-solve branch),
+    /// the joint tick's included.
     pub fn force_releases(&self) -> u64 {
-        self.feedback.releases()
+        self.feedback.releases() + self.joint_releases()
     }
 
     /// Ticks of the release branch whose last solve (the kinematic active

@@ -45,7 +45,7 @@ impl JointTick {
             &mut self.jr,
             &mut self.grads,
         );
-        if !ok {
+        if !ok || !self.limit_jacobian(targets) {
             return Err(ReducedError::RawEntry);
         }
         self.max_violation = self.violation();
@@ -61,15 +61,15 @@ impl JointTick {
         dt_s: f64,
         advance: bool,
     ) -> Result<(), ReducedError> {
-        let tree = &self.space.tree;
-        self.stage
-            .factor(tree, &self.kin, &self.jr, self.n_loop, &self.k_inv)?;
+        self.limit_factors()?;
         if advance {
             let tau_s = self.settings.velocity_filter.as_secs_f64();
             let (model, kin, q) = (&self.model, &self.kin, &self.q);
-            self.stage.load(model, tree, kin, q, dt_s, tau_s);
-            self.stage.finger_solve(tree.dofs, self.n_loop);
+            self.stage
+                .load(model, &self.space.tree, kin, q, dt_s, tau_s);
+            self.solve_fingers()?;
             self.outputs_at(targets, dt_s);
+            self.restore_limits()?;
         }
         self.q_s.copy_from_slice(&self.q);
         Ok(())

@@ -71,6 +71,7 @@ fn joint_axes(j: &TreeJoint, ends: &[BodyFrame; 2]) -> (Vector3<f64>, [Vector3<f
         ],
         Freedom::Spherical => [Vector3::x(), Vector3::y(), Vector3::z()],
         Freedom::Prismatic { axis } => [ends[0].rot * axis, Vector3::zeros(), Vector3::zeros()],
+        Freedom::Fixed => [Vector3::zeros(); 3],
     };
     (p, axes)
 }
@@ -239,6 +240,7 @@ pub(crate) fn displace_with(
                 q: UnitQuaternion::identity(),
                 t: t[0].v * th[0],
             },
+            Freedom::Fixed => Rigid::IDENTITY,
             Freedom::Spherical => {
                 let phi = Vector3::new(th[0], th[1], th[2]);
                 let p = kin.frames[j.child.index()].point(&j.anchors[j.child_end]);

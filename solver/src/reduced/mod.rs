@@ -20,13 +20,18 @@
 //! - `probe` (tests, ignored): times the augmented force stage against this
 //!   one at the same q; `tick_probe` times the whole ticks.
 //!
-//! Joints handled: revolute, universal, spherical, prismatic. Models with
-//! design variables, auxiliary columns (flexible bodies, surfaces), free
-//! anchors or inequality rows are refused.
+//! Joints handled: revolute, universal, spherical, prismatic, fixed (a
+//! weld: no coordinate). Revolute and prismatic limits on tree joints are
+//! bounds on a joint coordinate (`limits`); rigid fingers' orientation rows
+//! are kept rows like their point rows (`finger6`). Models with design
+//! variables, auxiliary columns (flexible bodies, surfaces), free anchors,
+//! other inequality rows or limits on loop-closing joints are refused.
 
 mod core;
 mod end;
+mod finger6;
 mod kinematics;
+mod limits;
 mod mask;
 mod resync;
 mod rows;

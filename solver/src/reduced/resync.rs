@@ -88,7 +88,10 @@ impl JointTick {
     /// and finger constraints); the others keep their value at the last
     /// resync. Allocates.
     pub fn evaluated_rows(&self) -> Vec<usize> {
-        self.set.evaluated().collect()
+        self.set
+            .evaluated()
+            .chain(self.limits.rows().iter().copied())
+            .collect()
     }
 
     /// Every model row's last value: the loop and finger rows' at the last

@@ -52,8 +52,8 @@ pub(crate) struct Stage {
     pub sk: Vec<f64>,
     work: Vec<f64>,
     eig: Vec<f64>,
-    g: Vec<f64>,
-    tau: Vec<f64>,
+    pub(crate) g: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
     pub lambda_f: Vec<f64>,
     reference: f64,
     ic: Vec<Matrix6<f64>>,
@@ -62,7 +62,8 @@ pub(crate) struct Stage {
     /// Moving bodies (index, first column) with their history.
     pub(super) bodies: Vec<(usize, usize, History)>,
     pub(super) ticks: u32,
-    /// Per finger: its first kept row, row count, the body's end.
+    /// Per finger: its first row in the finger block, row count, the
+    /// body's end.
     fingers: Vec<(usize, usize, usize)>,
     pub(super) prev_error: Vec<Vector3<f64>>,
 }
@@ -93,7 +94,7 @@ impl Stage {
             mass[b.index()] = Some(bm);
         }
         let mut fingers = Vec::new();
-        let mut next = nl;
+        let mut next = 0;
         for f in model.fingers() {
             let c = f.constraint.index();
             let rows = model.constraints()[c].rows.len();
@@ -181,7 +182,8 @@ impl Stage {
         if !factor_in_place(&mut self.h, n) {
             return Err(ReducedError::NotPositive("H"));
         }
-        self.yt.copy_from_slice(jr);
+        // Fewer rows than the buffers hold while limits are inactive.
+        self.yt[..jr.len()].copy_from_slice(jr);
         for i in 0..m {
             forward(&self.h, &mut self.yt[i * n..(i + 1) * n]);
         }
@@ -269,13 +271,13 @@ impl Stage {
 
     /// λ̃_F for τ (after [`Self::factor`] and [`Self::load`]).
     pub(super) fn finger_solve(&mut self, n: usize, nl: usize) {
-        let m = self.g.len();
-        let mf = m - nl;
+        let mf = self.lambda_f.len();
+        let m = nl + mf;
         forward(&self.h, &mut self.tau);
         for i in 0..m {
             self.g[i] = dot(&self.yt[i * n..(i + 1) * n], &self.tau);
         }
-        let (gl, gf) = self.g.split_at_mut(nl);
+        let (gl, gf) = self.g[..m].split_at_mut(nl);
         forward(&self.wll, gl);
         for (f, v) in gf.iter_mut().enumerate() {
             *v -= dot(&self.z[f * nl..(f + 1) * nl], gl);
@@ -289,6 +291,67 @@ impl Stage {
             &mut self.eig,
             self.reference,
         );
+    }
+
+    /// Copies the factors (not the motion history) into `to`, a stage of
+    /// the same sizes (`limits`: the steps' factors kept aside while Eq. 7
+    /// is solved without a released limit). No allocation.
+    pub(super) fn copy_factors(&self, to: &mut Stage) {
+        to.h.copy_from_slice(&self.h);
+        to.yt.copy_from_slice(&self.yt);
+        to.w.copy_from_slice(&self.w);
+        to.wll.copy_from_slice(&self.wll);
+        to.z.copy_from_slice(&self.z);
+        to.sig.copy_from_slice(&self.sig);
+        to.sk.copy_from_slice(&self.sk);
+        to.reference = self.reference;
+    }
+
+    /// The factors for Eq. 7 without the loop rows `gone` (kept-row
+    /// positions, ascending, all < `nl`; `limits`: released limits), from
+    /// the current ones for m rows: their rows of Y and rows and columns of
+    /// W dropped, W_LL, Z and Σ_F formed again (H's factor is unchanged;
+    /// Σ_F + 1/(K m̄), for the steps, is not formed). No allocation.
+    pub(super) fn drop_loop_rows(
+        &mut self,
+        n: usize,
+        m: usize,
+        nl: usize,
+        gone: &[usize],
+    ) -> Result<(), ReducedError> {
+        let kept = |i: &usize| !gone.contains(i);
+        let (m2, nl2) = (m - gone.len(), nl - gone.len());
+        for (to, from) in (0..m).filter(kept).enumerate() {
+            self.yt.copy_within(from * n..(from + 1) * n, to * n);
+        }
+        let mut to = 0;
+        for a in (0..m).filter(kept) {
+            for b in (0..m).filter(kept) {
+                self.w[to] = self.w[a * m + b];
+                to += 1;
+            }
+        }
+        let (m, nl, mf) = (m2, nl2, m2 - nl2);
+        for a in 0..nl {
+            self.wll[a * nl..(a + 1) * nl].copy_from_slice(&self.w[a * m..a * m + nl]);
+        }
+        if !factor_in_place(&mut self.wll, nl) {
+            return Err(ReducedError::NotPositive("W_LL"));
+        }
+        for f in 0..mf {
+            let zf = &mut self.z[f * nl..(f + 1) * nl];
+            for (a, z) in zf.iter_mut().enumerate() {
+                *z = self.w[a * m + nl + f];
+            }
+            forward(&self.wll, zf);
+        }
+        for f in 0..mf {
+            for g in 0..mf {
+                let zz = dot(&self.z[f * nl..(f + 1) * nl], &self.z[g * nl..(g + 1) * nl]);
+                self.sig[f * mf + g] = self.w[(nl + f) * m + nl + g] - zz;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -309,6 +372,7 @@ impl JointTick {
         let c = self.settings.coupling_damping_n_s_per_m;
         for (i, fi) in self.model.fingers().iter().enumerate() {
             let (first, rows, end) = st.fingers[i];
+            let first = self.n_loop + first;
             let fr = &self.frames[fi.body.index()];
             let (mut force, mut torque) = (Vector3::zeros(), Vector3::zeros());
             for row in first..first + rows {
@@ -326,13 +390,20 @@ impl JointTick {
             };
             st.prev_error[i] = err;
             let coupling = err * k + rate * c;
+            let coupling_torque = super::finger6::coupling_torque(
+                rows,
+                &self.q,
+                self.model.layout().body_offset(fi.body),
+                &targets[i],
+                self.settings.coupling_angular_stiffness_nm_per_rad,
+            );
             self.outputs[i] = FingerOutput {
                 force_n: force + coupling,
-                torque_nm: torque,
+                torque_nm: torque + coupling_torque,
                 constraint_force_n: force,
                 constraint_torque_nm: torque,
                 coupling_force_n: coupling,
-                coupling_torque_nm: Vector3::zeros(),
+                coupling_torque_nm: coupling_torque,
                 attachment_m: p,
                 target_m: targets[i].position_m,
                 tracking_error_m: err.norm(),

@@ -27,9 +27,11 @@
 //! Differences from the augmented `Program::tick` on the same model: the
 //! chord guard measures a step by its largest joint coordinate change
 //! (rotations times L) instead of the augmented metric; ½ θᵀHθ replaces
-//! ½ dᵀ M̃ d (equal to second order in the tick's motion); no multipliers;
-//! proxies (contact fingers), inequality rows, contact, design columns and
-//! inertial motion are refused at construction. `Program` adds the
+//! ½ dᵀ M̃ d (equal to second order in the tick's motion); no multipliers
+//! but the limits' ν (`limits`: revolute and prismatic limits on tree
+//! joints, with the augmented tick's active set); proxies (contact
+//! fingers), other inequality rows, contact, design columns and inertial
+//! motion are refused at construction. `Program` adds the
 //! divergence limits, the failed-tick restore, the report over every row
 //! and the resync wherever q moves outside a tick (`program/joint.rs`).
 //! Not done: a fallback to the augmented tick at a singular pose where the
@@ -40,6 +42,7 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 
 use super::kinematics::{Kinematics, Rigid, displace_with};
+use super::limits::Limits;
 use super::rows::RowSet;
 use super::small::{backward, dot, forward};
 use super::stage::Stage;
@@ -72,7 +75,7 @@ pub struct JointTick {
     /// 1 / (K w m̄) per finger row.
     pub(crate) k_inv: Vec<f64>,
     /// ℓ of the rows and the pull limit (`Scaling`).
-    ell: Vec<f64>,
+    pub(crate) ell: Vec<f64>,
     finger_limit_m: f64,
     /// Per joint coordinate: metres per unit (L for rotations, 1 for slides).
     dof_len: Vec<f64>,
@@ -90,10 +93,12 @@ pub struct JointTick {
     pub(crate) grads: Vec<RowGrad>,
     /// The force stage's factors and buffers.
     pub(crate) stage: Stage,
-    theta: Vec<f64>,
+    /// The joint limits' active set (`limits`).
+    pub(crate) limits: Limits,
+    pub(crate) theta: Vec<f64>,
     r: Vec<f64>,
-    y: Vec<f64>,
-    u: Vec<f64>,
+    pub(crate) y: Vec<f64>,
+    pub(crate) u: Vec<f64>,
     /// The finger outputs of the last tick.
     pub outputs: Vec<FingerOutput>,
     /// Largest |C| of the loop rows at the last tick's end (metres for
@@ -109,7 +114,7 @@ impl JointTick {
     /// history at rest. Allocates.
     ///
     /// # Errors
-    /// What [`JointSpace::new`] refuses; inertial motion, rigid or contact
+    /// What [`JointSpace::new`] refuses; inertial motion, contact
     /// fingers; a degenerate q.
     pub fn new(
         model: Arc<Model>,
@@ -143,12 +148,21 @@ impl JointTick {
                 dof_len[j.dof] = 1.0;
             }
         }
-        let (n, m) = (space.tree.dofs(), rows.len());
+        let (n, m0) = (space.tree.dofs(), rows.len());
+        let limits = Limits::new(&model, &space.tree, &scaling.ell, n_loop, |k| {
+            Stage::new(&model, &space.tree, n, m0 + k, n_loop + k, q)
+        })?;
+        let m = m0 + limits.len();
+        let mut rows = rows;
+        rows.reserve_exact(limits.len());
+        let mut scale = scale;
+        scale.reserve_exact(limits.len());
         let frames = ev.frames().to_vec();
         let mut kin = Kinematics::new(&model, &space.tree);
         kin.frames.clone_from(&frames);
-        let stage = Stage::new(&model, &space.tree, n, m, n_loop, q);
+        let stage = Stage::new(&model, &space.tree, n, m, n_loop + limits.len(), q);
         let mut t = Self {
+            limits,
             rigid: vec![Rigid::IDENTITY; space.tree.joints.len()],
             set,
             rows,
@@ -218,7 +232,9 @@ impl JointTick {
         self.theta.fill(0.0);
         let step = self.settings.step;
         let mut allowed = f64::INFINITY;
-        for k in 0..self.settings.iterations {
+        self.limits.begin();
+        let mut k = 0;
+        while k < self.settings.iterations {
             if k > 0 {
                 self.pose()?;
             }
@@ -229,6 +245,7 @@ impl JointTick {
                 targets,
                 &mut self.values,
             );
+            self.limit_values(targets);
             self.residual();
             self.solve_step();
             // δ = −θ − H⁻¹ (D J_r S)ᵀ y; u holds H⁻¹ (D J_r S)ᵀ y.
@@ -243,10 +260,21 @@ impl JointTick {
             {
                 return Ok(k);
             }
+            if self.limits.len() > 0 && self.predict_limits(step) {
+                // Inactive limits the step would cross join the active set
+                // and the step is taken again (`limits`), or the tick's
+                // steps end here.
+                if !self.activate_limits()? {
+                    return Ok(k);
+                }
+                continue;
+            }
             allowed = (CHORD_GROWTH * size).max(CHORD_FLOOR_M);
             for (t, u) in self.theta.iter_mut().zip(&self.u) {
                 *t -= step * (*t + u);
             }
+            self.store_nu();
+            k += 1;
         }
         Ok(self.settings.iterations)
     }
@@ -303,7 +331,7 @@ impl JointTick {
     fn solve_step(&mut self) {
         let (nl, m, n) = (self.n_loop, self.rows.len(), self.theta.len());
         let st = &mut self.stage;
-        let (yl, yf) = self.y.split_at_mut(nl);
+        let (yl, yf) = self.y[..m].split_at_mut(nl);
         yl.copy_from_slice(&self.r[..nl]);
         forward(&st.wll, yl);
         for (f, v) in yf.iter_mut().enumerate() {

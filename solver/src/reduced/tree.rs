@@ -31,6 +31,8 @@ pub(crate) enum Freedom {
     Spherical,
     /// One translation along `axis` (body frame of end i).
     Prismatic { axis: Vector3<f64> },
+    /// None: a weld (the child moves with its parent).
+    Fixed,
 }
 
 impl Freedom {
@@ -40,6 +42,7 @@ impl Freedom {
             Self::Revolute { .. } | Self::Prismatic { .. } => 1,
             Self::Universal { .. } => 2,
             Self::Spherical => 3,
+            Self::Fixed => 0,
         }
     }
 }
@@ -85,6 +88,8 @@ pub struct JointTree {
     pub(crate) tree_rows: Vec<usize>,
     /// The quaternion-norm rows.
     pub(crate) norm_rows: Vec<usize>,
+    /// The joint limits' rows (`limits`).
+    pub(crate) limit_rows: Vec<usize>,
 }
 
 fn is_ground(model: &Model, b: Option<BodyId>) -> bool {
@@ -110,6 +115,7 @@ fn joint_data(g: &Geometry) -> Option<(Freedom, [Param3; 2])> {
         Geometry::Universal(j) => (Freedom::Universal { axes: j.axes }, j.pair.anchor),
         Geometry::Spherical(j) => (Freedom::Spherical, j.pair.anchor),
         Geometry::Prismatic(j) => (Freedom::Prismatic { axis: j.axes.h_i }, j.pair.anchor),
+        Geometry::Weld(j) => (Freedom::Fixed, j.pair.anchor),
         _ => return None,
     })
 }
@@ -118,8 +124,8 @@ impl JointTree {
     /// The breadth-first spanning tree of `model`'s joint graph.
     ///
     /// # Errors
-    /// Design variables, auxiliary columns, free anchors, inequality rows,
-    /// or a moving body no joint path connects to the ground.
+    /// Design variables, auxiliary columns, free anchors, inequality rows
+    /// other than revolute and prismatic limits, or a moving body no joint path connects to the ground.
     pub fn new(model: &Model) -> Result<Self, ReducedError> {
         let layout = model.layout();
         if layout.design_coords() > 0 || layout.aux_coords() > 0 {
@@ -127,8 +133,17 @@ impl JointTree {
                 "design variables or auxiliary columns".into(),
             ));
         }
-        if !model.inequality_rows().is_empty() {
-            return Err(ReducedError::Unsupported("inequality rows".into()));
+        let limit = |r: usize| {
+            let k = model.constraints()[model.rows()[r].constraint.index()].kind;
+            matches!(
+                k,
+                ConstraintKind::RevoluteLimit | ConstraintKind::PrismaticLimit
+            )
+        };
+        if !model.inequality_rows().all(limit) {
+            return Err(ReducedError::Unsupported(
+                "inequality rows other than revolute and prismatic limits".into(),
+            ));
         }
         let nb = model.bodies().len();
         let mut joint_of_body: Vec<Option<usize>> = vec![None; nb];
@@ -194,9 +209,12 @@ impl JointTree {
         }
         let (mut loop_rows, mut finger_rows, mut tree_rows, mut norm_rows) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut limit_rows = Vec::new();
         for (k, info) in model.constraints().iter().enumerate() {
             let dest = if is_tree[k] {
                 &mut tree_rows
+            } else if info.kind.sense() == crate::Sense::Inequality {
+                &mut limit_rows
             } else if info.finger.is_some() {
                 &mut finger_rows
             } else if info.kind == ConstraintKind::QuaternionNorm {
@@ -214,6 +232,7 @@ impl JointTree {
             finger_rows,
             tree_rows,
             norm_rows,
+            limit_rows,
         })
     }
 

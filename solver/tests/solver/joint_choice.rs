@@ -10,8 +10,8 @@ use haptloop_solver::{
 
 use super::joint_coordinates::scene;
 
-/// A pendulum on a hinge with limits (inequality rows), one point finger.
-fn limited_pendulum() -> Model {
+/// A pendulum on a hinge with limits (a tree joint), one point finger.
+pub fn limited_pendulum() -> Model {
     let mut b = ModelBuilder::new();
     b.body(BodySpec::fixed("ground"));
     b.body(BodySpec::new("arm").at([0.1, 0.0, 0.0]));
@@ -25,9 +25,40 @@ fn limited_pendulum() -> Model {
     b.build().unwrap()
 }
 
+/// A planar four-bar of revolutes whose loop-closing hinge (coupler–rocker:
+/// the breadth-first tree reaches both ends first) has limits.
+fn limited_loop() -> Model {
+    let mut b = ModelBuilder::new();
+    b.body(BodySpec::fixed("ground"));
+    b.body(BodySpec::new("crank").at([0.0, 0.05, 0.0]));
+    b.body(BodySpec::new("coupler").at([0.1, 0.1, 0.0]));
+    b.body(BodySpec::new("rocker").at([0.2, 0.05, 0.0]));
+    let z = [0.0, 0.0, 1.0];
+    let hinge = |a: &str, b: &str, pa: [f64; 3], pb: [f64; 3]| {
+        JointSpec::new(K::Revolute, a, b).anchors(pa, pb).axes(z, z)
+    };
+    b.joint(hinge("ground", "crank", [0.0; 3], [0.0, -0.05, 0.0]));
+    b.joint(hinge(
+        "ground",
+        "rocker",
+        [0.2, 0.0, 0.0],
+        [0.0, -0.05, 0.0],
+    ));
+    b.joint(hinge(
+        "crank",
+        "coupler",
+        [0.0, 0.05, 0.0],
+        [-0.1, 0.0, 0.0],
+    ));
+    b.joint(hinge("coupler", "rocker", [0.1, 0.0, 0.0], [0.0, 0.05, 0.0]).limits(-1.0, 1.0));
+    b.finger(FingerSpec::point("index", "coupler", [0.0, 0.0, 0.0]));
+    b.build().unwrap()
+}
+
 /// `Auto` runs the augmented tick where the joint tick does not apply and
-/// says why (inequality rows; contact rows), and the joint tick where it
-/// does; `Joint` on the same models fails construction naming the reason.
+/// says why (limits on a loop-closing joint; contact rows), and the joint
+/// tick where it does (a hinge with limits in the tree); `Joint` on the
+/// models it refuses fails construction naming the reason.
 #[test]
 fn auto_chooses_and_joint_refuses_with_the_reason() {
     let auto = |m: Arc<Model>, s: SolverSettings| {
@@ -50,14 +81,20 @@ fn auto_chooses_and_joint_refuses_with_the_reason() {
         )
     };
     let pendulum = Arc::new(limited_pendulum());
-    let p = auto(pendulum.clone(), SolverSettings::default());
-    let c = p.coordinates();
+    let c = auto(pendulum, SolverSettings::default())
+        .coordinates()
+        .clone();
     println!("pendulum with limits: {c}");
+    assert!(c.joint && c.asked == Coordinates::Auto, "{c}");
+    let four = Arc::new(limited_loop());
+    let p = auto(four.clone(), SolverSettings::default());
+    let c = p.coordinates();
+    println!("four-bar with a limited loop-closing hinge: {c}");
     assert!(!c.joint && c.asked == Coordinates::Auto);
-    assert!(c.why.contains("inequality rows"), "{c}");
-    let e = joint(pendulum, SolverSettings::default()).unwrap_err();
+    assert!(c.why.contains("loop-closing joint"), "{c}");
+    let e = joint(four, SolverSettings::default()).unwrap_err();
     assert!(
-        matches!(&e, ProgramError::Coordinates(w) if w.contains("inequality rows")),
+        matches!(&e, ProgramError::Coordinates(w) if w.contains("loop-closing joint")),
         "{e}"
     );
     assert!(e.to_string().contains("augmented"), "{e}");

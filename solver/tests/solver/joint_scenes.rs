@@ -156,7 +156,10 @@ fn auto_is_honest_on_every_shipped_scene() {
     }
     assert!(checked >= 20, "{checked} scenes built");
     joint_scenes.sort();
-    assert_eq!(joint_scenes, ["bennett", "four-bar", "peaucellier"]);
+    assert_eq!(
+        joint_scenes,
+        ["bennett", "four-bar", "peaucellier", "stewart", "stewart-3rsu"]
+    );
 }
 
 /// The cost model's choice (`joint_cost`, constants fitted in BENCHMARKS.md

@@ -14,6 +14,7 @@ mod joint_choice;
 mod joint_coordinates;
 mod joint_fallback;
 mod joint_scenes;
+mod joint_stewart;
 mod mechanisms;
 mod model;
 mod pattern;
