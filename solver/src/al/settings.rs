@@ -139,9 +139,10 @@ pub enum Coordinates {
     /// The joint tick (`reduced::JointTick`): the projected update on the
     /// spanning tree's joint coordinates with forward kinematics, only the
     /// loop-closing and finger rows evaluated, Eq. 7 in joint coordinates.
-    /// Quasi-static mechanisms of revolute, universal, spherical and
-    /// prismatic joints with point fingers only: `Program::new` fails,
-    /// naming why, on any other model or setting.
+    /// Quasi-static mechanisms of revolute, universal, spherical,
+    /// prismatic and fixed joints, point or rigid fingers, and limits on
+    /// tree joints: `Program::new` fails, naming why, on any other model or
+    /// setting.
     Joint,
     /// `Joint` where the joint tick accepts the model and settings, else
     /// `Augmented`; [`Program::coordinates`](crate::Program::coordinates)
