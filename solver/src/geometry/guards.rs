@@ -13,8 +13,9 @@ use crate::constraint::witness::edge_edge::EdgeWitness;
 
 /// Edge–edge guards: every edge of A whose closest approach to an edge of B
 /// is within `reach` and falls inside both edges (two edges that could cross
-/// before the next cycle; near their ends the vertex guards hold) gets the
-/// Eq. 2–3 primitive of that edge pair. A rotation of up to the speed limit
+/// before the next cycle; within 5 % of an end whose vertex has a
+/// vertex–face row, that row holds instead) gets the Eq. 2–3 primitive of
+/// that edge pair. A rotation of up to the speed limit
 /// between two cycles can sweep an edge across an edge without any vertex
 /// coming near a face.
 pub(super) fn edge_guards(
