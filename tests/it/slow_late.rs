@@ -125,17 +125,28 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
 /// came back every cycle. Main: 610 backups, 7.65 N at the motor (0.97 N
 /// without stalls), 2.5 mm penetration.
 ///
-/// The bounds come from the backup policy and the scene's contact
-/// settings: a held cycle is at most the fixed cap
-/// (`held_penetration_cap_m`, 1 mm here); nothing is ever deeper than the
-/// broken bound; a stall starts at most one hold, which takes two backups
-/// in a row, and a penetration deeper than the cap while held is backed up
-/// once more and followed by one more (the reset's own cycle), so at most
-/// four backups a stall. Before the fixed cap the hold reached twice a
-/// sampled depth and a backup after a long hold went back to before it:
-/// with the norm rows out of the force factor, 20-period stalls made
-/// 146 backups and 8.5 N (BENCHMARKS.md, issue 23, "a fixed cap on held
-/// backups").
+/// The bounds come from the backup policy, the scene's contact settings
+/// and the coupling: a held cycle is at most the fixed cap
+/// (`held_penetration_cap_m`, 1 mm here), and so is the deepest
+/// penetration: a feature pair that can close within a cycle has a row
+/// (the guards, corners included), so nothing sinks past what the policy
+/// holds between two snapshots. At 4a8f1a9 the edge guards skipped edge
+/// pairs crossing near an end, leaving the corner of a box over no face of
+/// the one below without any row: 2.66 mm in one cycle (50 periods), under
+/// only the broken bound (BENCHMARKS.md, issue 23, "edge guards at the
+/// corners"); this bound fails there. A stall starts at most one hold,
+/// which takes two backups in a row, and a penetration deeper than the cap
+/// while held is backed up once more and followed by one more (the reset's
+/// own cycle), so at most four backups a stall. The motor: the coupling
+/// pulls with k × (device − finger); without stalls its peak is f₀, and
+/// after one the target shown to the program lags the device by up to the
+/// run's `max_target_lag_m` (the catch-up), which adds k × that lag: the
+/// bound is 1.2 × f₀ + k × lag (the column kept together after 20-period
+/// stalls and pushed at a corner takes 1.46 N, 1.67 N allowed). Before the
+/// fixed cap the hold reached twice a sampled depth and a backup after a
+/// long hold went back to before it: with the norm rows out of the force
+/// factor, 20-period stalls made 146 backups and 8.5 N (BENCHMARKS.md,
+/// issue 23, "a fixed cap on held backups").
 #[test]
 fn backups_after_long_stalls_do_not_repeat_every_cycle() {
     let scene = resolve("stack").unwrap();
@@ -156,16 +167,24 @@ fn backups_after_long_stalls_do_not_repeat_every_cycle() {
              stalls {f0} N, {d0} m)"
         );
         assert!(backups <= 4 * n_stalls, "{what}");
-        assert!(c.backups_held > 0, "{what}: nothing held");
-        assert!(held_max > c.tolerance_m && held_max <= cap, "{what}");
-        assert!(pen < c.broken_penetration_m, "{what}");
+        assert!(held_max <= cap, "{what}");
+        assert!(pen <= cap, "{what}: deeper than the held cap");
         assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
-        assert!(f <= 1.2 * f0, "{what}");
+        let lag = s.stalls.max_target_lag_m;
+        let k = haptloop_solver::SolverSettings::default().coupling_stiffness_n_per_m;
+        assert!(
+            f <= 1.2 * f0 + k * lag,
+            "{what}: above 1.2 × f0 + k × {lag} m"
+        );
         // The column slides as one without stalls; after them the top box
         // may slip off it (main froze the column where the backups began,
         // 1 cm from the start). Nothing may leave the 30 cm table.
         assert!(d.is_finite() && d < 0.15, "{what}");
-        assert!(!c.verdict.contains("kept"), "{what}: {}", c.verdict);
+        // The verdict says what the penetration was (it read `EXCEEDED`
+        // in both runs before the corner guards; 20-period stalls now keep
+        // the tolerance).
+        let kept = pen <= c.tolerance_m;
+        assert_eq!(c.verdict.contains("kept"), kept, "{what}: {}", c.verdict);
     }
 }
 

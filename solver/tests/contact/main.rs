@@ -9,6 +9,7 @@ mod common;
 // The solver tests' finite differences, shared.
 mod backup_paths;
 mod chord_refresh;
+mod corners;
 mod drags;
 mod expansion;
 #[allow(dead_code)]

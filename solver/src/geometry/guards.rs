@@ -1,0 +1,157 @@
+//! Edge–edge guards (§3.2's pre-emptive rows, extended to edges): every
+//! pair of edges of two polyhedra that could cross before the next cycle
+//! gets the Eq. 2–3 primitive of that edge pair. Called by
+//! [`super::primitives::expand`] after the vertex guards.
+
+use nalgebra::Vector3;
+
+use super::pair::{PairView, pack};
+use super::polyhedron::{Feature, Polyhedron};
+use super::primitives::value_at;
+use crate::constraint::witness::Witness;
+use crate::constraint::witness::edge_edge::EdgeWitness;
+
+/// Edge–edge guards: every edge of A whose closest approach to an edge of B
+/// is within `reach` and falls inside both edges (two edges that could cross
+/// before the next cycle; within 5 % of an end whose vertex has a
+/// vertex–face row, that row holds instead) gets the Eq. 2–3 primitive of
+/// that edge pair. A rotation of up to the speed limit
+/// between two cycles can sweep an edge across an edge without any vertex
+/// coming near a face.
+pub(super) fn edge_guards(
+    view: &PairView,
+    pa: &Polyhedron,
+    pb: &Polyhedron,
+    reach: f64,
+    depth_m: f64,
+    out: &mut Vec<Witness>,
+) {
+    let m = view.margin();
+    let a_to_b = view.a_to_b();
+    // Only edges near the other body's bounding box can come within reach
+    // (a hull of 20 vertices has ~50 edges: all pairs cost 30 µs).
+    let near_b: Vec<usize> = (0..pb.edges.len())
+        .filter(|&eb| {
+            let f = pb.edges[eb];
+            let (b0, b1) = (
+                view.b_in_a(&pb.vertices[f.vertices[0] as usize]),
+                view.b_in_a(&pb.vertices[f.vertices[1] as usize]),
+            );
+            pa.near_box(&b0.inf(&b1), &b0.sup(&b1), reach + m)
+        })
+        .collect();
+    if near_b.is_empty() {
+        return;
+    }
+    let held_a = held_vertices(out, 0, pa.vertices.len());
+    let held_b = held_vertices(out, 1, pb.vertices.len());
+    for (ea, e) in pa.edges.iter().enumerate() {
+        let a = [
+            pa.vertices[e.vertices[0] as usize],
+            pa.vertices[e.vertices[1] as usize],
+        ];
+        let (a0, a1) = (view.a_in_b(&a[0]), view.a_in_b(&a[1]));
+        if !pb.near_box(&a0.inf(&a1), &a0.sup(&a1), reach + m) {
+            continue;
+        }
+        for &eb in &near_b {
+            let f = pb.edges[eb];
+            let b = [
+                pb.vertices[f.vertices[0] as usize],
+                pb.vertices[f.vertices[1] as usize],
+            ];
+            let Some((s, t, d)) = segment_closest(a0, a1, b[0], b[1]) else {
+                continue;
+            };
+            // The closest approach must fall inside both edges (beyond an
+            // end the lines meet where the edges do not). Near an end, that
+            // end's vertex guard holds the pair if it has one; a vertex over
+            // no face of the other body (a stacked box's corner beyond the
+            // edge of the box below) has none, and only this edge pair can
+            // hold it (BENCHMARKS.md, issue 23, "edge guards at the corners").
+            let inside = |u: f64| u > 0.0 && u < 1.0;
+            let end_held = |u: f64, ends: [u32; 2], held: &[bool]| {
+                (u < 0.05 && held[ends[0] as usize]) || (u > 0.95 && held[ends[1] as usize])
+            };
+            if d - m >= reach
+                || !inside(s)
+                || !inside(t)
+                || end_held(s, e.vertices, &held_a)
+                || end_held(t, f.vertices, &held_b)
+            {
+                continue;
+            }
+            let key = [
+                pack(Feature::Edge(ea as u32)),
+                pack(Feature::Edge(eb as u32)),
+            ];
+            if out.iter().any(|w| match w {
+                Witness::EdgeEdge(x) => x.features == key,
+                _ => false,
+            }) {
+                continue;
+            }
+            let faces = [
+                pb.faces[f.faces[0] as usize].normal,
+                pb.faces[f.faces[1] as usize].normal,
+            ];
+            let Some(w) =
+                EdgeWitness::build(0, a, b, faces, pb.edge_normal(eb as u32), &a_to_b, m, key)
+            else {
+                continue;
+            };
+            // Eq. 3 holds only where this pair of edges is the one that would
+            // collide: a guard whose row reads deeper than the bodies overlap
+            // (`depth_m`, 0 when they are apart) sees the crossing from the
+            // wrong side of the separating plane and would push the bodies
+            // for nothing.
+            let w = Witness::EdgeEdge(w);
+            let (value, _) = value_at(&w, &view.pa, &view.pb);
+            if value >= -depth_m - 1e-9 && value - m < reach {
+                out.push(w);
+            }
+        }
+    }
+}
+
+/// Per vertex of end `point_end`'s polyhedron: held against a face of the
+/// other body by a vertex–face primitive in `out`.
+fn held_vertices(out: &[Witness], point_end: u8, n: usize) -> Vec<bool> {
+    let mut held = vec![false; n];
+    for w in out {
+        if let Witness::Plane(p) = w {
+            let (v, other) = if point_end == 0 {
+                (p.features[0], p.features[1])
+            } else {
+                (p.features[1], p.features[0])
+            };
+            if p.point_end == point_end && v >> 30 == 0 && other >> 30 == 2 && (v as usize) < n {
+                held[v as usize] = true;
+            }
+        }
+    }
+    held
+}
+
+/// Closest points of segments p0p1 and q0q1: parameters (s, t) and
+/// distance; `None` for (nearly) parallel segments, whose crossing is not a
+/// point.
+fn segment_closest(
+    p0: Vector3<f64>,
+    p1: Vector3<f64>,
+    q0: Vector3<f64>,
+    q1: Vector3<f64>,
+) -> Option<(f64, f64, f64)> {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.dot(&d1), d2.dot(&d2), d2.dot(&r));
+    let (b, c) = (d1.dot(&d2), d1.dot(&r));
+    let denom = a * e - b * b;
+    if denom <= 1e-12 * a * e {
+        return None;
+    }
+    let s = ((b * f - c * e) / denom).clamp(0.0, 1.0);
+    let t = ((b * s + f) / e).clamp(0.0, 1.0);
+    let s = ((b * t - c) / a).clamp(0.0, 1.0);
+    let d = ((p0 + d1 * s) - (q0 + d2 * t)).norm();
+    Some((s, t, d))
+}
