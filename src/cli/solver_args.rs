@@ -186,7 +186,8 @@ mod tests {
                 ("--force-solver", "matvec:0"),
                 ("--coordinates", "polar"),
             ] {
-                let err = Cli::try_parse_from(["haptloop", sub, "four-bar", flag, value])
+                let arg = format!("{flag}={value}");
+                let err = Cli::try_parse_from(["haptloop", sub, "four-bar", arg.as_str()])
                     .expect_err("refused");
                 assert!(err.to_string().contains(flag), "{sub} {flag}: {err}");
             }
