@@ -3,20 +3,19 @@
 //! clock (`session::timing`).
 
 use super::output::{check_writable, write_atomic};
-use super::values;
+use super::solver_args::SolverArgs;
 use crate::report::summary::{Stages, Summary};
 use crate::scenes::resolve;
 use crate::session::{self, Plan, SessionOptions, Stage};
 use anyhow::{Result, bail};
 use clap::Args;
 use haptloop_rt::probe::Percentiles;
-use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, StopFlag};
+use haptloop_rt::schedule::StopFlag;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
 
 /// Flags of `haptloop bench`.
 #[derive(Debug, Args)]
@@ -30,34 +29,9 @@ pub struct BenchArgs {
     /// Write the figures as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
-    /// Fast-loop rate in Hz (100–20000); default: the scene's, else 1000.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(i64::from(MIN_RATE_HZ)..=i64::from(MAX_RATE_HZ)))]
-    pub rate: Option<u32>,
-    /// Update iterations per tick (1–10000); default: the scene's, else the
-    /// solver's.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
-    pub iterations: Option<u32>,
-    /// Eq. 7 solver, as for `run`: `cholesky` (default) or `matvec[:N]`
-    /// (experimental: no factorisation in the tick).
-    #[arg(long, value_name = "SOLVER", value_parser = super::values::force_solver)]
-    pub force_solver: Option<haptloop_solver::ForceSolver>,
-    /// Update rule of the fast loop, as for `run`: `projected` or
-    /// `gradient`. Default: the scene's, else `projected`.
-    #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
-    pub update: Option<haptloop_solver::UpdateRule>,
-    /// The fast loop's coordinates, as for `run`: `augmented`, `joint` or
-    /// `auto`. Default: the scene's, else `augmented`.
-    #[arg(long, value_name = "COORDS", value_parser = values::coordinates)]
-    pub coordinates: Option<haptloop_solver::Coordinates>,
-    /// Constraint gain K of the fast update (finite, > 0), as for `run`.
-    /// Default: the scene's, else the solver's.
-    #[arg(long, value_parser = values::positive)]
-    pub gain: Option<f64>,
-    /// Time constant of the velocity filter behind the Eq. 7 inertial
-    /// force, ms (0 turns it off), as for `run`. Default: the scene's, else
-    /// 10 ms.
-    #[arg(long, value_name = "MS", value_parser = values::filter_ms)]
-    pub velocity_filter_ms: Option<f64>,
+    /// The solver flags, as for `run`.
+    #[command(flatten)]
+    pub solver: SolverArgs,
 }
 
 /// p50, p99, p99.9 and max of one figure, ns.
@@ -123,6 +97,19 @@ struct BenchJson {
     solver_failures: u64,
 }
 
+/// The session options of a bench: `solver`'s flags at `rate` for
+/// `seconds`, deterministic.
+pub(super) fn bench_options(solver: &SolverArgs, rate: u32, seconds: f64) -> SessionOptions {
+    let mut options = SessionOptions {
+        seconds,
+        deterministic: true,
+        ..SessionOptions::default()
+    };
+    solver.apply(&mut options);
+    options.rate_hz = Some(rate);
+    options
+}
+
 /// Runs the bench and prints (and writes) its figures.
 pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
     let scene = match resolve(&args.scene) {
@@ -136,6 +123,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         check_writable(path)?;
     }
     let rate = args
+        .solver
         .rate
         .or(scene.compiled.settings.rate_hz)
         .unwrap_or(1000);
@@ -143,20 +131,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
     if seconds > 86_400.0 {
         bail!("--ticks {} at {rate} Hz is more than a day", args.ticks);
     }
-    let options = SessionOptions {
-        seconds,
-        rate_hz: Some(rate),
-        iterations: args.iterations,
-        force_solver: args.force_solver,
-        update: args.update,
-        coordinates: args.coordinates,
-        gain: args.gain,
-        velocity_filter: args
-            .velocity_filter_ms
-            .map(|ms| Duration::from_secs_f64(ms / 1000.0)),
-        deterministic: true,
-        ..SessionOptions::default()
-    };
+    let options = bench_options(&args.solver, rate, seconds);
     let plan = Plan::new(&scene, &options)?;
     let plan_solver = plan.solver.force_solver;
     let (update, gain) = (plan.solver.update, plan.solver.gain);

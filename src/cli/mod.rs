@@ -12,6 +12,7 @@ mod rt_args;
 mod run;
 mod scenes;
 mod signals;
+mod solver_args;
 mod sweep;
 mod values;
 mod view;

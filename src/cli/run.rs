@@ -17,7 +17,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Duration;
 
 /// Exit status of a run that finished but had failed ticks, or whose replay
 /// did not reproduce its recording (README, "Exit status").
@@ -108,18 +107,9 @@ fn prepared_scene(args: &RunArgs) -> Result<Scene, ExitCode> {
 }
 
 /// The session's options from the flags (`live`: the live view's hook).
-fn session_options(args: &RunArgs, live: Option<session::LiveHook>) -> SessionOptions {
-    SessionOptions {
+pub(super) fn session_options(args: &RunArgs, live: Option<session::LiveHook>) -> SessionOptions {
+    let mut options = SessionOptions {
         seconds: args.seconds,
-        rate_hz: args.rate,
-        iterations: args.iterations,
-        update: args.update,
-        force_solver: args.force_solver,
-        coordinates: args.coordinates,
-        gain: args.gain,
-        velocity_filter: args
-            .velocity_filter_ms
-            .map(|ms| Duration::from_secs_f64(ms / 1000.0)),
         deterministic: args.deterministic,
         assemble: !args.no_assembly,
         out_dir: None,
@@ -130,7 +120,10 @@ fn session_options(args: &RunArgs, live: Option<session::LiveHook>) -> SessionOp
         reference_every: None,
         live,
         semantic_mode: args.semantic_mode,
-    }
+        ..SessionOptions::default()
+    };
+    args.solver.apply(&mut options);
+    options
 }
 
 /// The run's output directory (none with `--no-files`), claimed before

@@ -1,11 +1,11 @@
 //! The flags of `haptloop run` and their defaults.
 
 use super::super::rt_args::RtArgs;
+use super::super::solver_args::SolverArgs;
 use super::super::values;
 use crate::scenes::DEFAULT_SCENE;
 use crate::session;
 use clap::Args;
-use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ};
 use std::path::PathBuf;
 
 /// Flags of `haptloop run`.
@@ -17,51 +17,9 @@ pub struct RunArgs {
     /// Session length in seconds, (0, 86400].
     #[arg(long, default_value_t = 10.0, value_parser = values::seconds)]
     pub seconds: f64,
-    /// Fast-loop rate in Hz (100–20000); default: the scene's, else 1000.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(i64::from(MIN_RATE_HZ)..=i64::from(MAX_RATE_HZ)))]
-    pub rate: Option<u32>,
-    /// Augmented-Lagrangian iterations per tick (1–10000): more is more
-    /// accurate and costs more per tick. Default: the scene's, else the
-    /// solver's.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
-    pub iterations: Option<u32>,
-    /// Update rule of the fast loop: `projected` (Gauss–Newton with the
-    /// force solve's factor; the default) or `gradient` (Nelson & Cohen
-    /// Eq. 1–3).
-    #[arg(long, value_name = "RULE", value_parser = values::update_rule)]
-    pub update: Option<haptloop_solver::UpdateRule>,
-    /// Eq. 7 solver: `cholesky` (a numeric factorisation a tick; the
-    /// default) or `matvec` (experimental: no factorisation in the tick,
-    /// conjugate gradients preconditioned by a factor the slow loop
-    /// refreshes, a solve that reaches the cap redone with a factorisation;
-    /// not for contact; measured slower than `cholesky` on every mechanism,
-    /// BENCHMARKS.md), `matvec:N` to cap its iterations at N (default 64),
-    /// `tree` (experimental: no full factor, conjugate gradients
-    /// preconditioned by a spanning tree of the mechanism; not for contact;
-    /// measured slower than `cholesky` on meshes, BENCHMARKS.md), `tree:N`
-    /// to cap its iterations a solve at N (default 500), `multilevel` and
-    /// `multilevel:N` (experimental: conjugate gradients preconditioned by
-    /// an aggregation V-cycle; not for contact), `cg:N`
-    /// (Jacobi-preconditioned, gradient update only).
-    #[arg(long, value_name = "SOLVER", value_parser = values::force_solver)]
-    pub force_solver: Option<haptloop_solver::ForceSolver>,
-    /// The fast loop's coordinates: `augmented` (every body's seven
-    /// coordinates, every joint a set of rows; the default), `joint` (the
-    /// tick in joint coordinates: quasi-static mechanisms with point
-    /// fingers, no contact, limits or torque outputs; refused with the
-    /// reason otherwise) or `auto` (joint where it applies). Default: the
-    /// scene's `[solver] coordinates`, else `augmented`.
-    #[arg(long, value_name = "COORDS", value_parser = values::coordinates)]
-    pub coordinates: Option<haptloop_solver::Coordinates>,
-    /// Constraint gain K of the fast update (finite, > 0). Default: the
-    /// scene's, else the solver's.
-    #[arg(long, value_parser = values::positive)]
-    pub gain: Option<f64>,
-    /// Time constant of the low-pass filter on the velocities behind the
-    /// Eq. 7 inertial force, ms (0 turns it off). Default: the scene's, else
-    /// 10 ms: encoder quantisation makes unfiltered accelerations buzz.
-    #[arg(long, value_name = "MS", value_parser = values::filter_ms)]
-    pub velocity_filter_ms: Option<f64>,
+    /// The solver flags `bench` takes too.
+    #[command(flatten)]
+    pub solver: SolverArgs,
     /// Run on a mock clock as fast as possible: bit-identical results across
     /// runs (every summary.json field but wall_clock_s), no real-time figures.
     #[arg(long)]
@@ -167,13 +125,7 @@ impl Default for RunArgs {
         RunArgs {
             scene: DEFAULT_SCENE.into(),
             seconds: 10.0,
-            rate: None,
-            iterations: None,
-            update: None,
-            force_solver: None,
-            coordinates: None,
-            gain: None,
-            velocity_filter_ms: None,
+            solver: SolverArgs::default(),
             deterministic: false,
             no_assembly: false,
             out: None,

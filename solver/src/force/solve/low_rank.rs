@@ -29,7 +29,8 @@
 //! refactors as before.
 
 use super::super::small::{factor_in_place, min_norm_solve, substitute};
-use super::{Gram, MultiplierSolve, put_known_in, take_known_out};
+use super::known::{put_known_in, take_known_out};
+use super::{Gram, MultiplierSolve};
 
 /// At most this many released rows take the correction (each costs a
 /// triangular solve pair; a factorisation is worth a few).
