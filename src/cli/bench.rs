@@ -165,7 +165,7 @@ pub fn run(args: &BenchArgs, stop: &StopFlag) -> Result<ExitCode> {
         },
         solver_failures: s.safety.solver_failures,
     };
-    println!("{}", render(&json, &s.stages_ns));
+    super::emit(&render(&json, &s.stages_ns));
     if let Some(path) = &args.json {
         write_atomic(
             path,

@@ -301,3 +301,27 @@ fn ctrl_c_stops_checks_trial() {
         text(&o)
     );
 }
+
+/// `haptloop bench … | head` closes stdout before the table is printed: the
+/// bench still writes its `--json` file and exits 0, and never panics on the
+/// broken pipe (it used `println!`, which panics on EPIPE).
+#[test]
+fn a_bench_into_a_closed_pipe_does_not_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let mut child = haptloop()
+        .args(["bench", "four-bar", "--ticks", "300", "--json"])
+        .arg(&json)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["ticks"].as_u64(), Some(300), "{v}");
+}

@@ -158,7 +158,13 @@ fn auto_is_honest_on_every_shipped_scene() {
     joint_scenes.sort();
     assert_eq!(
         joint_scenes,
-        ["bennett", "four-bar", "peaucellier", "stewart", "stewart-3rsu"]
+        [
+            "bennett",
+            "four-bar",
+            "peaucellier",
+            "stewart",
+            "stewart-3rsu"
+        ]
     );
 }
 
