@@ -82,7 +82,7 @@ fn every_generated_chain_runs_its_whole_circle_without_a_failure() {
         if links >= 48 {
             assert_eq!(radius, 0.01, "{name}: the built-in circle fits");
         } else {
-            assert!(radius < 0.01 && radius >= 1e-3, "{name}: {radius}");
+            assert!((1e-3..0.01).contains(&radius), "{name}: {radius}");
             // The largest radius: 1 µm more crosses the margin.
             let more = chain_circle_reach_margin(links, radius + 2e-6);
             assert!(more < CHAIN_REACH_MARGIN_M, "{name}: {more:e}");
