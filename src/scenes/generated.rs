@@ -6,7 +6,9 @@
 //! file in `scenes/` like every other built-in.
 
 use haptloop_solver::ModelBuilder;
-use haptloop_solver::mechanisms::{chain_sized, lattice_sized, sphere_toy_sized};
+use haptloop_solver::mechanisms::{
+    CHAIN_REACH_MARGIN_M, chain_hand_radius, chain_sized, lattice_sized, sphere_toy_sized,
+};
 use haptloop_solver::scene::mechanism_tables;
 
 /// The most bodies a generated scene may have: the 8 × 32 lattice has 520,
@@ -25,6 +27,13 @@ pub struct Family {
     build: fn(&str) -> Result<(ModelBuilder, usize), String>,
     /// One line for the generated `description`.
     describe: fn(&str) -> String,
+    /// SIZE and the base's settings text (its `[solver]` and `[[device]]`
+    /// tables) → the settings for that size, or why SIZE is refused.
+    settings: fn(&str, &str) -> Result<String, String>,
+}
+
+fn same_settings(_: &str, settings: &str) -> Result<String, String> {
+    Ok(settings.to_owned())
 }
 
 fn dims(size: &str) -> Option<(usize, usize)> {
@@ -59,6 +68,7 @@ pub const FAMILIES: &[Family] = &[
                 size.replace('x', " × ")
             )
         },
+        settings: same_settings,
     },
     Family {
         prefix: "chain",
@@ -74,6 +84,7 @@ pub const FAMILIES: &[Family] = &[
                 "closed chain of {size} links hanging between two fixed points, held at the bottom"
             )
         },
+        settings: chain_settings,
     },
     Family {
         prefix: "sphere-toy",
@@ -93,6 +104,7 @@ pub const FAMILIES: &[Family] = &[
                 size.replace('x', " × ")
             )
         },
+        settings: same_settings,
     },
 ];
 
@@ -137,7 +149,52 @@ pub fn text(family: &Family, size: &str, base: &str) -> Result<String, String> {
         prefix = family.prefix,
         desc = (family.describe)(size),
     );
-    out += &base[start..=end];
+    out += &(family.settings)(size, &base[start..=end])?;
     out += &mechanism_tables(&builder, &|_| device.clone());
     Ok(out)
+}
+
+/// The smallest hand circle a generated chain is run with, metres: below it,
+/// the chain is refused rather than held still under the name of a circle.
+pub const MIN_CHAIN_HAND_RADIUS_M: f64 = 1e-3;
+
+/// The chain's settings for `size` links: the built-in's hand circle, its
+/// radius shrunk where the circle would pull the grasp closer than
+/// [`CHAIN_REACH_MARGIN_M`] to the chain's reach (a short chain pulled taut
+/// fails every tick: BENCHMARKS.md, "Issue 23 — the chain family at its
+/// extremes"); refused when that radius is under [`MIN_CHAIN_HAND_RADIUS_M`].
+fn chain_settings(size: &str, settings: &str) -> Result<String, String> {
+    const KEY: &str = "circle = { radius = ";
+    let at = settings
+        .find(KEY)
+        .map(|i| i + KEY.len())
+        .ok_or("the base scene's hand is not a circle")?;
+    let len = settings[at..]
+        .find([',', ' '])
+        .ok_or("the base scene's circle radius is not followed by `,`")?;
+    let base: f64 = settings[at..at + len]
+        .parse()
+        .map_err(|_| "the base scene's circle radius is not a number")?;
+    let links: usize = size.parse().map_err(|_| "expected a number of links")?;
+    let radius = chain_hand_radius(links, base);
+    if radius == base {
+        return Ok(settings.to_owned());
+    }
+    if radius < MIN_CHAIN_HAND_RADIUS_M {
+        return Err(format!(
+            "a chain of {links} links is too short for the hand's circle: a circle from the grasp \
+             that stays {CHAIN_REACH_MARGIN_M} m inside the chain's reach has radius {radius:.1e} m, \
+             under the least a generated chain is run with ({MIN_CHAIN_HAND_RADIUS_M} m)"
+        ));
+    }
+    let hand = settings[..at]
+        .rfind("\nhand = ")
+        .ok_or("the base scene's circle is not on a `hand = ` line")?;
+    Ok(format!(
+        "{}\n# radius {radius:?} m, not the built-in's {base} m: the largest circle that keeps \
+         the grasp {CHAIN_REACH_MARGIN_M} m inside a {links}-link chain's reach{}{radius:?}{}",
+        &settings[..hand],
+        &settings[hand..at],
+        &settings[at + len..]
+    ))
 }

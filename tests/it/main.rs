@@ -7,6 +7,7 @@ static ALLOC: haptloop_rt::alloc::CountingAllocator = haptloop_rt::alloc::Counti
 
 mod bench;
 mod browser;
+mod chain_family;
 mod chair;
 mod contact;
 mod design;

@@ -50,11 +50,7 @@ pub fn chain_builder() -> ModelBuilder {
 /// [`chain`] (which has 64).
 pub fn chain_sized(links: usize) -> ModelBuilder {
     let links = links.max(2);
-    let radius = CHAIN_LINK_M / (2.0 * (PI / (2.0 * links as f64)).sin());
-    let point = |k: usize| {
-        let phi = PI * k as f64 / links as f64;
-        Vector3::new(-phi.cos(), 0.0, -phi.sin()) * radius
-    };
+    let point = |k: usize| joint_point(links, k);
     let name = |k: usize| format!("link{k}");
     let mut t = Assembly::new();
     t.body(
@@ -97,4 +93,65 @@ pub fn chain_sized(links: usize) -> ModelBuilder {
     t.builder
         .finger(FingerSpec::point("index", name(links / 2), [0.0; 3]));
     t.builder
+}
+
+/// p_k of a chain of `links` bars (the module's construction).
+fn joint_point(links: usize, k: usize) -> Vector3<f64> {
+    let radius = CHAIN_LINK_M / (2.0 * (PI / (2.0 * links as f64)).sin());
+    let phi = PI * k as f64 / links as f64;
+    Vector3::new(-phi.cos(), 0.0, -phi.sin()) * radius
+}
+
+/// How far inside the chain's reach a hand path must stay: 1 mm. Nearer,
+/// the arms between the grasp and the fixed ends are pulled almost straight
+/// and the fast loop's rows lose rank together (BENCHMARKS.md, "Issue 23 —
+/// the chain family at its extremes").
+pub const CHAIN_REACH_MARGIN_M: f64 = 1e-3;
+
+/// How far inside its reach the grasp of a chain of `links` bars stays, at
+/// worst, while it follows the scene's horizontal circle of `radius` metres
+/// from the grasp, r((cos θ − 1)·x + sin θ·y): the least, over θ and both
+/// arms, of the arm's length (its bars up to the grasp, taut) less the
+/// grasp's distance to the arm's fixed end (sampled every half degree).
+/// Negative: the path leaves the reach.
+pub fn chain_circle_reach_margin(links: usize, radius: f64) -> f64 {
+    let links = links.max(2);
+    let half = links / 2;
+    let grasp = (joint_point(links, half) + joint_point(links, half + 1)) / 2.0;
+    let arms = [
+        (joint_point(links, 0), (half as f64 + 0.5) * CHAIN_LINK_M),
+        (
+            joint_point(links, links),
+            ((links - half) as f64 - 0.5) * CHAIN_LINK_M,
+        ),
+    ];
+    (0..720)
+        .map(|i| {
+            let theta = PI * i as f64 / 360.0;
+            let hand = grasp + Vector3::new(theta.cos() - 1.0, theta.sin(), 0.0) * radius;
+            arms.iter()
+                .map(|(end, length)| length - (hand - end).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The largest radius, at most `radius`, of the scene's hand circle (see
+/// [`chain_circle_reach_margin`]) that keeps the grasp
+/// [`CHAIN_REACH_MARGIN_M`] inside the reach of a chain of `links` bars
+/// (bisection to 1 µm; 0 when even the grasp's start is nearer than that).
+pub fn chain_hand_radius(links: usize, radius: f64) -> f64 {
+    let inside = |r: f64| chain_circle_reach_margin(links, r) >= CHAIN_REACH_MARGIN_M;
+    if inside(radius) {
+        return radius;
+    }
+    if !inside(0.0) {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (0.0, radius);
+    while hi - lo > 1e-6 {
+        let mid = 0.5 * (lo + hi);
+        if inside(mid) { lo = mid } else { hi = mid }
+    }
+    lo
 }

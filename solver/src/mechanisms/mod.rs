@@ -32,7 +32,10 @@ mod stewart;
 mod stewart_3rsu;
 
 pub use bennett::{BENNETT_A_M, BENNETT_B_M, bennett, bennett_builder};
-pub use chain::{CHAIN_LINK_KG, CHAIN_LINK_M, chain, chain_builder, chain_sized};
+pub use chain::{
+    CHAIN_LINK_KG, CHAIN_LINK_M, CHAIN_REACH_MARGIN_M, chain, chain_builder,
+    chain_circle_reach_margin, chain_hand_radius, chain_sized,
+};
 pub use cluttered::{CLUTTER_SPACING_M, DRAGGED_HALF_M, clutter_side, cluttered_builder};
 pub use four_bar::{four_bar, four_bar_builder};
 pub use lattice::{
