@@ -24,6 +24,7 @@ mod dead_point;
 mod edit;
 mod four_bar;
 mod harness;
+mod joint_extremes;
 mod long_run;
 mod matrix;
 mod stewart;
