@@ -194,26 +194,10 @@ impl Stage {
                 self.w[b * m + a] = v;
             }
         }
-        for a in 0..nl {
-            self.wll[a * nl..(a + 1) * nl].copy_from_slice(&self.w[a * m..a * m + nl]);
-        }
-        if !factor_in_place(&mut self.wll, nl) {
-            return Err(ReducedError::NotPositive("W_LL"));
-        }
-        for f in 0..mf {
-            let zf = &mut self.z[f * nl..(f + 1) * nl];
-            for (a, z) in zf.iter_mut().enumerate() {
-                *z = self.w[a * m + nl + f];
-            }
-            forward(&self.wll, zf);
-        }
+        self.loop_block(m, nl)?;
         self.reference = 0.0;
         for f in 0..mf {
             self.reference = self.reference.max(self.w[(nl + f) * m + nl + f]);
-            for g in 0..mf {
-                let zz = dot(&self.z[f * nl..(f + 1) * nl], &self.z[g * nl..(g + 1) * nl]);
-                self.sig[f * mf + g] = self.w[(nl + f) * m + nl + g] - zz;
-            }
         }
         self.sk.copy_from_slice(&self.sig);
         for (f, k) in k_inv.iter().enumerate() {
@@ -331,7 +315,14 @@ impl Stage {
                 to += 1;
             }
         }
-        let (m, nl, mf) = (m2, nl2, m2 - nl2);
+        self.loop_block(m2, nl2)
+    }
+
+    /// From W (m × m, its first `nl` rows the loop rows): W_LL's factor,
+    /// Z = W_LL⁻¹ᐟ² W_LF and Σ_F = W_FF − ZᵀZ, shared by [`Stage::factor`]
+    /// and [`Stage::drop_loop_rows`].
+    fn loop_block(&mut self, m: usize, nl: usize) -> Result<(), ReducedError> {
+        let mf = m - nl;
         for a in 0..nl {
             self.wll[a * nl..(a + 1) * nl].copy_from_slice(&self.w[a * m..a * m + nl]);
         }
