@@ -12,13 +12,13 @@ use super::compile_semantic::HoldDecl;
 use super::settings::SceneSettings;
 use super::spec::{
     Arr, BodySection, BoundsSpec, FreeSpec, GraspSpec, JointKindSpec, JointSection,
-    ObjectiveKindSpec, ObjectiveSection, Quat, ShapeSpec,
+    ObjectiveSection, Quat, ShapeSpec,
 };
 use crate::model::{
     BodySpec, Bounds, BuildError, DEFAULT_FINGERTIP_RADIUS_M, DesignParam, FingerSpec, JointKind,
     JointSpec, Owner, Shape,
 };
-use crate::objective::{ObjectiveSpec, ObstacleSpec};
+use crate::objective::{ObjectiveKind, ObjectiveSpec, ObstacleSpec};
 use crate::{FingerId, Model, ModelBuilder, RowUnit, Sense};
 use std::ops::Range;
 use std::path::PathBuf;
@@ -251,12 +251,12 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
         })
     };
     match o.kind.get_ref() {
-        ObjectiveKindSpec::Finger => ObjectiveSpec::Finger { weight },
-        ObjectiveKindSpec::LeastAstonishment => ObjectiveSpec::LeastAstonishment {
+        ObjectiveKind::Finger => ObjectiveSpec::Finger { weight },
+        ObjectiveKind::LeastAstonishment => ObjectiveSpec::LeastAstonishment {
             weight,
             design_weight: o.design_weight.as_ref().map_or(1.0, |w| *w.get_ref()),
         },
-        ObjectiveKindSpec::Dexterity => ObjectiveSpec::Dexterity {
+        ObjectiveKind::Dexterity => ObjectiveSpec::Dexterity {
             name,
             weight,
             chain: names(&o.chain),
@@ -269,26 +269,26 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             }),
             closure: names(&o.closure),
         },
-        ObjectiveKindSpec::Obstacle => ObjectiveSpec::Obstacle {
+        ObjectiveKind::Obstacle => ObjectiveSpec::Obstacle {
             name,
             weight,
             points: avoiding(o),
             obstacle: obstacle(o),
             distance_m: o.distance.as_ref().map_or(0.0, |d| *d.get_ref()),
         },
-        ObjectiveKindSpec::InverseDistance => ObjectiveSpec::InverseDistance {
+        ObjectiveKind::InverseDistance => ObjectiveSpec::InverseDistance {
             name,
             weight,
             points: avoiding(o),
             obstacle: obstacle(o),
         },
-        ObjectiveKindSpec::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
+        ObjectiveKind::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
             name,
             weight,
             chain: names(&o.chain),
             point_m: point(&o.point),
         },
-        ObjectiveKindSpec::StraightLine => ObjectiveSpec::StraightLine {
+        ObjectiveKind::StraightLine => ObjectiveSpec::StraightLine {
             name,
             weight,
             body: o
@@ -299,7 +299,7 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             line_point_m: point(&o.line_point),
             direction: point(&o.direction),
         },
-        ObjectiveKindSpec::JointLimitDistance => ObjectiveSpec::JointLimitDistance {
+        ObjectiveKind::JointLimitDistance => ObjectiveSpec::JointLimitDistance {
             name,
             weight,
             joints: names(&o.joints),
