@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use haptloop_rt::schedule::{MAX_RATE_HZ, MIN_RATE_HZ, ScheduleConfig};
 use haptloop_rt::thread::ThreadConfig;
 use haptloop_solver::geometry::ContactSettings;
-use haptloop_solver::scene::{SceneSettings, SemanticMode};
+use haptloop_solver::scene::SemanticMode;
 use haptloop_solver::{ForceSolver, SolverSettings, UpdateRule};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -161,7 +161,7 @@ impl Plan {
             bail!("--rate must be {MIN_RATE_HZ}–{MAX_RATE_HZ} Hz, got {rate_hz}");
         }
         let mut solver = solver_settings(scene, options)?;
-        let contact = contact_settings(s);
+        let contact = s.contact_settings();
         // The contact speed limit, in scenes where things can touch: no body
         // moves farther in one slow-loop cycle than the contact distance (see
         // SolverSettings::contact_step_m).
@@ -238,17 +238,23 @@ impl Plan {
     }
 }
 
-/// The fast loop's settings: the flags over the scene's `[solver]`
-/// (iterations, update rule, force solver, gain), the scene's own step,
-/// gains and coupling, inertial motion and the velocity filter.
+/// The fast loop's settings: the session's defaults (inertial motion for
+/// shaped moving bodies under gravity, docs/scene-format.md; the velocity
+/// filter), the scene's `[solver]` keys over them
+/// (`SceneSettings::apply_to`), and the flags over those (iterations,
+/// update rule, force solver, gain, coordinates, velocity filter).
 fn solver_settings(scene: &Scene, options: &SessionOptions) -> Result<SolverSettings> {
-    let s = &scene.compiled.settings;
-    let mut solver = SolverSettings::default();
-    if let Some(n) = options.iterations.or(s.iterations) {
-        if n == 0 || n > 10_000 {
-            bail!("--iterations must be 1–10000, got {n}");
-        }
-        solver.iterations = n;
+    let mut solver = SolverSettings {
+        dynamics: haptloop_solver::dynamics::inertial_by_default(&scene.compiled.model),
+        velocity_filter: DEFAULT_VELOCITY_FILTER,
+        ..SolverSettings::default()
+    };
+    scene.compiled.settings.apply_to(&mut solver);
+    // The scene's values passed its own validation; the checks below see
+    // them too, as before, but fail only for a flag's.
+    solver.iterations = options.iterations.unwrap_or(solver.iterations);
+    if !(1..=10_000).contains(&solver.iterations) {
+        bail!("--iterations must be 1–10000, got {}", solver.iterations);
     }
     if let Some(u) = options.update {
         solver.update = u;
@@ -265,56 +271,14 @@ fn solver_settings(scene: &Scene, options: &SessionOptions) -> Result<SolverSett
         }
         solver.force_solver = f;
     }
-    if let Some(k) = options.gain.or(s.gain) {
-        if !(k.is_finite() && k > 0.0) {
-            bail!("--gain must be a finite number > 0, got {k}");
-        }
-        solver.gain = k;
+    solver.gain = options.gain.unwrap_or(solver.gain);
+    if !(solver.gain.is_finite() && solver.gain > 0.0) {
+        bail!("--gain must be a finite number > 0, got {}", solver.gain);
     }
-    if let Some(h) = s.step {
-        solver.step = h;
-    }
-    if let Some(c) = options.coordinates.or(s.coordinates) {
-        solver.coordinates = c;
-    }
-    if let Some(k2) = s.multiplier_gain {
-        solver.multiplier_gain = k2;
-    }
-    if let Some(k) = s.coupling_stiffness {
-        solver.coupling_stiffness_n_per_m = k;
-    }
-    if let Some(b) = s.coupling_damping {
-        solver.coupling_damping_n_s_per_m = b;
-    }
-    // Inertial motion: the scene's `dynamics`, else on for shaped
-    // moving bodies under gravity (docs/scene-format.md).
-    solver.dynamics = s
-        .dynamics
-        .unwrap_or_else(|| haptloop_solver::dynamics::inertial_by_default(&scene.compiled.model));
-    solver.velocity_filter = match options
-        .velocity_filter
-        .or(s.velocity_filter.map(Duration::from_secs_f64))
-    {
-        Some(tau) => tau,
-        None => DEFAULT_VELOCITY_FILTER,
-    };
+    solver.coordinates = options.coordinates.unwrap_or(solver.coordinates);
+    solver.velocity_filter = options.velocity_filter.unwrap_or(solver.velocity_filter);
     Ok(solver)
 }
 
-/// The contact settings: the scene's `[solver]` keys over the defaults.
-fn contact_settings(s: &SceneSettings) -> ContactSettings {
-    let mut contact = ContactSettings::default();
-    if let Some(d) = s.contact_distance {
-        contact.contact_distance_m = d;
-    }
-    if let Some(d) = s.release_distance {
-        contact.release_distance_m = d;
-    }
-    if let Some(d) = s.penetration_tolerance {
-        contact.penetration_tolerance_m = d;
-    }
-    if let Some(g) = s.contact_guards {
-        contact.guards = g;
-    }
-    contact
-}
+#[cfg(test)]
+mod tests;

@@ -45,19 +45,16 @@ fn scenes() -> Vec<(String, crate::Model, SolverSettings)> {
     for path in list.split(',').filter(|p| !p.is_empty()) {
         let loaded = crate::scene::load(std::path::Path::new(path)).expect("scene loads");
         let compiled = loaded.compile().expect("scene compiles");
-        let mut settings = SolverSettings {
+        // The scene's solver keys, but the solver's default (kinematic)
+        // motion whatever the scene's `dynamics`, as the probe ran before
+        // it took the scene's settings whole (it took step and iterations).
+        let settings = SolverSettings {
             // `HAPTLOOP_PROBE_NORM_ROWS_OUT=1`: the quaternion-norm rows
             // out of the force factor (`SolverSettings::norm_rows_out`).
             norm_rows_out: std::env::var("HAPTLOOP_PROBE_NORM_ROWS_OUT").is_ok_and(|v| v == "1"),
-            ..SolverSettings::default()
+            dynamics: SolverSettings::default().dynamics,
+            ..compiled.settings.solver_settings()
         };
-        let s = &compiled.settings;
-        if let Some(v) = s.step {
-            settings.step = v;
-        }
-        if let Some(v) = s.iterations {
-            settings.iterations = v;
-        }
         out.push((compiled.name.clone(), compiled.model, settings));
     }
     out

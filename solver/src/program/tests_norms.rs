@@ -15,13 +15,12 @@ fn program(name: &str) -> (Arc<crate::Model>, SolverSettings) {
         .join("../scenes")
         .join(format!("{name}.toml"));
     let compiled = crate::scene::load(&path).unwrap().compile().unwrap();
-    let mut settings = SolverSettings::default();
-    if let Some(v) = compiled.settings.step {
-        settings.step = v;
-    }
-    if let Some(v) = compiled.settings.iterations {
-        settings.iterations = v;
-    }
+    // The scene's solver keys with the solver's default (kinematic) motion:
+    // these comparisons were made without stack's `dynamics = true`.
+    let settings = SolverSettings {
+        dynamics: SolverSettings::default().dynamics,
+        ..compiled.settings.solver_settings()
+    };
     (Arc::new(compiled.model), settings)
 }
 

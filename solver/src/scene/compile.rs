@@ -9,59 +9,20 @@
 use super::LoadedScene;
 use super::SceneError;
 use super::compile_semantic::HoldDecl;
+use super::settings::SceneSettings;
 use super::spec::{
     Arr, BodySection, BoundsSpec, FreeSpec, GraspSpec, JointKindSpec, JointSection,
-    ObjectiveKindSpec, ObjectiveSection, Quat, ShapeSpec, SolverSection,
+    ObjectiveSection, Quat, ShapeSpec,
 };
 use crate::model::{
     BodySpec, Bounds, BuildError, DEFAULT_FINGERTIP_RADIUS_M, DesignParam, FingerSpec, JointKind,
     JointSpec, Owner, Shape,
 };
-use crate::objective::{ObjectiveSpec, ObstacleSpec};
+use crate::objective::{ObjectiveKind, ObjectiveSpec, ObstacleSpec};
 use crate::{FingerId, Model, ModelBuilder, RowUnit, Sense};
 use std::ops::Range;
 use std::path::PathBuf;
 use toml::Spanned;
-
-/// The `[solver]` values the file set (unset keys are `None`; the session
-/// fills them from command-line flags or the solver's defaults).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct SceneSettings {
-    /// Fast-loop rate, Hz.
-    pub rate_hz: Option<u32>,
-    /// AL iterations per tick.
-    pub iterations: Option<u32>,
-    /// h.
-    pub step: Option<f64>,
-    /// K.
-    pub gain: Option<f64>,
-    /// k₂.
-    pub multiplier_gain: Option<f64>,
-    /// Newton-KKT stopping tolerance.
-    pub placement_tolerance: Option<f64>,
-    /// μ.
-    pub damping: Option<f64>,
-    /// Witness activation distance, m.
-    pub contact_distance: Option<f64>,
-    /// Witness removal distance, m.
-    pub release_distance: Option<f64>,
-    /// Violation the scene promises to stay under, m.
-    pub violation_tolerance: Option<f64>,
-    /// Virtual-coupling stiffness, N/m.
-    pub coupling_stiffness: Option<f64>,
-    /// Virtual-coupling damping, N·s/m.
-    pub coupling_damping: Option<f64>,
-    /// Velocity low-pass time constant, s.
-    pub velocity_filter: Option<f64>,
-    /// Inertial motion (`dynamics`).
-    pub dynamics: Option<bool>,
-    /// Contact penetration beyond which the slow loop backs up, m.
-    pub penetration_tolerance: Option<f64>,
-    /// Pre-emptive witness guards (`contact_guards`).
-    pub contact_guards: Option<bool>,
-    /// The fast loop's coordinates (validated).
-    pub coordinates: Option<crate::Coordinates>,
-}
 
 /// What the simulated hand does, in the scene frame (offsets from the finger's
 /// initial world position).
@@ -180,29 +141,6 @@ pub struct CompiledScene {
     pub absent: Vec<crate::BodyId>,
 }
 
-fn settings(s: &SolverSection) -> SceneSettings {
-    let f = |v: &Option<Spanned<f64>>| v.as_ref().map(|x| *x.get_ref());
-    SceneSettings {
-        rate_hz: s.rate_hz.as_ref().map(|x| *x.get_ref()),
-        iterations: s.iterations.as_ref().map(|x| *x.get_ref()),
-        step: f(&s.step),
-        gain: f(&s.gain),
-        multiplier_gain: f(&s.multiplier_gain),
-        placement_tolerance: f(&s.placement_tolerance),
-        damping: f(&s.damping),
-        contact_distance: f(&s.contact_distance),
-        release_distance: f(&s.release_distance),
-        violation_tolerance: f(&s.violation_tolerance),
-        coupling_stiffness: f(&s.coupling_stiffness),
-        coupling_damping: f(&s.coupling_damping),
-        velocity_filter: f(&s.velocity_filter),
-        dynamics: s.dynamics.as_ref().map(|x| *x.get_ref()),
-        penetration_tolerance: f(&s.penetration_tolerance),
-        contact_guards: s.contact_guards.as_ref().map(|x| *x.get_ref()),
-        coordinates: (s.coordinates.as_ref()).and_then(|c| crate::Coordinates::parse(c.get_ref())),
-    }
-}
-
 fn joint_kind(k: JointKindSpec) -> JointKind {
     match k {
         JointKindSpec::Spherical => JointKind::Spherical,
@@ -313,12 +251,12 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
         })
     };
     match o.kind.get_ref() {
-        ObjectiveKindSpec::Finger => ObjectiveSpec::Finger { weight },
-        ObjectiveKindSpec::LeastAstonishment => ObjectiveSpec::LeastAstonishment {
+        ObjectiveKind::Finger => ObjectiveSpec::Finger { weight },
+        ObjectiveKind::LeastAstonishment => ObjectiveSpec::LeastAstonishment {
             weight,
             design_weight: o.design_weight.as_ref().map_or(1.0, |w| *w.get_ref()),
         },
-        ObjectiveKindSpec::Dexterity => ObjectiveSpec::Dexterity {
+        ObjectiveKind::Dexterity => ObjectiveSpec::Dexterity {
             name,
             weight,
             chain: names(&o.chain),
@@ -331,26 +269,26 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             }),
             closure: names(&o.closure),
         },
-        ObjectiveKindSpec::Obstacle => ObjectiveSpec::Obstacle {
+        ObjectiveKind::Obstacle => ObjectiveSpec::Obstacle {
             name,
             weight,
             points: avoiding(o),
             obstacle: obstacle(o),
             distance_m: o.distance.as_ref().map_or(0.0, |d| *d.get_ref()),
         },
-        ObjectiveKindSpec::InverseDistance => ObjectiveSpec::InverseDistance {
+        ObjectiveKind::InverseDistance => ObjectiveSpec::InverseDistance {
             name,
             weight,
             points: avoiding(o),
             obstacle: obstacle(o),
         },
-        ObjectiveKindSpec::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
+        ObjectiveKind::WorkspaceVolume => ObjectiveSpec::WorkspaceVolume {
             name,
             weight,
             chain: names(&o.chain),
             point_m: point(&o.point),
         },
-        ObjectiveKindSpec::StraightLine => ObjectiveSpec::StraightLine {
+        ObjectiveKind::StraightLine => ObjectiveSpec::StraightLine {
             name,
             weight,
             body: o
@@ -361,7 +299,7 @@ pub(super) fn objective_spec(o: &ObjectiveSection) -> ObjectiveSpec {
             line_point_m: point(&o.line_point),
             direction: point(&o.direction),
         },
-        ObjectiveKindSpec::JointLimitDistance => ObjectiveSpec::JointLimitDistance {
+        ObjectiveKind::JointLimitDistance => ObjectiveSpec::JointLimitDistance {
             name,
             weight,
             joints: names(&o.joints),
@@ -574,7 +512,7 @@ impl LoadedScene {
             description: s.scene.description.clone().unwrap_or_default(),
             model,
             joints_only,
-            settings: settings(&s.solver),
+            settings: SceneSettings::from_section(&s.solver),
             devices,
             fingers,
             shaped_bodies: s.bodies.iter().filter(|b| b.shape.is_some()).count(),

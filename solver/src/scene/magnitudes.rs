@@ -6,8 +6,9 @@
 //! desk-sized haptic scene uses, and `docs/scene-format.md` states it.
 
 use super::SceneError;
-use super::spec::{ObjectiveKindSpec, ObjectiveSection, SceneFile, ShapeSpec};
+use super::spec::{ObjectiveSection, SceneFile, ShapeSpec};
 use super::validate::Checker;
+use crate::ObjectiveKind;
 use toml::Spanned;
 
 /// The largest gravity, m/s² (about 100 g).
@@ -84,7 +85,7 @@ impl Checker<'_> {
     }
 
     fn objective_magnitudes(&self, o: &ObjectiveSection) -> Check {
-        let la = *o.kind.get_ref() == ObjectiveKindSpec::LeastAstonishment;
+        let la = *o.kind.get_ref() == ObjectiveKind::LeastAstonishment;
         for (v, what) in [(&o.weight, "weight"), (&o.design_weight, "design_weight")] {
             let Some(v) = v else { continue };
             let x = *v.get_ref();

@@ -25,17 +25,19 @@ mod placed;
 mod polygon;
 mod schedule;
 mod semantic;
+mod settings;
 pub mod spec;
 mod validate;
 mod write;
 
-pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath, SceneSettings};
+pub use compile::{CompiledScene, DeviceDecl, FingerDecl, HandDecl, HandPath};
 pub use compile_semantic::HoldDecl;
 pub use design_flags::{DesignFlagDecl, DesignFlagSection, design_switch, with_switches};
 pub use error::SceneError;
 pub use flags::Flagged;
 pub use placed::BodyPose;
 pub use schedule::{ScheduleAction, ScheduleDecl, ScheduleSection, SemanticMode};
+pub use settings::SceneSettings;
 pub use write::mechanism_tables;
 
 use std::ops::Range;

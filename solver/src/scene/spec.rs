@@ -24,7 +24,7 @@ pub use device::{
 pub use joint::{
     BoundsSpec, FreeSpec, JointKindSpec, JointSection, SurfaceSection, SurfaceTypeSpec,
 };
-pub use objective::{ObjectiveKindSpec, ObjectiveSection, PointRef};
+pub use objective::{ObjectiveSection, PointRef};
 /// A 3-vector in the file: `[x, y, z]`.
 pub type Vec3 = Arr<f64, 3>;
 /// A quaternion in the file: `[w, x, y, z]` (normalised on load).

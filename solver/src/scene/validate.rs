@@ -119,13 +119,13 @@ impl Checker<'_> {
     /// The keys an objective's kind takes (the rest are errors at their
     /// place), the ones it needs, and `obstacle`'s either-or.
     fn objective(&self, o: &super::spec::ObjectiveSection) -> Check {
-        use super::spec::ObjectiveKindSpec as K;
+        use crate::ObjectiveKind as K;
         let kind = *o.kind.get_ref();
-        let (name, takes, needs): (&str, &[&str], &[&str]) = match kind {
-            K::Finger => ("finger", &["weight"], &[]),
-            K::LeastAstonishment => ("least_astonishment", &["weight", "design_weight"], &[]),
+        let name = kind.as_str();
+        let (takes, needs): (&[&str], &[&str]) = match kind {
+            K::Finger => (&["weight"], &[]),
+            K::LeastAstonishment => (&["weight", "design_weight"], &[]),
             K::Dexterity => (
-                "dexterity",
                 &[
                     "name",
                     "weight",
@@ -138,7 +138,6 @@ impl Checker<'_> {
                 &["chain"],
             ),
             K::Obstacle => (
-                "obstacle",
                 &[
                     "name",
                     "weight",
@@ -151,13 +150,11 @@ impl Checker<'_> {
                 &["points", "distance"],
             ),
             K::StraightLine => (
-                "straight_line",
                 &["name", "weight", "body", "point", "line_point", "direction"],
                 &["body", "line_point", "direction"],
             ),
-            K::JointLimitDistance => ("joint_limit_distance", &["name", "weight", "joints"], &[]),
+            K::JointLimitDistance => (&["name", "weight", "joints"], &[]),
             K::InverseDistance => (
-                "inverse_distance",
                 &[
                     "name",
                     "weight",
@@ -168,11 +165,7 @@ impl Checker<'_> {
                 ],
                 &["points"],
             ),
-            K::WorkspaceVolume => (
-                "workspace_volume",
-                &["name", "weight", "chain", "point"],
-                &["chain"],
-            ),
+            K::WorkspaceVolume => (&["name", "weight", "chain", "point"], &["chain"]),
         };
         let keys = o.keys();
         for (key, span) in &keys {

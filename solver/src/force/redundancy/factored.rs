@@ -100,26 +100,31 @@ impl<'a> Factored<'a> {
         scale: &[f64],
         s: &Scaling,
     ) -> Option<Vec<usize>> {
-        use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-        use faer::linalg::cholesky::llt::factor::LltRegularization;
-        use faer::sparse::linalg::SupernodalThreshold;
-        use faer::sparse::linalg::cholesky::{
-            CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
-            factorize_symbolic_cholesky,
-        };
-        use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-        use faer::{Par, Side};
+        let g = &*self.gram;
+        let at = self.elimination_order();
+        let (cp, ri, vals) = self.ordered_upper(&at);
+        let pivots = ordered_pivots(g.n_j, cp, ri, &vals)?;
+        let mut dependent = Vec::new();
+        for (j, &row) in g.j_rows.iter().enumerate() {
+            if pivots[at[j]] >= 1.5 && scale[row] != 0.0 && s.role[row] == Role::Equality {
+                dependent.push(row);
+            }
+        }
+        dependent.sort_unstable();
+        Some(dependent)
+    }
 
+    /// Each J index's place in the elimination order of
+    /// [`dependent_in_order_sparse`](Self::dependent_in_order_sparse): the
+    /// quaternion-norm rows first, then every other row in model order. A
+    /// norm row constrains |e|, which no joint row sees (R(e) is invariant
+    /// to scaling e), so it is never dependent on joint rows and its place
+    /// does not change which joint rows are; put first, eliminating it only
+    /// couples rows that already share its body, whereas left in body order
+    /// it links bodies far apart in the model and the factor fills in.
+    fn elimination_order(&self) -> Vec<usize> {
         let g = &*self.gram;
         let n = g.n_j;
-        let (lcp, lri) = (g.pattern.col_ptr(), g.pattern.row_idx());
-        // Elimination order: the quaternion-norm rows first, then every other
-        // row in model order. A norm row constrains |e|, which no joint row
-        // sees (R(e) is invariant to scaling e), so it is never dependent on
-        // joint rows and its place does not change which joint rows are; put
-        // first, eliminating it only couples rows that already share its body,
-        // whereas left in body order it links bodies far apart in the model
-        // and the factor fills in.
         let norm = |j: usize| {
             let row = g.j_rows[j];
             self.norm_rows[row]
@@ -130,11 +135,19 @@ impl<'a> Factored<'a> {
         for (k, &j) in order.iter().enumerate() {
             at[j] = k;
         }
+        at
+    }
+
+    /// A scaled to a unit diagonal, its upper triangle in the elimination
+    /// order `at`, CSC: column pointers, row indices (sorted), values.
+    fn ordered_upper(&self, at: &[usize]) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let g = &*self.gram;
+        let n = g.n_j;
+        let (lcp, lri) = (g.pattern.col_ptr(), g.pattern.row_idx());
         let d: Vec<f64> = (0..n)
             .map(|j| g.values[g.diag[j]].max(f64::MIN_POSITIVE))
             .collect();
-        // Upper triangle in the elimination order, CSC: entry (a, b), a ≤ b,
-        // goes to column b (rows sorted below).
+        // Entry (a, b), a ≤ b, goes to column b (rows sorted below).
         let mut cp = vec![0usize; n + 1];
         for c in 0..n {
             for &r in &lri[lcp[c]..lcp[c + 1]] {
@@ -159,52 +172,8 @@ impl<'a> Factored<'a> {
         }
         let ri: Vec<usize> = entries.iter().map(|e| e.0).collect();
         let vals: Vec<f64> = entries.iter().map(|e| e.1).collect();
-        let pattern = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
-        // faer: Identity ordering reads the upper triangle (crate-api-notes §1).
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Identity,
-            CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
-                ..Default::default()
-            },
-        )
-        .ok()?;
-        let SymbolicCholeskyRaw::Simplicial(simplicial) = symbolic.raw() else {
-            return None;
-        };
-        let mut mem = MemBuffer::new(StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-        ]));
-        let mut l = vec![0.0; symbolic.len_val()];
-        symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut l,
-                SparseColMatRef::new(pattern.as_ref(), &vals),
-                Side::Upper,
-                LltRegularization {
-                    dynamic_regularization_delta: 4.0,
-                    dynamic_regularization_epsilon: ORDERED_PIVOT,
-                },
-                Par::Seq,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .ok()?;
-        let (col_ptr, row_idx) = (simplicial.col_ptr(), simplicial.row_idx());
-        let mut dependent = Vec::new();
-        for (j, &row) in g.j_rows.iter().enumerate() {
-            let k = at[j];
-            let diag = (col_ptr[k]..col_ptr[k + 1]).find(|&p| row_idx[p] == k)?;
-            if l[diag] >= 1.5 && scale[row] != 0.0 && s.role[row] == Role::Equality {
-                dependent.push(row);
-            }
-        }
-        dependent.sort_unstable();
-        Some(dependent)
+        (cp, ri, vals)
     }
-
     /// λ_min / max diag over the rows with a non-zero scale, by inverse
     /// iteration from a fixed pseudo-random start.
     pub(super) fn min_eigen_ratio(&mut self, scale: &[f64]) -> f64 {
@@ -278,4 +247,61 @@ impl<'a> Factored<'a> {
         g.apply_inverse_mass(self.masses, &self.g, &mut self.w);
         (dot(&self.g, &self.w).max(0.0) / own).sqrt()
     }
+}
+
+/// The diagonal of L, by elimination position, of the simplicial LLᵀ of the
+/// `n`×`n` upper triangle (`cp`, `ri`, `vals`, CSC) in identity order, with
+/// pivots at or below [`ORDERED_PIVOT`] replaced by 4
+/// ([`Factored::dependent_in_order_sparse`]). `None` if faer fails.
+fn ordered_pivots(n: usize, cp: Vec<usize>, ri: Vec<usize>, vals: &[f64]) -> Option<Vec<f64>> {
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::cholesky::llt::factor::LltRegularization;
+    use faer::sparse::linalg::SupernodalThreshold;
+    use faer::sparse::linalg::cholesky::{
+        CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    };
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+    use faer::{Par, Side};
+
+    let pattern = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
+    // faer: Identity ordering reads the upper triangle (crate-api-notes §1).
+    let symbolic = factorize_symbolic_cholesky(
+        pattern.as_ref(),
+        Side::Upper,
+        SymmetricOrdering::Identity,
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        },
+    )
+    .ok()?;
+    let SymbolicCholeskyRaw::Simplicial(simplicial) = symbolic.raw() else {
+        return None;
+    };
+    let mut mem = MemBuffer::new(StackReq::any_of(&[
+        symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+    ]));
+    let mut l = vec![0.0; symbolic.len_val()];
+    symbolic
+        .factorize_numeric_llt::<f64>(
+            &mut l,
+            SparseColMatRef::new(pattern.as_ref(), vals),
+            Side::Upper,
+            LltRegularization {
+                dynamic_regularization_delta: 4.0,
+                dynamic_regularization_epsilon: ORDERED_PIVOT,
+            },
+            Par::Seq,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+    let (col_ptr, row_idx) = (simplicial.col_ptr(), simplicial.row_idx());
+    (0..n)
+        .map(|k| {
+            (col_ptr[k]..col_ptr[k + 1])
+                .find(|&p| row_idx[p] == k)
+                .map(|p| l[p])
+        })
+        .collect()
 }

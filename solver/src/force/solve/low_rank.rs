@@ -163,11 +163,31 @@ impl MultiplierSolve {
         known: &[Option<f64>],
         lr: &mut LowRank,
     ) -> Result<bool, super::FactorError> {
-        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
         let k = lr.rows.len();
         if k == 0 || k > MAX_RANK || self.llt.regularized != 0 || self.cg.is_some() {
             return Ok(false);
         }
+        if !self.released_columns(gram, lr) {
+            return Ok(false);
+        }
+        lr.lambda_j.copy_from_slice(&self.lambda_j);
+        lr.lambda_f.copy_from_slice(&self.lambda_f);
+        lr.rank = self.rank;
+        self.corrected_schur(gram, lr);
+        self.masked_solve(gram, r, known, lr);
+        self.unmask_joint_multipliers(gram.n_j, lr);
+        if !self.lambda_f.iter().all(|v| v.is_finite()) {
+            return Err(super::FactorError);
+        }
+        lr.done += 1;
+        Ok(true)
+    }
+
+    /// U = A_JJ⁻¹ E_R into `lr.u` and W's factor into `lr.w`; false when
+    /// a released row is nearly dependent on kept ones or W is refused
+    /// ([`factor_w`]). Part of [`solve_low_rank`](Self::solve_low_rank).
+    fn released_columns(&mut self, gram: &Gram, lr: &mut LowRank) -> bool {
+        let (n, k) = (gram.n_j, lr.rows.len());
         // U = A_JJ⁻¹ E_R.
         let u = &mut lr.u[..n * k];
         u.fill(0.0);
@@ -182,16 +202,18 @@ impl MultiplierSolve {
         for (i, &j) in lr.rows.iter().enumerate() {
             let inflation = u[i * n + j] * gram.values[gram.diag[j]];
             if inflation.is_nan() || inflation > MAX_INFLATION {
-                return Ok(false);
+                return false;
             }
         }
-        if !factor_w(u, n, &lr.rows, &mut lr.w[..k * k]) {
-            return Ok(false);
-        }
+        factor_w(u, n, &lr.rows, &mut lr.w[..k * k])
+    }
+
+    /// H = L_W⁻¹ Uᵀ A_JF into `lr.h` and the corrected Schur complement
+    /// S' = S + Hᵀ H into `schur`. Part of [`solve_low_rank`](Self::solve_low_rank).
+    fn corrected_schur(&mut self, gram: &Gram, lr: &mut LowRank) {
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        let k = lr.rows.len();
         let (u, l_w) = (&lr.u[..n * k], &lr.w[..k * k]);
-        lr.lambda_j.copy_from_slice(&self.lambda_j);
-        lr.lambda_f.copy_from_slice(&self.lambda_f);
-        lr.rank = self.rank;
         // H = L_W⁻¹ Uᵀ A_JF.
         let a_fj = &gram.values[nnz..nnz + m * n];
         let h = &mut lr.h[..k * m];
@@ -212,6 +234,17 @@ impl MultiplierSolve {
                 self.schur[g * m + f] = v;
             }
         }
+    }
+
+    /// The masked right-hand side r' (released rows 0), t = L_W⁻¹ Uᵀ r_J'
+    /// into `lr.t`, and the solve with the corrected Schur complement:
+    /// `x` holds v (the joint part before [`unmask_joint_multipliers`](Self::unmask_joint_multipliers)),
+    /// `lambda_f` and `rank` the masked solve's. Part of
+    /// [`solve_low_rank`](Self::solve_low_rank).
+    fn masked_solve(&mut self, gram: &Gram, r: &[f64], known: &[Option<f64>], lr: &mut LowRank) {
+        let (n, m, nnz) = (gram.n_j, gram.m_f, gram.nnz());
+        let k = lr.rows.len();
+        let (u, l_w, h) = (&lr.u[..n * k], &lr.w[..k * k], &lr.h[..k * m]);
         // r' and L_W⁻¹ Uᵀ r_J'.
         self.gather(gram, r);
         for &j in &lr.rows {
@@ -244,7 +277,13 @@ impl MultiplierSolve {
             rank
         });
         self.rank = rank;
-        // λ̃_J' = v − U W⁻¹ v_R, exactly 0 on R.
+    }
+
+    /// λ̃_J' = v − U W⁻¹ v_R, exactly 0 on R, into `lambda_j` (v in `x`).
+    /// Part of [`solve_low_rank`](Self::solve_low_rank).
+    fn unmask_joint_multipliers(&mut self, n: usize, lr: &mut LowRank) {
+        let k = lr.rows.len();
+        let (u, l_w) = (&lr.u[..n * k], &lr.w[..k * k]);
         let t = &mut lr.t[..k];
         for (ti, &j) in t.iter_mut().zip(&lr.rows) {
             *ti = self.x[j];
@@ -260,11 +299,6 @@ impl MultiplierSolve {
         for &j in &lr.rows {
             self.lambda_j[j] = 0.0;
         }
-        if !self.lambda_f.iter().all(|v| v.is_finite()) {
-            return Err(super::FactorError);
-        }
-        lr.done += 1;
-        Ok(true)
     }
 
     /// Puts back the multipliers and rank [`solve_low_rank`](Self::solve_low_rank)
