@@ -27,6 +27,7 @@
 //! variables, auxiliary columns (flexible bodies, surfaces), free anchors,
 //! other inequality rows or limits on loop-closing joints are refused.
 
+mod branch;
 mod core;
 mod end;
 mod finger6;
@@ -44,6 +45,8 @@ mod tree;
 mod fk_tests;
 #[cfg(test)]
 mod probe;
+#[cfg(test)]
+mod stage_check;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -1,0 +1,134 @@
+//! Branch-induced sparsity (Featherstone, *Rigid Body Dynamics
+//! Algorithms*, §6.5): with the joint coordinates numbered parent before
+//! child, H_ij ≠ 0 only when one of i, j is an ancestor of the other, and
+//! the factorisation H = Lᵀ L done from the leaves up fills nothing: L_ij
+//! (j < i) is nonzero only for j an ancestor of i. Each kernel walks a
+//! coordinate's ancestors through `parent` (per coordinate, the previous
+//! coordinate on its path to the ground, [`ROOT`] at the top; a multi-dof
+//! joint's coordinates chain), on the caller's dense row-major n × n
+//! storage (only L's ancestor entries are read or written). No allocation.
+//!
+//! ```text
+//! H = Lᵀ L,   H⁻¹ x = L⁻¹ L⁻ᵀ x,   L⁻ᵀ x stays within the ancestors of x's nonzeros
+//! ```
+
+use super::tree::JointTree;
+
+/// No parent: the coordinate's joint hangs from the ground.
+pub(crate) const ROOT: usize = usize::MAX;
+
+/// Per joint coordinate, the previous coordinate on its path to the
+/// ground (a weld's child takes its parent's last coordinate). Allocates.
+pub(crate) fn dof_parents(tree: &JointTree) -> Vec<usize> {
+    let mut last = vec![ROOT; tree.joints.len()];
+    let mut parent = vec![ROOT; tree.dofs];
+    for (k, j) in tree.joints.iter().enumerate() {
+        let mut above = j.parent_joint.map_or(ROOT, |p| last[p]);
+        for d in j.dof..j.dof + j.freedom.dofs() {
+            parent[d] = above;
+            above = d;
+        }
+        last[k] = above;
+    }
+    parent
+}
+
+/// Factors H (lower triangle of `h`, n × n row-major, n = parent.len()) in
+/// place into L with H = Lᵀ L, from the leaves up. False if a pivot is not
+/// positive (or not finite).
+pub(crate) fn factor_ltl(h: &mut [f64], parent: &[usize]) -> bool {
+    let n = parent.len();
+    for k in (0..n).rev() {
+        let d = h[k * n + k];
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        let d = d.sqrt();
+        h[k * n + k] = d;
+        let mut i = parent[k];
+        while i != ROOT {
+            h[k * n + i] /= d;
+            i = parent[i];
+        }
+        let mut i = parent[k];
+        while i != ROOT {
+            let lki = h[k * n + i];
+            let mut j = i;
+            while j != ROOT {
+                h[i * n + j] -= lki * h[k * n + j];
+                j = parent[j];
+            }
+            i = parent[i];
+        }
+    }
+    true
+}
+
+/// x ← L⁻ᵀ x for the factor of [`factor_ltl`]. Zero entries of x are
+/// skipped (their updates are exact zeros), so the work is the ancestors
+/// of x's nonzeros.
+#[inline]
+pub(crate) fn solve_lt(l: &[f64], parent: &[usize], x: &mut [f64]) {
+    let n = parent.len();
+    for i in (0..n).rev() {
+        if x[i] == 0.0 {
+            continue;
+        }
+        let v = x[i] / l[i * n + i];
+        x[i] = v;
+        let mut j = parent[i];
+        while j != ROOT {
+            x[j] -= l[i * n + j] * v;
+            j = parent[j];
+        }
+    }
+}
+
+/// x ← L⁻¹ x for the factor of [`factor_ltl`].
+#[inline]
+pub(crate) fn solve_l(l: &[f64], parent: &[usize], x: &mut [f64]) {
+    let n = parent.len();
+    for i in 0..n {
+        let mut v = x[i];
+        let mut j = parent[i];
+        while j != ROOT {
+            v -= l[i * n + j] * x[j];
+            j = parent[j];
+        }
+        x[i] = v / l[i * n + i];
+    }
+}
+
+/// x ← H⁻¹ x = L⁻¹ L⁻ᵀ x.
+#[inline]
+pub(crate) fn solve(l: &[f64], parent: &[usize], x: &mut [f64]) {
+    solve_lt(l, parent, x);
+    solve_l(l, parent, x);
+}
+
+/// The ascending positions of x's nonzeros into `to`; their count.
+#[inline]
+pub(crate) fn support(x: &[f64], to: &mut [u32]) -> usize {
+    let mut k = 0;
+    for (i, v) in x.iter().enumerate() {
+        if *v != 0.0 {
+            to[k] = i as u32;
+            k += 1;
+        }
+    }
+    k
+}
+
+/// a · b over `s`, positions where a may be nonzero (ascending).
+#[inline]
+pub(crate) fn sparse_dot(s: &[u32], a: &[f64], b: &[f64]) -> f64 {
+    let mut v = 0.0;
+    for &i in s {
+        v += a[i as usize] * b[i as usize];
+    }
+    v
+}
+
+#[cfg(test)]
+#[path = "branch_tests.rs"]
+mod tests;
