@@ -129,6 +129,66 @@ pub(crate) fn sparse_dot(s: &[u32], a: &[f64], b: &[f64]) -> f64 {
     v
 }
 
+/// Multiply-adds of the branch-sparse kernels on one tick's shapes
+/// (`program::joint_cost`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BranchWork {
+    /// H = Lᵀ L: Σ over coordinates k of Σ over k's ancestors i of i's depth.
+    pub factor: f64,
+    /// One solve with L or Lᵀ: Σ over coordinates of their depth (P).
+    pub path: f64,
+    /// Y's rows (Σ over each row's nonzeros of their depth) and W = YᵀY
+    /// (Σ over row pairs of the shorter support).
+    pub gram: f64,
+    /// g = Y t: Σ of the rows' supports.
+    pub rows: f64,
+}
+
+impl BranchWork {
+    /// The counts for `parent` and Y's row supports (lengths `supports`).
+    pub(crate) fn new(parent: &[usize], supports: &[(usize, &[u32])]) -> Self {
+        let mut depth = vec![0usize; parent.len()];
+        let (mut factor, mut path) = (0, 0);
+        for (k, &p) in parent.iter().enumerate() {
+            depth[k] = 1 + if p == ROOT { 0 } else { depth[p] };
+            path += depth[k];
+            let mut i = p;
+            while i != ROOT {
+                factor += depth[i];
+                i = parent[i];
+            }
+        }
+        let (mut gram, mut rows) = (0, 0);
+        for (a, &(la, sa)) in supports.iter().enumerate() {
+            rows += la;
+            gram += sa[..la].iter().map(|&i| depth[i as usize]).sum::<usize>();
+            gram += supports[..=a]
+                .iter()
+                .map(|&(lb, _)| la.min(lb))
+                .sum::<usize>();
+        }
+        Self {
+            factor: factor as f64,
+            path: path as f64,
+            gram: gram as f64,
+            rows: rows as f64,
+        }
+    }
+}
+
+impl super::tick::JointTick {
+    /// The branch kernels' work on this tick's tree and Y's row supports at
+    /// its last factor (at build: q0, no limit active). Allocates.
+    pub(crate) fn branch_work(&self) -> BranchWork {
+        let st = &self.stage;
+        let n = st.parent.len();
+        let supports: Vec<(usize, &[u32])> = (0..self.rows.len())
+            .map(|i| (st.supp_len[i], &st.supp[i * n..(i + 1) * n]))
+            .collect();
+        BranchWork::new(&st.parent, &supports)
+    }
+}
+
 #[cfg(test)]
 #[path = "branch_tests.rs"]
 mod tests;

@@ -50,8 +50,8 @@ pub(crate) struct Stage {
     /// Y row by row: row i = L⁻ᵀ (D J_r S)ᵢ (m × n).
     pub(super) yt: Vec<f64>,
     /// Row i of Y's nonzero positions: `supp[i * n..i * n + supp_len[i]]`.
-    supp: Vec<u32>,
-    supp_len: Vec<usize>,
+    pub(super) supp: Vec<u32>,
+    pub(super) supp_len: Vec<usize>,
     pub(super) w: Vec<f64>,
     /// W_LL's factor (nl × nl), Z row by finger row (mf × nl).
     pub wll: Vec<f64>,
