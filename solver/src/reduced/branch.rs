@@ -24,8 +24,13 @@ pub(crate) fn dof_parents(tree: &JointTree) -> Vec<usize> {
     let mut parent = vec![ROOT; tree.dofs];
     for (k, j) in tree.joints.iter().enumerate() {
         let mut above = j.parent_joint.map_or(ROOT, |p| last[p]);
-        for d in j.dof..j.dof + j.freedom.dofs() {
-            parent[d] = above;
+        for (d, p) in parent
+            .iter_mut()
+            .enumerate()
+            .skip(j.dof)
+            .take(j.freedom.dofs())
+        {
+            *p = above;
             above = d;
         }
         last[k] = above;
