@@ -38,11 +38,49 @@ pub(crate) fn dof_parents(tree: &JointTree) -> Vec<usize> {
     parent
 }
 
-/// Factors H (lower triangle of `h`, n × n row-major, n = parent.len()) in
+/// Per coordinate, its ancestors nearest first, as flat index lists (the
+/// kernels' inner loops run over slices, not a linked parent walk).
+#[derive(Debug, Clone)]
+pub(crate) struct Paths {
+    /// Per coordinate, the previous one on its path ([`dof_parents`]).
+    pub parent: Vec<usize>,
+    at: Vec<usize>,
+    anc: Vec<usize>,
+}
+
+impl Paths {
+    /// The lists for `parent`. Allocates.
+    pub(crate) fn new(parent: Vec<usize>) -> Self {
+        let (mut at, mut anc) = (vec![0], Vec::new());
+        for &p in &parent {
+            let mut j = p;
+            while j != ROOT {
+                anc.push(j);
+                j = parent[j];
+            }
+            at.push(anc.len());
+        }
+        Self { parent, at, anc }
+    }
+
+    /// Coordinate i's ancestors, nearest first.
+    #[inline]
+    pub(crate) fn of(&self, i: usize) -> &[usize] {
+        &self.anc[self.at[i]..self.at[i + 1]]
+    }
+
+    /// Coordinates.
+    #[inline]
+    pub(crate) fn len(&self) -> usize {
+        self.parent.len()
+    }
+}
+
+/// Factors H (lower triangle of `h`, n × n row-major, n = paths.len()) in
 /// place into L with H = Lᵀ L, from the leaves up. False if a pivot is not
 /// positive (or not finite).
-pub(crate) fn factor_ltl(h: &mut [f64], parent: &[usize]) -> bool {
-    let n = parent.len();
+pub(crate) fn factor_ltl(h: &mut [f64], paths: &Paths) -> bool {
+    let n = paths.len();
     for k in (0..n).rev() {
         let d = h[k * n + k];
         if !(d > 0.0 && d.is_finite()) {
@@ -50,20 +88,20 @@ pub(crate) fn factor_ltl(h: &mut [f64], parent: &[usize]) -> bool {
         }
         let d = d.sqrt();
         h[k * n + k] = d;
-        let mut i = parent[k];
-        while i != ROOT {
-            h[k * n + i] /= d;
-            i = parent[i];
+        let (hk, rest) = {
+            let (lo, hi) = h.split_at_mut(k * n);
+            (&mut hi[..n], lo)
+        };
+        for &i in paths.of(k) {
+            hk[i] /= d;
         }
-        let mut i = parent[k];
-        while i != ROOT {
-            let lki = h[k * n + i];
-            let mut j = i;
-            while j != ROOT {
-                h[i * n + j] -= lki * h[k * n + j];
-                j = parent[j];
+        for &i in paths.of(k) {
+            let lki = hk[i];
+            let hi = &mut rest[i * n..(i + 1) * n];
+            hi[i] -= lki * hk[i];
+            for &j in paths.of(i) {
+                hi[j] -= lki * hk[j];
             }
-            i = parent[i];
         }
     }
     true
@@ -73,42 +111,40 @@ pub(crate) fn factor_ltl(h: &mut [f64], parent: &[usize]) -> bool {
 /// skipped (their updates are exact zeros), so the work is the ancestors
 /// of x's nonzeros.
 #[inline]
-pub(crate) fn solve_lt(l: &[f64], parent: &[usize], x: &mut [f64]) {
-    let n = parent.len();
+pub(crate) fn solve_lt(l: &[f64], paths: &Paths, x: &mut [f64]) {
+    let n = paths.len();
     for i in (0..n).rev() {
         if x[i] == 0.0 {
             continue;
         }
         let v = x[i] / l[i * n + i];
         x[i] = v;
-        let mut j = parent[i];
-        while j != ROOT {
-            x[j] -= l[i * n + j] * v;
-            j = parent[j];
+        let li = &l[i * n..(i + 1) * n];
+        for &j in paths.of(i) {
+            x[j] -= li[j] * v;
         }
     }
 }
 
 /// x ← L⁻¹ x for the factor of [`factor_ltl`].
 #[inline]
-pub(crate) fn solve_l(l: &[f64], parent: &[usize], x: &mut [f64]) {
-    let n = parent.len();
+pub(crate) fn solve_l(l: &[f64], paths: &Paths, x: &mut [f64]) {
+    let n = paths.len();
     for i in 0..n {
+        let li = &l[i * n..(i + 1) * n];
         let mut v = x[i];
-        let mut j = parent[i];
-        while j != ROOT {
-            v -= l[i * n + j] * x[j];
-            j = parent[j];
+        for &j in paths.of(i) {
+            v -= li[j] * x[j];
         }
-        x[i] = v / l[i * n + i];
+        x[i] = v / li[i];
     }
 }
 
 /// x ← H⁻¹ x = L⁻¹ L⁻ᵀ x.
 #[inline]
-pub(crate) fn solve(l: &[f64], parent: &[usize], x: &mut [f64]) {
-    solve_lt(l, parent, x);
-    solve_l(l, parent, x);
+pub(crate) fn solve(l: &[f64], paths: &Paths, x: &mut [f64]) {
+    solve_lt(l, paths, x);
+    solve_l(l, paths, x);
 }
 
 /// The ascending positions of x's nonzeros into `to`; their count.
@@ -186,11 +222,11 @@ impl super::tick::JointTick {
     /// its last factor (at build: q0, no limit active). Allocates.
     pub(crate) fn branch_work(&self) -> BranchWork {
         let st = &self.stage;
-        let n = st.parent.len();
+        let n = st.paths.len();
         let supports: Vec<(usize, &[u32])> = (0..self.rows.len())
             .map(|i| (st.supp_len[i], &st.supp[i * n..(i + 1) * n]))
             .collect();
-        BranchWork::new(&st.parent, &supports)
+        BranchWork::new(&st.paths.parent, &supports)
     }
 }
 

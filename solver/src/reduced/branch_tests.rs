@@ -73,7 +73,8 @@ fn the_tree_factor_recovers_a_known_factor_and_solves() {
             }
         }
         let mut h: Vec<f64> = (0..n * n).map(|k| hm[(k / n, k % n)]).collect();
-        assert!(factor_ltl(&mut h, &parent));
+        let paths = Paths::new(parent.clone());
+        assert!(factor_ltl(&mut h, &paths));
         let mut gap = 0.0f64;
         for i in 0..n {
             for j in 0..=i {
@@ -88,14 +89,14 @@ fn the_tree_factor_recovers_a_known_factor_and_solves() {
         let b = DVector::from_fn(n, |i, _| (0.7 * i as f64 + 0.3).cos());
         let want = hm.clone().cholesky().unwrap().solve(&b);
         let mut x: Vec<f64> = b.iter().copied().collect();
-        solve(&h, &parent, &mut x);
+        solve(&h, &paths, &mut x);
         let err = (0..n).map(|i| (x[i] - want[i]).abs()).fold(0.0, f64::max);
         assert!(err < 1e-12 * want.amax(), "n {n}: |x − x_dense| {err:.2e}");
         // L⁻ᵀ of a single nonzero stays on that coordinate's ancestors.
         let k = n - 1;
         let mut e = vec![0.0; n];
         e[k] = 1.0;
-        solve_lt(&h, &parent, &mut e);
+        solve_lt(&h, &paths, &mut e);
         let path = ancestors(&parent, k);
         for (i, v) in e.iter().enumerate() {
             assert!(path.contains(&i) || *v == 0.0, "n {n}: L⁻ᵀ e fills {i}");

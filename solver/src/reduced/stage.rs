@@ -21,7 +21,7 @@
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use super::ReducedError;
-use super::branch::{dof_parents, factor_ltl, solve, solve_lt, sparse_dot, support};
+use super::branch::{Paths, dof_parents, factor_ltl, solve, solve_lt, sparse_dot, support};
 use super::kinematics::{Kinematics, Twist};
 use super::small::{dot, forward};
 use super::tree::JointTree;
@@ -45,8 +45,8 @@ pub(super) struct History {
 pub(crate) struct Stage {
     /// H, then its factor L (H = Lᵀ L, `branch`; n × n, lower triangle).
     pub h: Vec<f64>,
-    /// Per joint coordinate, the previous one on its path to the ground.
-    pub(super) parent: Vec<usize>,
+    /// Per joint coordinate, its ancestors (`branch`).
+    pub(super) paths: Paths,
     /// Y row by row: row i = L⁻ᵀ (D J_r S)ᵢ (m × n).
     pub(super) yt: Vec<f64>,
     /// Row i of Y's nonzero positions: `supp[i * n..i * n + supp_len[i]]`.
@@ -113,7 +113,7 @@ impl Stage {
         }
         Self {
             h: vec![0.0; n * n],
-            parent: dof_parents(tree),
+            paths: Paths::new(dof_parents(tree)),
             yt: vec![0.0; m * n],
             supp: vec![0; m * n],
             supp_len: vec![0; m],
@@ -193,7 +193,7 @@ impl Stage {
         let mf = m - nl;
         #[cfg(test)]
         let h0 = super::stage_check::enabled().then(|| self.h.clone());
-        if !factor_ltl(&mut self.h, &self.parent) {
+        if !factor_ltl(&mut self.h, &self.paths) {
             return Err(ReducedError::NotPositive("H"));
         }
         self.gram(jr, n, m);
@@ -223,7 +223,7 @@ impl Stage {
         self.yt[..jr.len()].copy_from_slice(jr);
         for i in 0..m {
             let y = &mut self.yt[i * n..(i + 1) * n];
-            solve_lt(&self.h, &self.parent, y);
+            solve_lt(&self.h, &self.paths, y);
             self.supp_len[i] = support(y, &mut self.supp[i * n..(i + 1) * n]);
         }
         for a in 0..m {
@@ -249,7 +249,7 @@ impl Stage {
     pub(super) fn solve_h(&self, x: &mut [f64]) {
         #[cfg(test)]
         let x0 = super::stage_check::enabled().then(|| x.to_vec());
-        solve(&self.h, &self.parent, x);
+        solve(&self.h, &self.paths, x);
         #[cfg(test)]
         if let Some(x0) = x0 {
             super::stage_check::solve(x0, x);
@@ -304,7 +304,7 @@ impl Stage {
     pub(super) fn finger_solve(&mut self, n: usize, nl: usize) {
         let mf = self.lambda_f.len();
         let m = nl + mf;
-        solve_lt(&self.h, &self.parent, &mut self.tau);
+        solve_lt(&self.h, &self.paths, &mut self.tau);
         for i in 0..m {
             let s = &self.supp[i * n..i * n + self.supp_len[i]];
             self.g[i] = sparse_dot(s, &self.yt[i * n..(i + 1) * n], &self.tau);

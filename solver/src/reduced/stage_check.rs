@@ -127,7 +127,7 @@ fn tau(n: usize) -> Vec<f64> {
 
 /// After `Stage::factor` (`h0`: H before it, m rows of `jr`).
 pub(super) fn factor(h0: &[f64], jr: &[f64], st: &Stage, m: usize) {
-    let n = st.parent.len();
+    let n = st.paths.len();
     let mut ltl = h0.to_vec();
     dense_ltl(&mut ltl, n);
     record(0, gap(&lower(&st.h, n), &lower(&ltl, n)), 0);
@@ -138,7 +138,7 @@ pub(super) fn factor(h0: &[f64], jr: &[f64], st: &Stage, m: usize) {
     let mut llt = h0.to_vec();
     assert!(factor_in_place(&mut llt, n), "dense H not positive");
     let mut t = tau(n);
-    super::branch::solve_lt(&st.h, &st.parent, &mut t);
+    super::branch::solve_lt(&st.h, &st.paths, &mut t);
     let g: Vec<f64> = (0..m)
         .map(|i| dot(&st.yt[i * n..(i + 1) * n], &t))
         .collect();
