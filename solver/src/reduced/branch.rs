@@ -2,11 +2,12 @@
 //! Algorithms*, §6.5): with the joint coordinates numbered parent before
 //! child, H_ij ≠ 0 only when one of i, j is an ancestor of the other, and
 //! the factorisation H = Lᵀ L done from the leaves up fills nothing: L_ij
-//! (j < i) is nonzero only for j an ancestor of i. Each kernel walks a
-//! coordinate's ancestors through `parent` (per coordinate, the previous
-//! coordinate on its path to the ground, [`ROOT`] at the top; a multi-dof
-//! joint's coordinates chain), on the caller's dense row-major n × n
-//! storage (only L's ancestor entries are read or written). No allocation.
+//! (j < i) is nonzero only for j an ancestor of i. Each kernel runs over a
+//! coordinate's ancestors ([`Paths`], from `parent`: per coordinate the
+//! previous coordinate on its path to the ground, [`ROOT`] at the top; a
+//! multi-dof joint's coordinates chain), on the caller's dense row-major
+//! n × n storage (only L's ancestor entries are read or written). No
+//! allocation.
 //!
 //! ```text
 //! H = Lᵀ L,   H⁻¹ x = L⁻¹ L⁻ᵀ x,   L⁻ᵀ x stays within the ancestors of x's nonzeros
