@@ -4,16 +4,19 @@
 //!
 //! **The joint tick** (`reduced`), n joint coordinates, m kept rows (n_L
 //! loop rows, m_F finger rows), `iterations` update steps, P = Σ over the
-//! joint coordinates of the coordinates on its path to the ground, D the
-//! deepest path, B the tree joints:
+//! joint coordinates of the coordinates on its path to the ground (its
+//! depth), D the deepest path, B the tree joints. H's factor, its solves,
+//! Y and W follow the tree's branches (`reduced::branch`): F = Σ over
+//! coordinates k of the depths of k's ancestors, s_a the nonzeros of Y's
+//! row a (at build, q0), d_i the depth of coordinate i:
 //!
 //! ```text
 //! H (composite inertias)       36 n + 6 P
-//! H = L Lᵀ                     n³ / 6
-//! Y = L⁻¹ (D J_r S)ᵀ, W = YᵀY  m n² / 2 + m² n / 2
+//! H = Lᵀ L                     F
+//! Y = L⁻ᵀ (D J_r S)ᵀ, W = YᵀY  Σ_a Σ_{i ∈ s_a} d_i + Σ_{b ≤ a} min(|s_a|, |s_b|)
 //! W_LL, Z, Σ_F                 n_L³ / 6 + m_F n_L² / 2 + m_F² n_L
-//! J_r S, τ = Sᵀ b              6 m D + 6 P
-//! per step                     n² + 3 m n + n_L² + 2 m_F n_L + 60 B
+//! J_r S, τ = Sᵀ b, g           6 m D + 7 P + Σ_a |s_a|
+//! per step                     2 P + 3 m n + n_L² + 2 m_F n_L + 60 B
 //! ```
 //!
 //! **The augmented tick**: its Eq. 7 factor (nnz stored values over an
@@ -38,7 +41,7 @@ const GRAM_PER_JACOBIAN_ENTRY: f64 = 12.0;
 
 /// Microseconds per joint-tick multiply-add and the joint tick's fixed
 /// cost (fitted, BENCHMARKS.md).
-const JOINT_US_PER_MADD: f64 = 0.36e-3;
+const JOINT_US_PER_MADD: f64 = 0.7e-3;
 const JOINT_US_FIXED: f64 = 1.0;
 
 /// Microseconds per augmented-tick multiply-add and its fixed cost.
@@ -87,18 +90,19 @@ impl CostEstimate {
 /// The joint tick's multiply-adds a tick (module docs).
 pub(crate) fn joint_madds(tick: &JointTick, iterations: u32) -> f64 {
     let tree = &tick.space.tree;
-    let (p, d) = tree.path_dofs();
+    let (_, d) = tree.path_dofs();
+    let w = tick.branch_work();
     let (n, m, nl) = (
         tick.dofs() as f64,
         tick.rows.len() as f64,
         tick.n_loop as f64,
     );
-    let (p, d, b) = (p as f64, d as f64, tree.tree_joints() as f64);
+    let (p, d, b) = (w.path, d as f64, tree.tree_joints() as f64);
     let mf = m - nl;
-    let factors = 36.0 * n + 6.0 * p + n.powi(3) / 6.0 + m * n * n / 2.0 + m * m * n / 2.0;
+    let factors = 36.0 * n + 6.0 * p + w.factor + w.gram;
     let loops = nl.powi(3) / 6.0 + mf * nl * nl / 2.0 + mf * mf * nl;
-    let ends = 6.0 * m * d + 6.0 * p;
-    let step = n * n + 3.0 * m * n + nl * nl + 2.0 * mf * nl + 60.0 * b;
+    let ends = 6.0 * m * d + 7.0 * p + w.rows;
+    let step = 2.0 * p + 3.0 * m * n + nl * nl + 2.0 * mf * nl + 60.0 * b;
     factors + loops + ends + f64::from(iterations) * step
 }
 

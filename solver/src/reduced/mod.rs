@@ -17,6 +17,9 @@
 //!   joint coordinates — the projected update on θ with forward kinematics,
 //!   only the loop and finger rows evaluated, and Eq. 7 — on plain loops
 //!   over preallocated slices; `resync` moves it to a q it did not tick to.
+//! - `branch`: H = Lᵀ L along the tree's branches (no fill) and the solves,
+//!   Y and W over each row's nonzeros, for `stage`; `stage_check` (tests)
+//!   checks every factor and solve of a run against the dense path.
 //! - `probe` (tests, ignored): times the augmented force stage against this
 //!   one at the same q; `tick_probe` times the whole ticks.
 //!
@@ -27,6 +30,7 @@
 //! variables, auxiliary columns (flexible bodies, surfaces), free anchors,
 //! other inequality rows or limits on loop-closing joints are refused.
 
+mod branch;
 mod core;
 mod end;
 mod finger6;
@@ -44,6 +48,8 @@ mod tree;
 mod fk_tests;
 #[cfg(test)]
 mod probe;
+#[cfg(test)]
+mod stage_check;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

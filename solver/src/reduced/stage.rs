@@ -4,7 +4,7 @@
 //! same quantities with faer and checks them):
 //!
 //! ```text
-//! H = L Lᵀ (composite inertias),  Y = L⁻¹ (D J_r S)ᵀ,  W = Yᵀ Y
+//! H = Lᵀ L (composite inertias),  Y = L⁻ᵀ (D J_r S)ᵀ,  W = Yᵀ Y
 //! W_LL = L_L L_Lᵀ,  Z = L_L⁻¹ W_LF,  Σ_F = W_FF − Zᵀ Z,  Σ_F + 1/(K m̄) = L_K L_Kᵀ
 //! τ = Sᵀ b,  g = Y L⁻¹ τ,  λ̃_F = Σ_F⁺ (g_F − Zᵀ L_L⁻¹ g_L)
 //! ```
@@ -13,18 +13,22 @@
 //! acceleration differenced from its poses (`force::motion`, its filter
 //! included); the finger output adds the virtual coupling as
 //! `Feedback::wrenches` does.
+//!
+//! H's factor, the solves with it, Y and W follow the tree's branches
+//! (`branch`: Lᵀ L from the leaves up, no fill; Y's rows and W's dots over
+//! each row's nonzeros), so a coordinate costs its path's depth, not n.
 
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use super::ReducedError;
+use super::branch::{Paths, dof_parents, factor_ltl, solve, solve_lt, sparse_dot, support};
 use super::kinematics::{Kinematics, Twist};
 use super::small::{dot, forward};
-use super::tick::JointTick;
 use super::tree::JointTree;
 use crate::force::ACCELERATION_FILTER_FRACTION;
 use crate::force::inertia::BodyMass;
 use crate::force::small::{factor_in_place, min_norm_solve};
-use crate::{BodyId, FingerOutput, FingerTarget, Model};
+use crate::{BodyId, Model};
 
 /// One body's motion history (`force::motion`).
 #[derive(Debug, Clone, Copy)]
@@ -39,11 +43,16 @@ pub(super) struct History {
 
 /// Factors and buffers of the force stage.
 pub(crate) struct Stage {
-    /// H, then its factor (n × n).
+    /// H, then its factor L (H = Lᵀ L, `branch`; n × n, lower triangle).
     pub h: Vec<f64>,
-    /// Y row by row: row i = L⁻¹ (D J_r S)ᵢ (m × n).
-    yt: Vec<f64>,
-    w: Vec<f64>,
+    /// Per joint coordinate, its ancestors (`branch`).
+    pub(super) paths: Paths,
+    /// Y row by row: row i = L⁻ᵀ (D J_r S)ᵢ (m × n).
+    pub(super) yt: Vec<f64>,
+    /// Row i of Y's nonzero positions: `supp[i * n..i * n + supp_len[i]]`.
+    pub(super) supp: Vec<u32>,
+    pub(super) supp_len: Vec<usize>,
+    pub(super) w: Vec<f64>,
     /// W_LL's factor (nl × nl), Z row by finger row (mf × nl).
     pub wll: Vec<f64>,
     pub z: Vec<f64>,
@@ -64,7 +73,7 @@ pub(crate) struct Stage {
     pub(super) ticks: u32,
     /// Per finger: its first row in the finger block, row count, the
     /// body's end.
-    fingers: Vec<(usize, usize, usize)>,
+    pub(super) fingers: Vec<(usize, usize, usize)>,
     pub(super) prev_error: Vec<Vector3<f64>>,
 }
 
@@ -104,7 +113,10 @@ impl Stage {
         }
         Self {
             h: vec![0.0; n * n],
+            paths: Paths::new(dof_parents(tree)),
             yt: vec![0.0; m * n],
+            supp: vec![0; m * n],
+            supp_len: vec![0; m],
             w: vec![0.0; m * m],
             wll: vec![0.0; nl * nl],
             z: vec![0.0; mf * nl],
@@ -126,7 +138,7 @@ impl Stage {
     }
 
     /// H = Sᵀ M S by composite inertias (as `JointSpace::inertia`).
-    fn inertia(&mut self, tree: &JointTree, kin: &Kinematics) {
+    pub(super) fn inertia(&mut self, tree: &JointTree, kin: &Kinematics) {
         let n = tree.dofs;
         self.h.fill(0.0);
         for (k, j) in tree.joints.iter().enumerate() {
@@ -179,20 +191,15 @@ impl Stage {
         let n = tree.dofs;
         let m = jr.len() / n.max(1);
         let mf = m - nl;
-        if !factor_in_place(&mut self.h, n) {
+        #[cfg(test)]
+        let h0 = super::stage_check::enabled().then(|| self.h.clone());
+        if !factor_ltl(&mut self.h, &self.paths) {
             return Err(ReducedError::NotPositive("H"));
         }
-        // Fewer rows than the buffers hold while limits are inactive.
-        self.yt[..jr.len()].copy_from_slice(jr);
-        for i in 0..m {
-            forward(&self.h, &mut self.yt[i * n..(i + 1) * n]);
-        }
-        for a in 0..m {
-            for b in 0..=a {
-                let v = dot(&self.yt[a * n..(a + 1) * n], &self.yt[b * n..(b + 1) * n]);
-                self.w[a * m + b] = v;
-                self.w[b * m + a] = v;
-            }
+        self.gram(jr, n, m);
+        #[cfg(test)]
+        if let Some(h0) = h0 {
+            super::stage_check::factor(&h0, jr, self, m);
         }
         self.loop_block(m, nl)?;
         self.reference = 0.0;
@@ -207,6 +214,46 @@ impl Stage {
             return Err(ReducedError::NotPositive("Σ_F + 1/(K m̄)"));
         }
         Ok(())
+    }
+
+    /// Y = L⁻ᵀ (D J_r S)ᵀ row by row (each row's work the ancestors of its
+    /// nonzeros) with its rows' supports, and W = Yᵀ Y over them.
+    fn gram(&mut self, jr: &[f64], n: usize, m: usize) {
+        // Fewer rows than the buffers hold while limits are inactive.
+        self.yt[..jr.len()].copy_from_slice(jr);
+        for i in 0..m {
+            let y = &mut self.yt[i * n..(i + 1) * n];
+            solve_lt(&self.h, &self.paths, y);
+            self.supp_len[i] = support(y, &mut self.supp[i * n..(i + 1) * n]);
+        }
+        for a in 0..m {
+            for b in 0..=a {
+                let s = if self.supp_len[a] <= self.supp_len[b] {
+                    a
+                } else {
+                    b
+                };
+                let s = &self.supp[s * n..s * n + self.supp_len[s]];
+                let v = sparse_dot(
+                    s,
+                    &self.yt[a * n..(a + 1) * n],
+                    &self.yt[b * n..(b + 1) * n],
+                );
+                self.w[a * m + b] = v;
+                self.w[b * m + a] = v;
+            }
+        }
+    }
+
+    /// x ← H⁻¹ x with H's factor (the steps' u).
+    pub(super) fn solve_h(&self, x: &mut [f64]) {
+        #[cfg(test)]
+        let x0 = super::stage_check::enabled().then(|| x.to_vec());
+        solve(&self.h, &self.paths, x);
+        #[cfg(test)]
+        if let Some(x0) = x0 {
+            super::stage_check::solve(x0, x);
+        }
     }
 
     /// Advances the motion history to `frames` (as `Motion::advance`) and
@@ -257,9 +304,10 @@ impl Stage {
     pub(super) fn finger_solve(&mut self, n: usize, nl: usize) {
         let mf = self.lambda_f.len();
         let m = nl + mf;
-        forward(&self.h, &mut self.tau);
+        solve_lt(&self.h, &self.paths, &mut self.tau);
         for i in 0..m {
-            self.g[i] = dot(&self.yt[i * n..(i + 1) * n], &self.tau);
+            let s = &self.supp[i * n..i * n + self.supp_len[i]];
+            self.g[i] = sparse_dot(s, &self.yt[i * n..(i + 1) * n], &self.tau);
         }
         let (gl, gf) = self.g[..m].split_at_mut(nl);
         forward(&self.wll, gl);
@@ -283,6 +331,8 @@ impl Stage {
     pub(super) fn copy_factors(&self, to: &mut Stage) {
         to.h.copy_from_slice(&self.h);
         to.yt.copy_from_slice(&self.yt);
+        to.supp.copy_from_slice(&self.supp);
+        to.supp_len.copy_from_slice(&self.supp_len);
         to.w.copy_from_slice(&self.w);
         to.wll.copy_from_slice(&self.wll);
         to.z.copy_from_slice(&self.z);
@@ -307,6 +357,8 @@ impl Stage {
         let (m2, nl2) = (m - gone.len(), nl - gone.len());
         for (to, from) in (0..m).filter(kept).enumerate() {
             self.yt.copy_within(from * n..(from + 1) * n, to * n);
+            self.supp.copy_within(from * n..(from + 1) * n, to * n);
+            self.supp_len[to] = self.supp_len[from];
         }
         let mut to = 0;
         for a in (0..m).filter(kept) {
@@ -353,52 +405,4 @@ pub(super) fn pose(q: &[f64], o: usize) -> (Vector3<f64>, UnitQuaternion<f64>) {
         Vector3::new(q[o], q[o + 1], q[o + 2]),
         UnitQuaternion::new_normalize(e),
     )
-}
-
-impl JointTick {
-    /// The finger outputs from λ̃_F and the coupling (`Feedback::wrenches`).
-    pub(super) fn outputs_at(&mut self, targets: &[FingerTarget], dt_s: f64) {
-        let st = &mut self.stage;
-        let k = self.settings.coupling_stiffness_n_per_m;
-        let c = self.settings.coupling_damping_n_s_per_m;
-        for (i, fi) in self.model.fingers().iter().enumerate() {
-            let (first, rows, end) = st.fingers[i];
-            let first = self.n_loop + first;
-            let fr = &self.frames[fi.body.index()];
-            let (mut force, mut torque) = (Vector3::zeros(), Vector3::zeros());
-            for row in first..first + rows {
-                let lam = self.scale[row] * st.lambda_f[row - self.n_loop];
-                force += self.grads[row].lin[end] * lam;
-                torque += self.grads[row].ang[end] * lam;
-            }
-            let p = fr.point(&fi.point_m);
-            let torque = torque - (p - fr.r).cross(&force);
-            let err = p - targets[i].position_m;
-            let rate = if st.ticks > 1 {
-                (err - st.prev_error[i]) / dt_s
-            } else {
-                Vector3::zeros()
-            };
-            st.prev_error[i] = err;
-            let coupling = err * k + rate * c;
-            let coupling_torque = super::finger6::coupling_torque(
-                rows,
-                &self.q,
-                self.model.layout().body_offset(fi.body),
-                &targets[i],
-                self.settings.coupling_angular_stiffness_nm_per_rad,
-            );
-            self.outputs[i] = FingerOutput {
-                force_n: force + coupling,
-                torque_nm: torque + coupling_torque,
-                constraint_force_n: force,
-                constraint_torque_nm: torque,
-                coupling_force_n: coupling,
-                coupling_torque_nm: coupling_torque,
-                attachment_m: p,
-                target_m: targets[i].position_m,
-                tracking_error_m: err.norm(),
-            };
-        }
-    }
 }

@@ -351,7 +351,7 @@ impl JointTick {
                 *u += j * yi;
             }
         }
-        substitute(&st.h, &mut self.u);
+        st.solve_h(&mut self.u);
     }
 
     /// The update alone from q_s (the probe: repeatable, q_s unchanged).

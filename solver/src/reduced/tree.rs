@@ -120,6 +120,112 @@ fn joint_data(g: &Geometry) -> Option<(Freedom, [Param3; 2])> {
     })
 }
 
+/// The tree joints found breadth-first (`JointTree::new`).
+struct Grown {
+    joints: Vec<TreeJoint>,
+    joint_of_body: Vec<Option<usize>>,
+    /// Per constraint: a tree joint.
+    is_tree: Vec<bool>,
+    /// Per body: reached from the ground.
+    reached: Vec<bool>,
+    dofs: usize,
+}
+
+/// Design variables, auxiliary columns and inequality rows other than
+/// revolute and prismatic limits are refused.
+fn refuse_unhandled(model: &Model) -> Result<(), ReducedError> {
+    let layout = model.layout();
+    if layout.design_coords() > 0 || layout.aux_coords() > 0 {
+        return Err(ReducedError::Unsupported(
+            "design variables or auxiliary columns".into(),
+        ));
+    }
+    let limit = |r: usize| {
+        let k = model.constraints()[model.rows()[r].constraint.index()].kind;
+        matches!(
+            k,
+            ConstraintKind::RevoluteLimit | ConstraintKind::PrismaticLimit
+        )
+    };
+    if !model.inequality_rows().all(limit) {
+        return Err(ReducedError::Unsupported(
+            "inequality rows other than revolute and prismatic limits".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Which end of a joint with ends `bodies` is the child when it leaves
+/// `node` (`None`: the ground) toward a moving body; `None` if it does not.
+fn child_end(model: &Model, node: Option<BodyId>, bodies: [Option<BodyId>; 2]) -> Option<usize> {
+    let [a, b] = bodies;
+    let at_node = |x: Option<BodyId>| match node {
+        None => is_ground(model, x),
+        Some(n) => x == Some(n),
+    };
+    if at_node(a) && !is_ground(model, b) {
+        Some(1)
+    } else if at_node(b) && !is_ground(model, a) {
+        Some(0)
+    } else {
+        None
+    }
+}
+
+/// The tree joints breadth-first from the ground, joints in model order.
+fn grow(model: &Model) -> Result<Grown, ReducedError> {
+    let nb = model.bodies().len();
+    let mut g = Grown {
+        joints: Vec::new(),
+        joint_of_body: vec![None; nb],
+        is_tree: vec![false; model.constraints().len()],
+        reached: vec![false; nb],
+        dofs: 0,
+    };
+    let mut queue: VecDeque<Option<BodyId>> = VecDeque::from([None]);
+    while let Some(node) = queue.pop_front() {
+        for (k, info) in model.constraints().iter().enumerate() {
+            let Some((freedom, anchors)) = joint_data(&model.geometry[k]) else {
+                continue;
+            };
+            if g.is_tree[k] {
+                continue;
+            }
+            let Some(child_end) = child_end(model, node, info.bodies) else {
+                continue;
+            };
+            let child = info.bodies[child_end].expect("moving");
+            if g.reached[child.index()] {
+                continue;
+            }
+            let anchors = [constant(&anchors[0]), constant(&anchors[1])];
+            let [Some(ai), Some(aj)] = anchors else {
+                return Err(ReducedError::Unsupported(format!(
+                    "joint `{}` has a free anchor",
+                    info.name
+                )));
+            };
+            g.reached[child.index()] = true;
+            g.is_tree[k] = true;
+            g.joint_of_body[child.index()] = Some(g.joints.len());
+            g.joints.push(TreeJoint {
+                constraint: k,
+                parent: node,
+                child,
+                child_end,
+                parent_joint: node.and_then(|n| g.joint_of_body[n.index()]),
+                anchors: [ai, aj],
+                ends: info.bodies,
+                freedom,
+                dof: g.dofs,
+            });
+            g.dofs += freedom.dofs();
+            queue.push_back(Some(child));
+        }
+    }
+    Ok(g)
+}
+
 impl JointTree {
     /// The breadth-first spanning tree of `model`'s joint graph.
     ///
@@ -127,81 +233,10 @@ impl JointTree {
     /// Design variables, auxiliary columns, free anchors, inequality rows
     /// other than revolute and prismatic limits, or a moving body no joint path connects to the ground.
     pub fn new(model: &Model) -> Result<Self, ReducedError> {
+        refuse_unhandled(model)?;
+        let g = grow(model)?;
         let layout = model.layout();
-        if layout.design_coords() > 0 || layout.aux_coords() > 0 {
-            return Err(ReducedError::Unsupported(
-                "design variables or auxiliary columns".into(),
-            ));
-        }
-        let limit = |r: usize| {
-            let k = model.constraints()[model.rows()[r].constraint.index()].kind;
-            matches!(
-                k,
-                ConstraintKind::RevoluteLimit | ConstraintKind::PrismaticLimit
-            )
-        };
-        if !model.inequality_rows().all(limit) {
-            return Err(ReducedError::Unsupported(
-                "inequality rows other than revolute and prismatic limits".into(),
-            ));
-        }
-        let nb = model.bodies().len();
-        let mut joint_of_body: Vec<Option<usize>> = vec![None; nb];
-        let mut reached = vec![false; nb];
-        let mut is_tree = vec![false; model.constraints().len()];
-        let mut joints: Vec<TreeJoint> = Vec::new();
-        let mut queue: VecDeque<Option<BodyId>> = VecDeque::from([None]);
-        let mut dofs = 0;
-        while let Some(node) = queue.pop_front() {
-            for (k, info) in model.constraints().iter().enumerate() {
-                let Some((freedom, anchors)) = joint_data(&model.geometry[k]) else {
-                    continue;
-                };
-                if is_tree[k] {
-                    continue;
-                }
-                let [a, b] = info.bodies;
-                let at_node = |x: Option<BodyId>| match node {
-                    None => is_ground(model, x),
-                    Some(n) => x == Some(n),
-                };
-                let child_end = if at_node(a) && !is_ground(model, b) {
-                    1
-                } else if at_node(b) && !is_ground(model, a) {
-                    0
-                } else {
-                    continue;
-                };
-                let child = info.bodies[child_end].expect("moving");
-                if reached[child.index()] {
-                    continue;
-                }
-                let anchors = [constant(&anchors[0]), constant(&anchors[1])];
-                let [Some(ai), Some(aj)] = anchors else {
-                    return Err(ReducedError::Unsupported(format!(
-                        "joint `{}` has a free anchor",
-                        info.name
-                    )));
-                };
-                reached[child.index()] = true;
-                is_tree[k] = true;
-                joint_of_body[child.index()] = Some(joints.len());
-                joints.push(TreeJoint {
-                    constraint: k,
-                    parent: node,
-                    child,
-                    child_end,
-                    parent_joint: node.and_then(|n| joint_of_body[n.index()]),
-                    anchors: [ai, aj],
-                    ends: info.bodies,
-                    freedom,
-                    dof: dofs,
-                });
-                dofs += freedom.dofs();
-                queue.push_back(Some(child));
-            }
-        }
-        if let Some((id, _)) = layout.moving_bodies().find(|(b, _)| !reached[b.index()]) {
+        if let Some((id, _)) = layout.moving_bodies().find(|(b, _)| !g.reached[b.index()]) {
             return Err(ReducedError::Unsupported(format!(
                 "body `{}` is not connected to the ground by joints",
                 model.bodies()[id.index()].name
@@ -211,7 +246,7 @@ impl JointTree {
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut limit_rows = Vec::new();
         for (k, info) in model.constraints().iter().enumerate() {
-            let dest = if is_tree[k] {
+            let dest = if g.is_tree[k] {
                 &mut tree_rows
             } else if info.kind.sense() == crate::Sense::Inequality {
                 &mut limit_rows
@@ -225,9 +260,9 @@ impl JointTree {
             dest.extend(info.rows.clone());
         }
         Ok(Self {
-            joints,
-            joint_of_body,
-            dofs,
+            joints: g.joints,
+            joint_of_body: g.joint_of_body,
+            dofs: g.dofs,
             loop_rows,
             finger_rows,
             tree_rows,

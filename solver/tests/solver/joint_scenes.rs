@@ -170,18 +170,24 @@ fn auto_is_honest_on_every_shipped_scene() {
 
 /// The cost model's choice (`joint_cost`, constants fitted in BENCHMARKS.md
 /// issue 23): on the lattice (132 joint coordinates, 128 loop rows: a
-/// dense 128-row loop Gram) and the 64-link chain (130 coordinates: a dense
-/// 130² H) the joint estimate is several times the augmented one and `auto`
-/// runs augmented; on the four-bar (5 coordinates) it is a fraction and
-/// `auto` runs joint. The estimates are checked against their leading term
-/// computed here from the stated shapes (n³/6 + m n²/2 + m² n/2 for the
-/// joint tick), and `joint` asked explicitly still runs joint.
+/// dense 128-row loop Gram) and the 64-link chain (130 coordinates in two
+/// 65-deep branches) the joint estimate is over the augmented one (measured
+/// 1.68× and 2.61×) and `auto` runs augmented; on the four-bar (5
+/// coordinates) it is about half (measured 0.48×) and `auto` runs joint.
+/// The estimates are checked against terms computed here from the stated
+/// shapes: at least the loop block's n_L³/6 and the branch factor of the
+/// stated depths (a path of L coordinates: Σ_k k(k − 1)/2 = C(L + 1, 3)),
+/// at most the dense count this model replaced (n³/6 + m n²/2 + m² n/2 +
+/// n_L³/6, + 2e3 for the per-step terms); and `joint` asked explicitly
+/// still runs joint.
 #[test]
 fn auto_picks_by_the_cost_model() {
-    for (name, n, m, joint) in [
-        ("lattice", 132.0, 131.0, false),
-        ("chain", 130.0, 7.0, false),
-        ("four-bar", 5.0, 7.0, true),
+    let path_factor = |l: f64| (l + 1.0) * l * (l - 1.0) / 6.0;
+    let lattice: (&str, f64, f64, f64, f64, bool) = ("lattice", 132.0, 131.0, 128.0, 0.0, false);
+    for (name, n, m, nl, branch, joint) in [
+        lattice,
+        ("chain", 130.0, 7.0, 4.0, 2.0 * path_factor(65.0), false),
+        ("four-bar", 5.0, 7.0, 4.0, 0.0, true),
     ] {
         let (model, s) = scene(name, Coordinates::Auto);
         let p = Program::new(model.clone(), s).unwrap();
@@ -189,17 +195,18 @@ fn auto_picks_by_the_cost_model() {
         println!("{name}: {c}");
         assert_eq!(c.joint, joint, "{name}: {c}");
         let e = c.estimate.expect("an estimate");
-        let lead: f64 = n * n * n / 6.0 + m * n * n / 2.0 + m * m * n / 2.0;
+        let low = (nl * nl * nl / 6.0).max(branch);
+        let dense = n * n * n / 6.0 + m * n * n / 2.0 + m * m * n / 2.0 + nl * nl * nl / 6.0;
         assert!(
-            e.joint_madds > lead && e.joint_madds < 1.6 * lead + 2e3,
-            "{name}: {:.3e} against the leading {lead:.3e}",
+            e.joint_madds > low && e.joint_madds < dense + 2e3,
+            "{name}: {:.3e} against {low:.3e}..{dense:.3e} + 2e3",
             e.joint_madds
         );
         let ratio = e.joint_us() / e.augmented_us();
         if joint {
-            assert!(ratio < 0.5, "{name}: {c}");
+            assert!(ratio < 0.6, "{name}: {c}");
         } else {
-            assert!(ratio > 2.0, "{name}: {c}");
+            assert!(ratio > 1.2, "{name}: {c}");
             assert!(c.why.contains("joint estimate"), "{c}");
         }
         let asked = SolverSettings {
