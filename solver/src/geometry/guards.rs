@@ -95,6 +95,13 @@ pub(super) fn edge_guards(
                 pb.faces[f.faces[0] as usize].normal,
                 pb.faces[f.faces[1] as usize].normal,
             ];
+            let faces_a = [
+                a_to_b * pa.faces[e.faces[0] as usize].normal,
+                a_to_b * pa.faces[e.faces[1] as usize].normal,
+            ];
+            if !edges_can_meet(a1 - a0, faces_a, b[1] - b[0], faces) {
+                continue;
+            }
             let Some(w) =
                 EdgeWitness::build(0, a, b, faces, pb.edge_normal(eb as u32), &a_to_b, m, key)
             else {
@@ -112,6 +119,49 @@ pub(super) fn edge_guards(
             }
         }
     }
+}
+
+/// How far outside an edge's normal cone (the arc between its two faces'
+/// normals) the normal of an edge–edge contact may lie, rad: a box tilted
+/// on the edge of another meets it with the normal that far off one cone
+/// (0.01 rad in `solver/tests/contact/corners.rs`).
+const CONE_SLACK_RAD: f64 = std::f64::consts::FRAC_PI_6;
+
+/// Two edges (directions `da`, `db`, their faces' outward normals, all in
+/// B's frame) can touch edge on edge: the normal of the plane they span,
+/// n = ±da × db, lies in B's normal cone and −n in A's, within
+/// [`CONE_SLACK_RAD`] (the Gauss-map test of a Minkowski-difference face).
+/// Otherwise the bodies cannot meet along that edge pair, and Eq. 3's
+/// separating plane through B's edge is no plane between them: a side edge
+/// of a stacked box standing on the top edge of the box below, their
+/// corners within microns, gives a vertical plane at 45° that reads the
+/// column's sideways offset as a penetration and pushes the boxes apart
+/// sideways (BENCHMARKS.md, issue 23, "the throws").
+fn edges_can_meet(
+    da: Vector3<f64>,
+    faces_a: [Vector3<f64>; 2],
+    db: Vector3<f64>,
+    faces_b: [Vector3<f64>; 2],
+) -> bool {
+    let Some(n) = da.cross(&db).try_normalize(1e-12) else {
+        return false;
+    };
+    let n = if n.dot(&(faces_b[0] + faces_b[1])) >= 0.0 {
+        n
+    } else {
+        -n
+    };
+    within_cone(&n, faces_b) && within_cone(&-n, faces_a)
+}
+
+/// `n` (unit, perpendicular to the edge like its faces' normals) within
+/// [`CONE_SLACK_RAD`] of the arc between the two face normals.
+fn within_cone(n: &Vector3<f64>, faces: [Vector3<f64>; 2]) -> bool {
+    let Some(mid) = (faces[0] + faces[1]).try_normalize(1e-12) else {
+        return true;
+    };
+    let half = faces[0].dot(&mid).clamp(-1.0, 1.0).acos();
+    n.dot(&mid).clamp(-1.0, 1.0).acos() <= half + CONE_SLACK_RAD
 }
 
 /// Per vertex of end `point_end`'s polyhedron: held against a face of the
