@@ -138,11 +138,13 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
 /// which takes two backups in a row, and a penetration deeper than the cap
 /// while held is backed up once more and followed by one more (the reset's
 /// own cycle), so at most four backups a stall. The motor: the coupling
-/// pulls with k × (device − finger); without stalls its peak is f₀, and
-/// after one the target shown to the program lags the device by up to the
-/// run's `max_target_lag_m` (the catch-up), which adds k × that lag: the
-/// bound is 1.2 × f₀ + k × lag (the column kept together after 20-period
-/// stalls and pushed at a corner takes 1.46 N, 1.67 N allowed). Before the
+/// pulls with k × (device − finger), the same hand pushing the same
+/// column: within 1.2 × its peak without stalls, f₀. At 75d705a the bound
+/// was loosened to 1.2 × f₀ + k × the catch-up lag (1.67 N) for 1.46 N
+/// after 20-period stalls, a column rotated 6.5° and pushed at a corner:
+/// the rotation came from an edge guard between a side edge and a top edge
+/// at coinciding corners, which pushed the boxes apart sideways; with the
+/// normal-cone test 0.96 N (BENCHMARKS.md, issue 23, "the throws"). Before the
 /// fixed cap the hold reached twice a sampled depth and a backup after a
 /// long hold went back to before it: with the norm rows out of the force
 /// factor, 20-period stalls made 146 backups and 8.5 N (BENCHMARKS.md,
@@ -170,12 +172,7 @@ fn backups_after_long_stalls_do_not_repeat_every_cycle() {
         assert!(held_max <= cap, "{what}");
         assert!(pen <= cap, "{what}: deeper than the held cap");
         assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
-        let lag = s.stalls.max_target_lag_m;
-        let k = haptloop_solver::SolverSettings::default().coupling_stiffness_n_per_m;
-        assert!(
-            f <= 1.2 * f0 + k * lag,
-            "{what}: above 1.2 × f0 + k × {lag} m"
-        );
+        assert!(f <= 1.2 * f0, "{what}: above 1.2 × f0");
         // The column slides as one without stalls; after them the top box
         // may slip off it (main froze the column where the backups began,
         // 1 cm from the start). Nothing may leave the 30 cm table.
@@ -186,6 +183,41 @@ fn backups_after_long_stalls_do_not_repeat_every_cycle() {
         let kept = pen <= c.tolerance_m;
         assert_eq!(c.verdict.contains("kept"), kept, "{what}: {}", c.verdict);
     }
+}
+
+/// Every box of the column still on the 30 cm table at the end, m: none
+/// farther than 0.15 m from the table's centre in x or y, none below its
+/// top (z = 0).
+fn boxes_on_the_table(o: &Outcome) -> bool {
+    let Some((_, last)) = o.track.samples.iter().last() else {
+        return false;
+    };
+    last.poses
+        .iter()
+        .take(3)
+        .all(|p| p.0[0].abs() < 0.15 && p.0[1].abs() < 0.15 && p.0[2] > 0.0)
+}
+
+/// `stack` with 20-period host stalls at 0.65 s, 1.15 s, … 3.65 s: at
+/// 75d705a the witness table of tick 704 (35 ms after the first stall)
+/// carried an edge guard between the bottom box's top edge and the middle
+/// box's side edge whose corners nearly coincided: a vertical separating
+/// plane that read the column's sideways offset (11.5 µm) as a
+/// penetration. The next tick the bottom box tipped 0.7°, and the top box
+/// left the column at 0.4 m/s and the table (36 m away at the end), with
+/// no penetration deeper than 58 µm. With the normal-cone test the column
+/// stays on the table and within the held cap (0.15 mm).
+#[test]
+fn a_stall_after_which_the_column_threw_its_top_box_keeps_it_on_the_table() {
+    let scene = resolve("stack").unwrap();
+    let o = run(&scene, 4.0, stalls(0.65, 0.5, 3.65, 20), Vec::new());
+    let (pen, backups, f, d, s) = figures(&o);
+    let cap = session::held_penetration_cap_m(&o.plan.contact);
+    let what = format!("{pen} m, {backups} backups, {f} N, bodies moved up to {d} m");
+    assert!(boxes_on_the_table(&o), "{what}: a box left the table");
+    assert!(pen <= cap, "{what}: deeper than the held cap {cap} m");
+    let c = s.contact.as_ref().unwrap();
+    assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
 }
 
 /// The fast loop's side of all this allocates nothing: `stack` with
