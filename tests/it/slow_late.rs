@@ -138,13 +138,11 @@ fn cluttered_stays_together_while_the_slow_loop_is_late() {
 /// which takes two backups in a row, and a penetration deeper than the cap
 /// while held is backed up once more and followed by one more (the reset's
 /// own cycle), so at most four backups a stall. The motor: the coupling
-/// pulls with k × (device − finger), the same hand pushing the same
-/// column: within 1.2 × its peak without stalls, f₀. At 75d705a the bound
-/// was loosened to 1.2 × f₀ + k × the catch-up lag (1.67 N) for 1.46 N
-/// after 20-period stalls, a column rotated 6.5° and pushed at a corner:
-/// the rotation came from an edge guard between a side edge and a top edge
-/// at coinciding corners, which pushed the boxes apart sideways; with the
-/// normal-cone test 0.96 N (BENCHMARKS.md, issue 23, "the throws"). Before the
+/// pulls with k × (device − finger); without stalls its peak is f₀, and
+/// after one the target shown to the program lags the device by up to the
+/// run's `max_target_lag_m` (the catch-up), which adds k × that lag: the
+/// bound is 1.2 × f₀ + k × lag (the column kept together after 20-period
+/// stalls and pushed at a corner takes 1.46 N, 1.67 N allowed). Before the
 /// fixed cap the hold reached twice a sampled depth and a backup after a
 /// long hold went back to before it: with the norm rows out of the force
 /// factor, 20-period stalls made 146 backups and 8.5 N (BENCHMARKS.md,
@@ -172,7 +170,12 @@ fn backups_after_long_stalls_do_not_repeat_every_cycle() {
         assert!(held_max <= cap, "{what}");
         assert!(pen <= cap, "{what}: deeper than the held cap");
         assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
-        assert!(f <= 1.2 * f0, "{what}: above 1.2 × f0");
+        let lag = s.stalls.max_target_lag_m;
+        let k = haptloop_solver::SolverSettings::default().coupling_stiffness_n_per_m;
+        assert!(
+            f <= 1.2 * f0 + k * lag,
+            "{what}: above 1.2 × f0 + k × {lag} m"
+        );
         // The column slides as one without stalls; after them the top box
         // may slip off it (main froze the column where the backups began,
         // 1 cm from the start). Nothing may leave the 30 cm table.
@@ -205,12 +208,18 @@ fn boxes_on_the_table(o: &Outcome) -> bool {
 /// plane that read the column's sideways offset (11.5 µm) as a
 /// penetration. The next tick the bottom box tipped 0.7°, and the top box
 /// left the column at 0.4 m/s and the table (36 m away at the end), with
-/// no penetration deeper than 58 µm. With the normal-cone test the column
-/// stays on the table and within the held cap (0.15 mm).
+/// no penetration deeper than 58 µm. With the edge guards' normal-cone
+/// test (`ContactSettings::edge_cones`, off by default: it changes `place`
+/// on sit-on-chair, BENCHMARKS.md, issue 23, "the throws") the column stays
+/// on the table and within the held cap (0.15 mm), and at the phase of
+/// `backups_after_long_stalls_do_not_repeat_every_cycle` the motor keeps
+/// within 1.2 × its peak without stalls (0.963 N; 1.458 N without the
+/// test, which needs that test's looser bound).
 #[test]
 fn a_stall_after_which_the_column_threw_its_top_box_keeps_it_on_the_table() {
     let scene = resolve("stack").unwrap();
-    let o = run(&scene, 4.0, stalls(0.65, 0.5, 3.65, 20), Vec::new());
+    let (_, _, f0, _, _) = figures(&run_cones(&scene, 4.0, Vec::new()));
+    let o = run_cones(&scene, 4.0, stalls(0.65, 0.5, 3.65, 20));
     let (pen, backups, f, d, s) = figures(&o);
     let cap = session::held_penetration_cap_m(&o.plan.contact);
     let what = format!("{pen} m, {backups} backups, {f} N, bodies moved up to {d} m");
@@ -218,6 +227,25 @@ fn a_stall_after_which_the_column_threw_its_top_box_keeps_it_on_the_table() {
     assert!(pen <= cap, "{what}: deeper than the held cap {cap} m");
     let c = s.contact.as_ref().unwrap();
     assert_eq!(c.broken_snapshots + c.broken_ticks, 0, "{what}");
+    let (pen, _, f, _, _) = figures(&run_cones(&scene, 4.0, stalls(0.5, 0.5, 3.5, 20)));
+    assert!(
+        f <= 1.2 * f0,
+        "at the other test's phase: {f} N, {f0} N without stalls"
+    );
+    assert!(pen <= cap, "at the other test's phase: {pen} m");
+}
+
+/// `run` with the edge guards' normal-cone test on, host stalls only.
+fn run_cones(scene: &Scene, seconds: f64, fast: Vec<Stall>) -> Outcome {
+    let options = SessionOptions {
+        seconds,
+        deterministic: true,
+        ..SessionOptions::default()
+    };
+    let mut plan = Plan::new(scene, &options).unwrap();
+    plan.stalls = fast;
+    plan.contact.edge_cones = true;
+    session::run(scene, plan, &StopFlag::new(), &mut |_| {}).unwrap()
 }
 
 /// The fast loop's side of all this allocates nothing: `stack` with

@@ -14,8 +14,9 @@ use crate::constraint::witness::edge_edge::EdgeWitness;
 /// Edge–edge guards: every edge of A whose closest approach to an edge of B
 /// is within `reach` and falls inside both edges (two edges that could cross
 /// before the next cycle; within 5 % of an end whose vertex has a
-/// vertex–face row, that row holds instead) gets the Eq. 2–3 primitive of
-/// that edge pair. A rotation of up to the speed limit
+/// vertex–face row, that row holds instead), and with `cones` only if it
+/// can meet it edge on edge ([`edges_can_meet`]), gets the Eq. 2–3
+/// primitive of that edge pair. A rotation of up to the speed limit
 /// between two cycles can sweep an edge across an edge without any vertex
 /// coming near a face.
 pub(super) fn edge_guards(
@@ -24,6 +25,7 @@ pub(super) fn edge_guards(
     pb: &Polyhedron,
     reach: f64,
     depth_m: f64,
+    cones: bool,
     out: &mut Vec<Witness>,
 ) {
     let m = view.margin();
@@ -37,6 +39,7 @@ pub(super) fn edge_guards(
         pb,
         reach,
         depth_m,
+        cones,
         m,
         a_to_b: view.a_to_b(),
         held_a: held_vertices(out, 0, pa.vertices.len()),
@@ -77,6 +80,7 @@ struct Guards<'a> {
     pb: &'a Polyhedron,
     reach: f64,
     depth_m: f64,
+    cones: bool,
     m: f64,
     a_to_b: Matrix3<f64>,
     held_a: Vec<bool>,
@@ -156,7 +160,7 @@ impl Guards<'_> {
             self.a_to_b * pa.faces[e.faces[0] as usize].normal,
             self.a_to_b * pa.faces[e.faces[1] as usize].normal,
         ];
-        if !edges_can_meet(a1 - a0, faces_a, b[1] - b[0], faces) {
+        if self.cones && !edges_can_meet(a1 - a0, faces_a, b[1] - b[0], faces) {
             return None;
         }
         let sep = pb.edge_normal(eb as u32);
