@@ -545,8 +545,8 @@ impl ActiveSet {
             out.push(fallback(&view, &q));
         }
         if s.guards {
-            let depth = (-q.distance_m).max(0.0);
-            expand(&view, reach, depth, s.edge_cones, &mut out);
+            let overlap = (-q.distance_m).max(0.0);
+            expand(&view, reach, overlap, s.edge_cones, &mut out);
         }
         select(&view, slots, &mut out);
         if depth > s.penetration_tolerance_m {
