@@ -71,6 +71,16 @@ pub struct ContactSettings {
     /// the §3.2.1 expansion alone (the paper's other approach). Scene key
     /// `[solver] contact_guards`; default on.
     pub guards: bool,
+    /// The edge guards keep only edge pairs that can meet edge on edge (the
+    /// normal of the plane both edges span within both edges' normal cones,
+    /// `guards::edges_can_meet`). On, `stack` after long host stalls no
+    /// longer throws its top box (a side edge against a top edge at
+    /// coinciding corners read the column's sideways offset as a
+    /// penetration); off by default: with it `place` on sit-on-chair stops
+    /// short of its blocked goal and a cluttered lockstep run's low-rank
+    /// release is no longer bit-identical to refactoring (BENCHMARKS.md,
+    /// issue 23, "the throws").
+    pub edge_cones: bool,
 }
 
 impl ContactSettings {
@@ -113,6 +123,7 @@ impl Default for ContactSettings {
             finger_slots: 2,
             max_pairs_per_body: MAX_PAIRS_PER_BODY,
             guards: true,
+            edge_cones: false,
         }
     }
 }
@@ -534,7 +545,8 @@ impl ActiveSet {
             out.push(fallback(&view, &q));
         }
         if s.guards {
-            expand(&view, reach, (-q.distance_m).max(0.0), &mut out);
+            let overlap = (-q.distance_m).max(0.0);
+            expand(&view, reach, overlap, s.edge_cones, &mut out);
         }
         select(&view, slots, &mut out);
         if depth > s.penetration_tolerance_m {

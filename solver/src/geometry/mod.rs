@@ -13,7 +13,7 @@
 //! | `sat.rs` | the separating-axis test of two polyhedra (touching and overlapping pairs) |
 //! | `pair.rs` | a pair at its poses: frame changes |
 //! | `primitives.rs` | feature pair → witness primitives, pre-emptive expansion, slot choice |
-//! | `guards.rs` | the pre-emptive edge–edge guards (edges that could cross, corners no vertex guard holds) |
+//! | `guards.rs` | the pre-emptive edge–edge guards (edges that could cross, corners no vertex guard holds; with `edge_cones`, only pairs that can meet edge on edge) |
 //! | `expansion.rs` | subsequent penetration (§3.2.1): a held vertex's neighbours below its face expand the witness to the edge or face |
 //! | `active_set.rs` | the slow loop's cycle: add, replace, drop, expand, back up |
 //!

@@ -335,8 +335,9 @@ fn frame(p: &Pose3) -> BodyFrame {
 /// about the crossing would swing into a face — all before the next cycle.
 /// Duplicates of primitives already in `out` are skipped; `select` keeps
 /// the most critical within the slot budget. `depth_m` is how deep the two
-/// bodies overlap now (0 when apart).
-pub fn expand(view: &PairView, reach: f64, depth_m: f64, out: &mut Vec<Witness>) {
+/// bodies overlap now (0 when apart); `cones`: the edge guards' normal-cone
+/// test ([`super::ContactSettings::edge_cones`]).
+pub fn expand(view: &PairView, reach: f64, depth_m: f64, cones: bool, out: &mut Vec<Witness>) {
     let (Some(pa), Some(pb)) = (view.a.polyhedron(), view.b.polyhedron()) else {
         return;
     };
@@ -397,7 +398,7 @@ pub fn expand(view: &PairView, reach: f64, depth_m: f64, out: &mut Vec<Witness>)
             }
         }
     }
-    super::guards::edge_guards(view, pa, pb, reach, depth_m, out);
+    super::guards::edge_guards(view, pa, pb, reach, depth_m, cones, out);
 }
 
 /// Keeps at most `slots` of `out`: the one nearest to violation first, then

@@ -12,7 +12,7 @@ use haptloop_solver::constraint::witness::Witness;
 use haptloop_solver::geometry::primitives::value_at;
 use haptloop_solver::geometry::{ActiveSet, ContactBody, ContactSettings, Pose3};
 
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::{Quaternion, Rotation3, UnitQuaternion, Vector3};
 
 use crate::common::{at, cuboid};
 
@@ -20,6 +20,10 @@ const H: f64 = 0.02;
 const SHIFT: f64 = 0.0005;
 
 fn set() -> ActiveSet {
+    set_with(ContactSettings::default())
+}
+
+fn set_with(settings: ContactSettings) -> ActiveSet {
     let body = || {
         Some(ContactBody {
             collider: cuboid([H, H, H]).collider().unwrap(),
@@ -28,7 +32,7 @@ fn set() -> ActiveSet {
             friction: 0.0,
         })
     };
-    ActiveSet::new(vec![body(), body()], Vec::new(), ContactSettings::default())
+    ActiveSet::new(vec![body(), body()], Vec::new(), settings)
 }
 
 /// The upper box `gap` above the lower one, shifted, and tilted 0.01 rad
@@ -85,4 +89,92 @@ fn the_corner_no_vertex_guard_holds_has_an_edge_row() {
         "no edge row reading {expected} m: {rows:?} ({:?})",
         s.witnesses([0, 1])
     );
+}
+
+/// A pose from a position and a unit quaternion [w, x, y, z].
+fn pose(r: [f64; 3], q: [f64; 4]) -> Pose3 {
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]));
+    Pose3 {
+        r: Vector3::from(r),
+        rot: q.to_rotation_matrix().into_inner(),
+    }
+}
+
+/// The bottom and middle boxes of `stack` at tick 704 of `run stack
+/// --deterministic --stall 0.65:20 --stall 1.15:20 …` (35 ms after a
+/// 20-period stall; the snapshot whose witness table threw the top box off
+/// the table at 75d705a): the middle box yawed 1.4 mrad against the bottom
+/// one and tilted 1.3 mrad, standing on it 15 µm apart in plan, so its
+/// (+x, −y) bottom corner and the bottom box's (+x, −y) top corner are
+/// within microns of each other and neither is held by a vertex–face row.
+/// The bodies touch along z, so no row that reads a penetration (a
+/// negative value: the rows that push) may read a sideways slide of the
+/// middle box (5 µm in +x and in +y): a slide over a face keeps every
+/// vertex's height over it and the crossing of two top/bottom edges at the
+/// same height (closed form, to 2 % of the slide for the tilt). At
+/// 75d705a the bottom box's +x top edge (along y) and the middle box's
+/// (+x, −y) side edge (vertical) had their closest approach inside both,
+/// and their Eq. 3 row (a vertical separating plane at 45° between +x and
+/// −y) read the plan offset, −11.5 µm, and moved by −3.5 µm with a 5 µm
+/// slide in +x: the next tick it tipped the bottom box 0.7° and the column
+/// threw its top box off the table (BENCHMARKS.md, issue 23, "the throws").
+/// The test is `ContactSettings::edge_cones`, off by default; with it off
+/// this fails as at 75d705a.
+#[test]
+fn stacked_corners_get_no_row_that_reads_a_slide() {
+    let mut s = set_with(ContactSettings {
+        edge_cones: true,
+        ..ContactSettings::default()
+    });
+    let lower = pose(
+        [
+            0.008527006523355887,
+            -9.115728774887861e-6,
+            0.01999999996001733,
+        ],
+        [
+            0.9999975759318555,
+            -3.318594099306401e-10,
+            -2.5679200932001743e-10,
+            0.0022018565051537303,
+        ],
+    );
+    let up = pose(
+        [
+            0.008532959305569363,
+            1.269771042660653e-6,
+            0.0599999924271513,
+        ],
+        [
+            0.9999955397532702,
+            -0.0004578453187206679,
+            0.0004557823336813718,
+            0.00291606760786894,
+        ],
+    );
+    s.update(&[lower, up]);
+    let rows = s.witnesses([0, 1]).to_vec();
+    let pushing = rows
+        .iter()
+        .filter(|w| value_at(w, &lower, &up).0 < 0.0)
+        .count();
+    assert!(pushing >= 2, "{pushing} rows read the contact: {rows:?}");
+    let slide = 5e-6;
+    for dir in [Vector3::x(), Vector3::y()] {
+        let slid = Pose3 {
+            r: up.r + dir * slide,
+            rot: up.rot,
+        };
+        for w in &rows {
+            let before = value_at(w, &lower, &up).0;
+            if before >= 0.0 {
+                continue;
+            }
+            let after = value_at(w, &lower, &slid).0;
+            assert!(
+                (after - before).abs() < 0.02 * slide,
+                "a row reads the slide along {dir:?}: {before} m → {after} m ({w:?})"
+            );
+        }
+    }
 }
