@@ -33,6 +33,7 @@
 
 use super::joint::OPENING_FLOOR;
 use super::stages::{Ordered, StageMarks};
+use super::tick::{max_scaled_change, within};
 use super::{Program, TickOutcome, TickReport};
 use crate::FingerTarget;
 use crate::reduced::History;
@@ -163,7 +164,8 @@ impl Program {
     /// the tree rows open): q projected onto the tree, the joint tick
     /// resynced there, its motion history shifted (the outputs are the next
     /// tick's). A projection that fails (a degenerate quaternion)
-    /// leaves q and the joint tick stale: the tick falls back.
+    /// or would move q beyond the step limit (a corrupted q) leaves q and
+    /// the joint tick stale: the tick falls back.
     ///
     /// # Real-time
     /// No allocation: one pass over the tree joints, one joint resync.
@@ -173,7 +175,15 @@ impl Program {
         };
         j.project = false;
         self.q_ref.copy_from_slice(&self.q);
-        if j.tick.project_onto_tree(&mut self.q_ref).is_err() {
+        // A projection further than the step limit (a corrupted q) is
+        // refused as a step would be: the tick falls back, and the
+        // augmented tick reports it.
+        if j.tick.project_onto_tree(&mut self.q_ref).is_err()
+            || !within(
+                max_scaled_change(&self.q_ref, &self.q, &self.scaling.sqrt_metric),
+                self.limits.step_m,
+            )
+        {
             j.stale = true;
             return;
         }
