@@ -128,7 +128,7 @@ impl Program {
             .max(l * r.max_violation_rad)
             .max(l * r.max_norm_violation);
         // NaN-safe: a NaN report counts as open.
-        !(worst <= OPENING_FLOOR * l)
+        !within(worst, OPENING_FLOOR * l)
     }
 
     /// A tick after a fallback that left the rows open beyond the opening
