@@ -144,24 +144,6 @@ fn outcome(e: &ReducedError) -> TickOutcome {
     }
 }
 
-/// A joint tick whose loop rows end more open than they started and
-/// beyond this × L falls back to the augmented tick ([`opens_loops`]).
-pub(super) const OPENING_FLOOR: f64 = 1e-2;
-
-/// Whether a joint tick opened its loops: near a singular pose (the
-/// four-bar pulled taut) the chord iteration in joint coordinates opens the
-/// loop rows 1.5–5× a tick, and further than the augmented tick does
-/// (forward kinematics carries each joint's second-order error down the
-/// chain to the loop-closing rows); no step or violation limit catches it
-/// before 0.1 L. A tick that works closes its loop rows (they are hard
-/// rows, whatever the target does). `before` and `after` are the loop
-/// rows' largest |C| at the tick's start and end (metres and radians),
-/// `length_m` is L. NaN is caught by the step check after it.
-#[inline]
-fn opens_loops(before: f64, after: f64, length_m: f64) -> bool {
-    after > before && after > OPENING_FLOOR * length_m
-}
-
 /// Why `targets` cannot be ticked toward (as the evaluation would say).
 fn bad_targets(fingers: usize, targets: &[FingerTarget]) -> Option<EvalError> {
     if targets.len() != fingers {
@@ -358,7 +340,7 @@ impl Program {
         marks.end(SolverStage::Update);
         t.evaluate_end(targets, true)
             .map_err(|e| (outcome(&e), n))?;
-        if opens_loops(open_before, t.max_violation, self.scaling.length_m) {
+        if super::joint_fallback::opens_loops(open_before, t.max_violation, self.scaling.length_m) {
             return Err((TickOutcome::Diverged(Divergence::Violation), n));
         }
         let step = max_scaled_change(t.q(), &self.q, &self.scaling.sqrt_metric);

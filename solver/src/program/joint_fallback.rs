@@ -31,12 +31,29 @@
 //! would open the loops again (the four-bar's 1 m step: 15.0 mm and 4
 //! fallbacks without this, 12.8 mm for the augmented tick).
 
-use super::joint::OPENING_FLOOR;
 use super::stages::{Ordered, StageMarks};
 use super::tick::{max_scaled_change, within};
 use super::{Program, TickOutcome, TickReport};
 use crate::FingerTarget;
 use crate::reduced::History;
+
+/// A joint tick whose loop rows end more open than they started and
+/// beyond this × L falls back to the augmented tick ([`opens_loops`]).
+pub(super) const OPENING_FLOOR: f64 = 1e-2;
+
+/// Whether a joint tick opened its loops: near a singular pose (the
+/// four-bar pulled taut) the chord iteration in joint coordinates opens the
+/// loop rows 1.5–5× a tick, and further than the augmented tick does
+/// (forward kinematics carries each joint's second-order error down the
+/// chain to the loop-closing rows); no step or violation limit catches it
+/// before 0.1 L. A tick that works closes its loop rows (they are hard
+/// rows, whatever the target does). `before` and `after` are the loop
+/// rows' largest |C| at the tick's start and end (metres and radians),
+/// `length_m` is L. NaN is caught by the step check after it.
+#[inline]
+pub(super) fn opens_loops(before: f64, after: f64, length_m: f64) -> bool {
+    after > before && after > OPENING_FLOOR * length_m
+}
 
 /// A failure injected into the next joint tick (tests).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
