@@ -14,11 +14,16 @@
 //! divergence limits and the failure paths: bad input (bad targets, a zero
 //! time step) fails the tick — q is not moved, every finger output is zero,
 //! the joint tick's motion history restarts at rest at q and the status says
-//! why, as in the augmented tick; any other failure runs the augmented tick
-//! for the same call (`joint_fallback`). Wherever q
+//! why, as in the augmented tick; any other failure — among them a tick
+//! that ends with its loop rows more open than it started, beyond 1e-2 L
+//! (`opens_loops`) — runs the augmented tick for the same call
+//! (`joint_fallback`), and the next joint tick first projects q onto the
+//! tree. Wherever q
 //! changes outside a tick (`set_q`, `shift_q`, `assemble`, `iterate`,
 //! `adopt_state`, `refresh_factor`) the joint tick is moved there without
-//! allocating (`JointTick::resync`).
+//! allocating (`JointTick::resync`); if the tree rows or the norms are open
+//! there beyond 1e-10 L (`joint_report::CLOSED`), the next joint tick
+//! first projects q onto the tree.
 //!
 //! **The report.** Every row is reported as by the augmented tick
 //! (`Violation::of`'s rules, `joint_report`): the loop and finger rows at
@@ -67,8 +72,8 @@ impl fmt::Display for CoordinatesChoice {
 /// The joint tick of a program, with whether a resync failed since (the
 /// next tick then retries it first).
 pub(super) struct JointPath {
-    tick: JointTick,
-    stale: bool,
+    pub(super) tick: JointTick,
+    pub(super) stale: bool,
     /// The rows each tick evaluates (finger rows dropped), and per model
     /// row whether it is one of them.
     rows: Vec<usize>,
@@ -78,6 +83,16 @@ pub(super) struct JointPath {
     /// A test's injected failure of the next joint tick
     /// (`Program::fail_next_joint_tick`).
     pub(super) inject: Option<super::joint_fallback::Injected>,
+    /// After a fallback, or a resync that found the tree rows or norms
+    /// open: the next joint tick first projects q onto the tree
+    /// (`joint_fallback`).
+    pub(super) project: bool,
+    /// After a fallback whose tick left the rows open beyond
+    /// `OPENING_FLOOR` × L: the ticks run augmented until they are within
+    /// it (`joint_fallback`).
+    pub(super) recovering: bool,
+    /// Augmented ticks run so (`Program::joint_recovery_ticks`).
+    pub(super) recovery_ticks: u64,
 }
 
 impl fmt::Debug for JointPath {
@@ -201,6 +216,9 @@ impl Program {
                     evaluated,
                     fixed: RowStats::default(),
                     inject: None,
+                    project: false,
+                    recovering: false,
+                    recovery_ticks: 0,
                 }));
                 self.joint_resync(History::Rest);
                 Ok(())
@@ -260,6 +278,7 @@ impl Program {
                 .is_ok();
         j.stale = !ok;
         j.fixed = RowStats::fixed(&self.model, &self.scaling, &j.evaluated, self.ev.values());
+        j.project |= !j.fixed.closed(self.scaling.length_m);
     }
 
     /// The tick in joint coordinates ([`tick_marked`](Self::tick_marked)
@@ -270,6 +289,12 @@ impl Program {
         dt_s: f64,
         marks: &mut Ordered<'_, M>,
     ) -> TickReport {
+        if self.joint.as_ref().is_some_and(|j| j.recovering) {
+            return self.joint_recovery(targets, dt_s, marks);
+        }
+        if dt_s > 0.0 && self.joint.as_ref().is_some_and(|j| j.project) {
+            self.joint_project();
+        }
         let Some(mut j) = self.joint.take() else {
             return self.joint_failed(TickOutcome::NonFinite, 0);
         };
@@ -309,11 +334,15 @@ impl Program {
         }
         let t = &mut j.tick;
         let (fixed, rows) = (j.fixed, &j.rows);
+        let open_before = t.max_violation;
         let n = t.update(targets).map_err(|e| (outcome(&e), 0))?;
         t.steps = n;
         marks.end(SolverStage::Update);
         t.evaluate_end(targets, true)
             .map_err(|e| (outcome(&e), n))?;
+        if super::joint_fallback::opens_loops(open_before, t.max_violation, self.scaling.length_m) {
+            return Err((TickOutcome::Diverged(Divergence::Violation), n));
+        }
         let step = max_scaled_change(t.q(), &self.q, &self.scaling.sqrt_metric);
         if step.is_nan() {
             return Err((TickOutcome::NonFinite, n));

@@ -10,6 +10,12 @@ use crate::al::scaling::{Role, Scaling};
 use crate::al::update::Violation;
 use crate::{Model, RowUnit, Sense};
 
+/// The rows joint ticks never evaluate (tree joints, norms) count as
+/// closed at a resync within this × L (scaled); beyond it the next joint
+/// tick first projects q onto the tree (`joint_fallback`), since joint
+/// ticks would keep that residue for the rest of the run.
+pub(super) const CLOSED: f64 = 1e-10;
+
 /// Violation statistics over some rows.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct RowStats {
@@ -56,6 +62,12 @@ impl RowStats {
             }
         }
         st
+    }
+
+    /// Whether every row counted is within [`CLOSED`] × `length_m` (scaled
+    /// metres: angles and norms times the length).
+    pub fn closed(&self, length_m: f64) -> bool {
+        self.max_scaled_m <= CLOSED * length_m
     }
 
     /// These statistics with `rows` at `values` added, as a `Violation`.

@@ -37,6 +37,7 @@ mod finger6;
 mod kinematics;
 mod limits;
 mod mask;
+mod project;
 mod resync;
 mod rows;
 mod small;

@@ -10,6 +10,7 @@ mod convergence;
 mod design;
 mod force;
 mod gears;
+mod joint_redundant;
 mod limits;
 mod lockstep;
 mod matvec;

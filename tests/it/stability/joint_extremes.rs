@@ -2,12 +2,10 @@
 //! asked explicitly, the default left alone), held to the augmented tick's
 //! bounds: the four-bar's 1 m step of the hand target and the Peaucellier
 //! linkage's dead point. Both pull a loop through a pose next to a singular
-//! one. **Both fail today** and are ignored: a harness for the fix
-//! (BENCHMARKS.md, issue 23, the joint tick at the extremes: a fallback to
-//! the augmented tick when a joint tick opens its loops passed the first
-//! and not the second, the fallback's tree-row and norm errors never closed
-//! by the joint ticks after it). Run them with
-//! `cargo test --release --test it joint_extremes -- --ignored`.
+//! one. Both failed before a joint tick that opens its loops fell back to
+//! the augmented tick and the joint tick after a fallback projected q onto
+//! the tree (BENCHMARKS.md, issue 23, the joint tick at the extremes; its
+//! fix).
 
 use haptloop::session::SessionOptions;
 use haptloop_solver::Coordinates;
@@ -41,12 +39,12 @@ fn run(c: &Case) -> (Outcome, f64, u64) {
 
 /// The four-bar's hand target steps 1 m away and back (as
 /// `matrix::a_1_m_step_of_the_hand_target`). Pulled taut, both ticks open
-/// the loop over a few ticks; today the joint tick opens it by 57 and
-/// 88 mm (two ticks beyond the session's broken bound), the augmented tick
-/// by 12.8 mm. Asserted: no failed tick, and the worst
-/// violation of any tick within 10 % of the augmented run's.
+/// the loop over a few ticks; the joint tick opened it by 57 and 88 mm
+/// (two ticks beyond the session's broken bound) before its ticks that open
+/// their loops fell back, the augmented tick by 12.8 mm. Asserted: no
+/// failed tick, and the worst violation of any tick within 10 % of the
+/// augmented run's.
 #[test]
-#[ignore = "fails today: two joint ticks 57 and 88 mm open (BENCHMARKS.md, issue 23)"]
 fn a_1_m_step_of_the_four_bar_in_joint_coordinates() {
     let (path, end) = out_and_back(0.2, [1.0, 0.0, 0.0], 0.001, 0.3);
     let mut worst = [0.0; 2];
@@ -68,11 +66,12 @@ fn a_1_m_step_of_the_four_bar_in_joint_coordinates() {
 
 /// The Peaucellier linkage's dead point (as
 /// `dead_point::the_peaucellier_dead_point`, on its nine starts) in joint
-/// coordinates: every snap within the 1 mm the scene states (today the
-/// start moved by 5 pm snaps by 1.007 mm, the others by 0.59 mm at most)
-/// and the run back within the scene's tolerance (`check_recovered`).
+/// coordinates: every snap within the 1 mm the scene states (the start
+/// moved by 5 pm snapped by 1.007 mm before the fallback on opening loops;
+/// with it, a fallback whose tree-row residue the joint ticks kept never
+/// recovered, hence the projection) and the run back within the scene's
+/// tolerance (`check_recovered`).
 #[test]
-#[ignore = "fails today: the start moved by 5 pm snaps by 1.007 mm (BENCHMARKS.md, issue 23)"]
 fn the_peaucellier_dead_point_in_joint_coordinates() {
     for k in 0..9 {
         let scene = edited("peaucellier", |t| nudge_crank(t, k as f64 * 1e-12));
