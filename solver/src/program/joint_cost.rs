@@ -22,10 +22,14 @@
 //! **The augmented tick**: its Eq. 7 factor (nnz stored values over an
 //! order N of rows, the factor known at build) refactored each tick and
 //! solved once a step and once for the force, the Gram matrix and the
-//! evaluation proportional to the Jacobian's nnz:
+//! evaluation proportional to the Jacobian's nnz, and each row's
+//! evaluation once a step (R a row a step: fitted, not counted — without
+//! it the chains' augmented ticks, many cheap rows over a thin factor, were
+//! estimated 0.7× their measured time and the lattice's 1.4×):
 //!
 //! ```text
 //! factor  nnz² / N,   solves  2 nnz (iterations + 1),   Gram + evaluation  G · nnz(C_q)
+//! rows    R · N (iterations + 1)
 //! ```
 //!
 //! Each count is then scaled to microseconds by its path's rate and
@@ -39,13 +43,18 @@ use crate::reduced::JointTick;
 /// Jacobian entry.
 const GRAM_PER_JACOBIAN_ENTRY: f64 = 12.0;
 
+/// Multiply-adds of the augmented tick's evaluation per constraint row and
+/// update step (fitted with the rates below, BENCHMARKS.md issue 23, "auto's
+/// cost model refitted").
+const EVALUATION_PER_ROW_STEP: f64 = 190.0;
+
 /// Microseconds per joint-tick multiply-add and the joint tick's fixed
 /// cost (fitted, BENCHMARKS.md).
-const JOINT_US_PER_MADD: f64 = 0.7e-3;
-const JOINT_US_FIXED: f64 = 1.0;
+const JOINT_US_PER_MADD: f64 = 0.55e-3;
+const JOINT_US_FIXED: f64 = 1.5;
 
 /// Microseconds per augmented-tick multiply-add and its fixed cost.
-const AUGMENTED_US_PER_MADD: f64 = 0.5e-3;
+const AUGMENTED_US_PER_MADD: f64 = 0.16e-3;
 const AUGMENTED_US_FIXED: f64 = 1.0;
 
 /// Both ticks' estimated arithmetic for one program
@@ -116,5 +125,7 @@ pub(crate) fn augmented_madds(
     iterations: u32,
 ) -> f64 {
     let (l, n) = (factor_nnz as f64, order.max(1) as f64);
-    l * l / n + 2.0 * l * f64::from(iterations + 1) + GRAM_PER_JACOBIAN_ENTRY * jacobian_nnz as f64
+    let steps = f64::from(iterations + 1);
+    let rows = EVALUATION_PER_ROW_STEP * order as f64 * steps;
+    l * l / n + 2.0 * l * steps + GRAM_PER_JACOBIAN_ENTRY * jacobian_nnz as f64 + rows
 }
