@@ -657,15 +657,12 @@ impl Feedback {
             let coupling = err * settings.coupling_stiffness_n_per_m
                 + rate * settings.coupling_damping_n_s_per_m;
             let coupling_torque = if fr.rigid {
-                let o = fr.offset;
-                let body = UnitQuaternion::new_normalize(Quaternion::new(
-                    q[o + 3],
-                    q[o + 4],
-                    q[o + 5],
-                    q[o + 6],
-                ));
-                (body * t.orientation.inverse()).scaled_axis()
-                    * settings.coupling_angular_stiffness_nm_per_rad
+                rigid_coupling_torque(
+                    q,
+                    fr.offset,
+                    t,
+                    settings.coupling_angular_stiffness_nm_per_rad,
+                )
             } else {
                 Vector3::zeros()
             };
@@ -713,4 +710,19 @@ fn frame(q: &[f64], o: usize) -> Option<BodyFrame> {
         Vector3::new(q[o], q[o + 1], q[o + 2]),
         [q[o + 3], q[o + 4], q[o + 5], q[o + 6]],
     )
+}
+
+/// The virtual coupling's torque on a rigid finger whose body's pose starts
+/// at column `o` of q: the rotation from the target's orientation to the
+/// body's, as a rotation vector, times the angular stiffness (shared with
+/// the joint tick's `reduced::finger6`).
+pub(crate) fn rigid_coupling_torque(
+    q: &[f64],
+    o: usize,
+    target: &FingerTarget,
+    stiffness_nm_per_rad: f64,
+) -> Vector3<f64> {
+    let body =
+        UnitQuaternion::new_normalize(Quaternion::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]));
+    (body * target.orientation.inverse()).scaled_axis() * stiffness_nm_per_rad
 }

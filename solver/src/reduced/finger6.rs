@@ -7,9 +7,10 @@
 //! is left is the rigid grasp's angular coupling, added to the felt torque
 //! as `Feedback::wrenches` adds it.
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 use super::tick::JointTick;
+use crate::force::feedback::rigid_coupling_torque;
 use crate::{FingerOutput, FingerTarget};
 
 /// The angular coupling torque of a finger with `rows` rows on the body at
@@ -23,12 +24,10 @@ pub(super) fn coupling_torque(
     target: &FingerTarget,
     stiffness: f64,
 ) -> Vector3<f64> {
-    let Some(o) = offset.filter(|_| rows == 6) else {
-        return Vector3::zeros();
-    };
-    let body =
-        UnitQuaternion::new_normalize(Quaternion::new(q[o + 3], q[o + 4], q[o + 5], q[o + 6]));
-    (body * target.orientation.inverse()).scaled_axis() * stiffness
+    match offset.filter(|_| rows == 6) {
+        Some(o) => rigid_coupling_torque(q, o, target, stiffness),
+        None => Vector3::zeros(),
+    }
 }
 
 impl JointTick {

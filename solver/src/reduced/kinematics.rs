@@ -48,7 +48,11 @@ pub struct Kinematics {
     pub(crate) twists: Vec<Twist>,
 }
 
-fn frame_of(model: &Model, q: &[f64], b: Option<BodyId>) -> Result<BodyFrame, ReducedError> {
+pub(super) fn frame_of(
+    model: &Model,
+    q: &[f64],
+    b: Option<BodyId>,
+) -> Result<BodyFrame, ReducedError> {
     match b {
         None => Ok(BodyFrame::IDENTITY),
         Some(b) => model

@@ -25,21 +25,12 @@
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
 use super::ReducedError;
+use super::kinematics::frame_of;
 use super::tick::JointTick;
 use super::tree::{Freedom, TreeJoint};
+use crate::Model;
 use crate::constraint::Geometry;
 use crate::rotation::BodyFrame;
-use crate::{BodyId, Model};
-
-/// A body's frame at q (the world's for `None`).
-fn frame(model: &Model, q: &[f64], b: Option<BodyId>) -> Result<BodyFrame, ReducedError> {
-    match b {
-        None => Ok(BodyFrame::IDENTITY),
-        Some(b) => model
-            .body_frame(q, b)
-            .ok_or(ReducedError::Degenerate(b.index())),
-    }
-}
 
 /// The smallest rotation taking direction `from` onto `to` (identity when
 /// they are parallel or either is zero).
@@ -128,12 +119,15 @@ impl JointTick {
                 return Err(ReducedError::Degenerate(j.child.index()));
             }
             q[o + 3..o + 7].iter_mut().for_each(|v| *v /= n);
-            let ends = [frame(model, q, j.ends[0])?, frame(model, q, j.ends[1])?];
+            let ends = [
+                frame_of(model, q, j.ends[0])?,
+                frame_of(model, q, j.ends[1])?,
+            ];
             let rot = child_rotation(model, j, &ends);
             let e = quaternion_near(&rot, &q[o + 3..o + 7]);
             q[o + 3..o + 7].copy_from_slice(&e);
             let (c, p) = (j.child_end, 1 - j.child_end);
-            let child = frame(model, q, Some(j.child))?;
+            let child = frame_of(model, q, Some(j.child))?;
             let d = child.point(&j.anchors[c]) - ends[p].point(&j.anchors[p]);
             let shift = match (j.freedom, &model.geometry[j.constraint]) {
                 (Freedom::Prismatic { .. }, Geometry::Prismatic(g)) => {

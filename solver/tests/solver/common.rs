@@ -324,3 +324,24 @@ pub fn initial_residual(model: &Model) -> f64 {
         .iter()
         .fold(0.0, |m, v| m.max(v.abs()))
 }
+
+/// The settings the joint-coordinate tests run a compiled scene with: its
+/// `[solver]` step and iterations over the defaults, with `coordinates`.
+/// Deliberately not `SceneSettings::solver_settings`: these tests compare
+/// ticks at the solver's default gains, filter and dynamics.
+pub fn step_and_iterations(
+    settings: &haptloop_solver::scene::SceneSettings,
+    coordinates: haptloop_solver::Coordinates,
+) -> haptloop_solver::SolverSettings {
+    let mut s = haptloop_solver::SolverSettings {
+        coordinates,
+        ..haptloop_solver::SolverSettings::default()
+    };
+    if let Some(v) = settings.step {
+        s.step = v;
+    }
+    if let Some(v) = settings.iterations {
+        s.iterations = v;
+    }
+    s
+}

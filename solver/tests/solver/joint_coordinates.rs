@@ -25,16 +25,7 @@ pub fn scene(name: &str, coordinates: Coordinates) -> (Arc<Model>, SolverSetting
         .unwrap()
         .compile()
         .unwrap();
-    let mut settings = SolverSettings {
-        coordinates,
-        ..SolverSettings::default()
-    };
-    if let Some(v) = compiled.settings.step {
-        settings.step = v;
-    }
-    if let Some(v) = compiled.settings.iterations {
-        settings.iterations = v;
-    }
+    let settings = super::common::step_and_iterations(&compiled.settings, coordinates);
     (Arc::new(compiled.model), settings)
 }
 

@@ -30,17 +30,7 @@ fn compiled(path: &std::path::Path) -> CompiledScene {
 
 /// The scene's settings (step, iterations) with `coordinates`.
 fn settings(c: &CompiledScene, coordinates: Coordinates) -> SolverSettings {
-    let mut s = SolverSettings {
-        coordinates,
-        ..SolverSettings::default()
-    };
-    if let Some(v) = c.settings.step {
-        s.step = v;
-    }
-    if let Some(v) = c.settings.iterations {
-        s.iterations = v;
-    }
-    s
+    super::common::step_and_iterations(&c.settings, coordinates)
 }
 
 /// Each finger's target at `t_s`: its start plus its device's hand path

@@ -9,6 +9,7 @@ use haptloop_rt::alloc::{count, is_installed};
 use haptloop_solver::{Coordinates, FingerTarget, Model, Program, SolverSettings, TickOutcome};
 use nalgebra::{UnitQuaternion, Vector3};
 
+use super::common::step_and_iterations;
 use super::joint_coordinates::body_gap;
 
 const DT: Duration = Duration::from_millis(1);
@@ -29,13 +30,7 @@ pub fn scene(name: &str, free: bool) -> (Arc<Model>, SolverSettings) {
         .unwrap()
         .compile()
         .unwrap();
-    let mut settings = SolverSettings::default();
-    if let Some(v) = compiled.settings.step {
-        settings.step = v;
-    }
-    if let Some(v) = compiled.settings.iterations {
-        settings.iterations = v;
-    }
+    let settings = step_and_iterations(&compiled.settings, SolverSettings::default().coordinates);
     (Arc::new(compiled.model), settings)
 }
 

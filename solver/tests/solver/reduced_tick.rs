@@ -19,13 +19,10 @@ fn the_joint_tick_allocates_nothing() {
             .unwrap()
             .compile()
             .unwrap();
-        let mut settings = SolverSettings::default();
-        if let Some(v) = compiled.settings.step {
-            settings.step = v;
-        }
-        if let Some(v) = compiled.settings.iterations {
-            settings.iterations = v;
-        }
+        let settings = super::common::step_and_iterations(
+            &compiled.settings,
+            SolverSettings::default().coordinates,
+        );
         let model = Arc::new(compiled.model);
         let t0 = model.initial_targets();
         let mut jt = JointTick::new(model.clone(), settings, model.q0(), &t0).unwrap();
